@@ -1,0 +1,17 @@
+//! Carcenac's modular implicit surfaces: a binary tree of small MLP modules whose output Φ is
+//! zero on the surface.
+//!
+//! - [`layout`](ModuleLayout): where each module's weights lie (shared with the trainer);
+//! - [`ImplicitModel`]: decoding and validation of a blob;
+//! - evaluation of Φ, ∇Φ (forward mode) and the unit normal, for one point or in batches of
+//!   [`LANES`], for the whole tree or any module's subtree ([`ModuleView`]).
+
+mod batch;
+mod eval;
+mod layout;
+mod model;
+
+pub use batch::LANES;
+pub use eval::{FieldGradient, ModuleView};
+pub use layout::{DenseLayout, MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
+pub use model::{DEFAULT_MODULES, DEFAULT_PARAMETERS, ImplicitModel, ImplicitPayload};

@@ -1,0 +1,310 @@
+//! The validated implicit model and its blob decoder.
+
+use heapless::Vec;
+use serde::{Deserialize, Serialize};
+
+use super::layout::{MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout};
+use crate::blob::{self, ModelKind};
+use crate::error::{BlobError, Quantity};
+use crate::scalar::{Scalar, ScalarKind};
+
+/// Default parameter capacity: a 17-leaf, 16-node body model of width 9 needs 6 852.
+pub const DEFAULT_PARAMETERS: usize = 8192;
+/// Default module capacity.
+pub const DEFAULT_MODULES: usize = 64;
+
+/// The postcard payload of an implicit-model blob (see [`crate::blob`] for the framing).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ImplicitPayload<'a> {
+    /// Hidden width N of every module.
+    pub width: u8,
+    /// Module kinds in post-order ([`ModuleKind::code`]).
+    #[serde(borrow)]
+    pub tree: &'a [u8],
+    /// All parameters in [`super::layout`] order, 4 little-endian bytes each in the blob's
+    /// scalar kind.
+    #[serde(borrow)]
+    pub parameters: &'a [u8],
+    /// Opaque to the core (the trainer stores its training summary here).
+    #[serde(borrow)]
+    pub metadata: &'a [u8],
+}
+
+impl<'a> ImplicitPayload<'a> {
+    /// Parses and frames-checks an implicit blob without building a model.
+    ///
+    /// # Errors
+    /// Framing errors of [`blob::parse`], [`BlobError::WrongModelKind`],
+    /// [`BlobError::MalformedPayload`].
+    pub fn from_blob(bytes: &'a [u8]) -> Result<(blob::BlobHeader, Self), BlobError> {
+        let (header, payload) = blob::parse(bytes)?;
+        if header.model != ModelKind::Implicit {
+            return Err(BlobError::WrongModelKind {
+                expected: ModelKind::Implicit,
+                found: header.model,
+            });
+        }
+        Ok((header, blob::decode_payload(payload)?))
+    }
+}
+
+/// Where one module sits: its kind, its parameters and its children.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) struct ModuleEntry {
+    pub(crate) kind: ModuleKind,
+    /// Offset of the module's first parameter.
+    pub(crate) offset: usize,
+    /// Index of the first module of this module's subtree.
+    pub(crate) subtree_start: usize,
+    /// Index of the left child (nodes only; the right child is `index − 1`).
+    pub(crate) left: usize,
+    /// Height of the subtree (leaf = 1).
+    pub(crate) height: usize,
+}
+
+/// A modular implicit surface Φ (Carcenac 2004), loaded from a blob and validated.
+///
+/// `P` and `M` are the parameter and module capacities reserved inline (no heap): the defaults
+/// take 32 KiB in `f32` and hold a 33-module body model. Evaluation after a successful load
+/// cannot fail: it saturates in fixed point and never reads out of bounds.
+///
+/// ```
+/// # use neurosurf_core::implicit::*;
+/// # use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+/// # fn main() -> Result<(), neurosurf_core::BlobError> {
+/// # let blob = example_blob();
+/// let model = ImplicitModel::<f32>::from_blob(&blob)?;
+/// let fixed = ImplicitModel::<Q16>::from_blob(&blob)?; // same blob, other scalar
+/// let p = [0.1, 0.2, 0.3];
+/// let phi = model.field(p);
+/// let phi_q = fixed.field(p.map(Q16::from_f32_saturating)).to_f32();
+/// assert!((phi - phi_q).abs() < 1e-3);
+/// # Ok(())
+/// # }
+/// # fn example_blob() -> Vec<u8> {
+/// #     let layout = ModuleLayout::new(ModuleKind::Leaf, 2);
+/// #     let params: Vec<f64> = (0..layout.len).map(|i| ((i * 7 % 11) as f64 - 5.0) / 10.0).collect();
+/// #     let bytes: Vec<u8> = params.iter().flat_map(|&p| ScalarKind::F32.encode(p).unwrap()).collect();
+/// #     let payload = ImplicitPayload { width: 2, tree: &[0], parameters: &bytes, metadata: &[] };
+/// #     let mut out = vec![0_u8; 1024];
+/// #     let n = neurosurf_core::blob::write(
+/// #         neurosurf_core::blob::ModelKind::Implicit, ScalarKind::F32, &payload, &mut out).unwrap();
+/// #     out.truncate(n);
+/// #     out
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct ImplicitModel<
+    S: Scalar,
+    const P: usize = DEFAULT_PARAMETERS,
+    const M: usize = DEFAULT_MODULES,
+> {
+    pub(crate) width: usize,
+    pub(crate) modules: Vec<ModuleEntry, M>,
+    pub(crate) parameters: Vec<S, P>,
+    pub(crate) stored_as: ScalarKind,
+}
+
+impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
+    /// Decodes and validates a blob, converting its parameters to `S`.
+    ///
+    /// # Errors
+    /// Every [`BlobError`] that applies: framing ([`blob::parse`]), wrong model kind, malformed
+    /// payload, invalid width or tree, parameter count disagreeing with the tree, capacities of
+    /// this type exceeded, non-finite or (for fixed point) out-of-range parameters.
+    pub fn from_blob(bytes: &[u8]) -> Result<Self, BlobError> {
+        let (header, payload) = ImplicitPayload::from_blob(bytes)?;
+        let result = Self::from_payload(&payload, header.scalar);
+        #[cfg(feature = "defmt")]
+        if let Err(e) = &result {
+            defmt::warn!("implicit blob rejected: {}", e);
+        }
+        result
+    }
+
+    /// Validates a decoded payload whose parameters are stored as `stored`.
+    ///
+    /// # Errors
+    /// As [`ImplicitModel::from_blob`], minus framing.
+    pub fn from_payload(
+        payload: &ImplicitPayload<'_>,
+        stored: ScalarKind,
+    ) -> Result<Self, BlobError> {
+        let width = usize::from(payload.width);
+        if width == 0 || width > MAX_WIDTH {
+            return Err(BlobError::ShapeMismatch {
+                what: Quantity::Width,
+                expected: MAX_WIDTH,
+                found: width,
+            });
+        }
+        let modules = build_tree::<M>(payload.tree, width)?;
+        let needed = modules
+            .last()
+            .map_or(0, |m| m.offset + ModuleLayout::new(m.kind, width).len);
+        let word = stored.stored_bytes();
+        let found = payload.parameters.len() / word;
+        if !payload.parameters.len().is_multiple_of(word) || found != needed {
+            return Err(BlobError::ShapeMismatch {
+                what: Quantity::Parameters,
+                expected: needed,
+                found,
+            });
+        }
+        if needed > P {
+            return Err(BlobError::CapacityExceeded {
+                what: Quantity::Parameters,
+                needed,
+                capacity: P,
+            });
+        }
+        let mut parameters = Vec::new();
+        for (index, chunk) in payload.parameters.chunks_exact(4).enumerate() {
+            let bytes: [u8; 4] = chunk.try_into().map_err(|_| BlobError::MalformedPayload)?;
+            let value = S::from_stored(bytes, stored).ok_or_else(|| {
+                if stored == ScalarKind::F32 && !f32::from_le_bytes(bytes).is_finite() {
+                    BlobError::NonFiniteParameter { index }
+                } else {
+                    BlobError::ParameterOutOfRange { index }
+                }
+            })?;
+            parameters
+                .push(value)
+                .map_err(|_| BlobError::CapacityExceeded {
+                    what: Quantity::Parameters,
+                    needed,
+                    capacity: P,
+                })?;
+        }
+        Ok(ImplicitModel {
+            width,
+            modules,
+            parameters,
+            stored_as: stored,
+        })
+    }
+
+    /// Hidden width N.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Number of modules (leaves and nodes).
+    pub fn module_count(&self) -> usize {
+        self.modules.len()
+    }
+
+    /// Number of leaf modules (features).
+    pub fn leaf_count(&self) -> usize {
+        self.modules
+            .iter()
+            .filter(|m| m.kind == ModuleKind::Leaf)
+            .count()
+    }
+
+    /// Total stored parameters.
+    pub fn parameter_count(&self) -> usize {
+        self.parameters.len()
+    }
+
+    /// Kind of module `index` (post-order), if it exists.
+    pub fn module_kind(&self, index: usize) -> Option<ModuleKind> {
+        self.modules.get(index).map(|m| m.kind)
+    }
+
+    /// The children of node `index` as (left, right), `None` for leaves and bad indices.
+    pub fn children(&self, index: usize) -> Option<(usize, usize)> {
+        let m = self.modules.get(index)?;
+        (m.kind == ModuleKind::Node).then(|| (m.left, index - 1))
+    }
+
+    /// Index of the root module.
+    pub fn root(&self) -> usize {
+        self.modules.len().saturating_sub(1)
+    }
+
+    /// The scalar kind the blob stored its parameters in.
+    pub fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    /// Multiply–accumulates of one field (or field and gradient) evaluation of the whole model:
+    /// the lower bound of its instruction count.
+    pub fn mac_count(&self, gradient: bool) -> usize {
+        self.modules
+            .iter()
+            .map(|m| ModuleLayout::new(m.kind, self.width).mac_count(gradient))
+            .sum()
+    }
+}
+
+/// Checks a post-order tree and computes each module's offset, subtree and children.
+fn build_tree<const M: usize>(tree: &[u8], width: usize) -> Result<Vec<ModuleEntry, M>, BlobError> {
+    if tree.is_empty() {
+        return Err(BlobError::ShapeMismatch {
+            what: Quantity::Modules,
+            expected: 1,
+            found: 0,
+        });
+    }
+    if tree.len() > M {
+        return Err(BlobError::CapacityExceeded {
+            what: Quantity::Modules,
+            needed: tree.len(),
+            capacity: M,
+        });
+    }
+    let mut modules: Vec<ModuleEntry, M> = Vec::new();
+    // Roots of the subtrees completed so far, as module indices.
+    let mut pending: Vec<usize, M> = Vec::new();
+    let mut offset = 0_usize;
+    for (index, &code) in tree.iter().enumerate() {
+        let kind = ModuleKind::from_code(code).ok_or(BlobError::InvalidTree { module: index })?;
+        let entry = match kind {
+            ModuleKind::Leaf => ModuleEntry {
+                kind,
+                offset,
+                subtree_start: index,
+                left: index,
+                height: 1,
+            },
+            ModuleKind::Node => {
+                let invalid = BlobError::InvalidTree { module: index };
+                let right = pending.pop().ok_or(invalid)?;
+                let left = pending.pop().ok_or(invalid)?;
+                let (left_entry, right_entry) = (
+                    modules.get(left).ok_or(invalid)?,
+                    modules.get(right).ok_or(invalid)?,
+                );
+                let height = 1 + left_entry.height.max(right_entry.height);
+                if height > MAX_HEIGHT {
+                    return Err(BlobError::CapacityExceeded {
+                        what: Quantity::StackDepth,
+                        needed: height,
+                        capacity: MAX_HEIGHT,
+                    });
+                }
+                ModuleEntry {
+                    kind,
+                    offset,
+                    subtree_start: left_entry.subtree_start,
+                    left,
+                    height,
+                }
+            }
+        };
+        pending
+            .push(index)
+            .map_err(|_| BlobError::InvalidTree { module: index })?;
+        modules
+            .push(entry)
+            .map_err(|_| BlobError::InvalidTree { module: index })?;
+        offset += ModuleLayout::new(kind, width).len;
+    }
+    if pending.len() != 1 {
+        return Err(BlobError::InvalidTree {
+            module: tree.len() - 1,
+        });
+    }
+    Ok(modules)
+}

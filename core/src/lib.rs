@@ -1,0 +1,35 @@
+//! # neurosurf-core
+//!
+//! Evaluates neural freeform surface models on anything from a desktop to a Cortex-M4F:
+//! `#![no_std]`, no allocator, no `unsafe`, no panics on any input.
+//!
+//! - [`scalar`]: the one sealed number abstraction, implemented for `f32` and Q16.16
+//!   ([`scalar::Q16`]) side by side;
+//! - [`blob`]: the checked container format trained models travel in;
+//! - [`implicit`]: Carcenac's modular implicit surfaces Φ(x) = 0 — field, gradient, normal.
+//!
+//! Load a blob once (that validates everything), then evaluate without failure:
+//!
+//! ```
+//! use neurosurf_core::{implicit::ImplicitModel, BlobError};
+//! fn surface_normal(blob: &[u8], p: [f32; 3]) -> Result<Option<[f32; 3]>, BlobError> {
+//!     let model = ImplicitModel::<f32>::from_blob(blob)?;
+//!     Ok(model.normal(p))
+//! }
+//! assert!(surface_normal(b"not a blob", [0.0; 3]).is_err());
+//! ```
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![warn(missing_debug_implementations)]
+
+pub mod blob;
+mod dense;
+mod error;
+pub mod implicit;
+mod jet;
+mod math;
+pub mod scalar;
+
+pub use error::{BlobError, LengthMismatch, Quantity};
+pub use jet::Jet;

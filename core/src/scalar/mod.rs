@@ -1,0 +1,224 @@
+//! The one scalar abstraction every model is written against.
+//!
+//! [`Scalar`] is sealed and implemented side by side for [`f32`] and for Q16.16 fixed point
+//! ([`Q16`] = `fixed::types::I16F16`), so a single test binary can evaluate the same model in
+//! both and compare them with an `f64` reference. It provides exactly what the models need:
+//! saturating arithmetic, a wide multiply–accumulate ([`Scalar::Acc`]), the activation
+//! a(H) = 1.7159·tanh(2H/3) with its first and second derivatives, `sqrt`/`recip` for
+//! normalization, and conversions.
+//!
+//! The hot loop of every network is `acc = mac(acc, weight, input)` followed by one
+//! [`Scalar::from_acc`] per neuron: for `f32` that is a plain multiply–add; for Q16.16 it is a
+//! 32×32→64-bit multiply–accumulate in Q32.32 with a single rounding and saturation at the end
+//! (no division, no per-term rounding).
+//!
+//! ```
+//! use neurosurf_core::scalar::{Q16, Scalar};
+//! let h = 0.75_f32;
+//! let float = <f32 as Scalar>::activation(h);
+//! let fixed = Q16::activation(Q16::from_f32_saturating(h)).to_f32();
+//! assert!((float - fixed).abs() < 1.0 / 16384.0);
+//! ```
+
+mod activation_table;
+mod float;
+mod q16;
+
+pub use q16::Q16;
+
+use core::fmt::Debug;
+
+/// 1.7159, the amplitude of the activation a(H) = 1.7159·tanh(2H/3) (LeCun's choice, used by
+/// Carcenac).
+pub const ACTIVATION_AMPLITUDE: f64 = 1.7159;
+/// 2/3, the input gain of the activation.
+pub const ACTIVATION_GAIN: f64 = 2.0 / 3.0;
+
+/// Largest absolute error of [`Q16`]'s activation against the exact a(H), over all inputs
+/// (measured exhaustively by the tests; the design goal was 2⁻¹⁴).
+pub const Q16_ACTIVATION_MAX_ERROR: f64 = 1.0 / 32768.0;
+
+/// Largest absolute error of `f32`'s activation against the exact a(H) (libm `tanhf` plus
+/// two roundings).
+pub const F32_ACTIVATION_MAX_ERROR: f64 = 4.0e-7;
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for f32 {}
+    impl Sealed for super::Q16 {}
+}
+
+/// How parameters are stored in a blob, and which scalar a model is evaluated in.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ScalarKind {
+    /// IEEE-754 binary32, little endian.
+    F32,
+    /// Signed Q16.16 fixed point (`I16F16`), two's complement, little endian.
+    Q16_16,
+}
+
+impl ScalarKind {
+    /// The byte that identifies this kind in a blob header.
+    pub const fn code(self) -> u8 {
+        match self {
+            ScalarKind::F32 => 1,
+            ScalarKind::Q16_16 => 2,
+        }
+    }
+
+    /// The kind a blob header byte names, if any.
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            1 => Some(ScalarKind::F32),
+            2 => Some(ScalarKind::Q16_16),
+            _ => None,
+        }
+    }
+
+    /// Bytes per stored parameter.
+    pub const fn stored_bytes(self) -> usize {
+        4
+    }
+
+    /// A short lowercase name (`"f32"`, `"q16.16"`), as used on the command line.
+    pub const fn name(self) -> &'static str {
+        match self {
+            ScalarKind::F32 => "f32",
+            ScalarKind::Q16_16 => "q16.16",
+        }
+    }
+
+    /// Encodes one parameter for storage in this kind (round to nearest).
+    ///
+    /// Returns `None` when `value` is not finite or not representable (Q16.16 covers
+    /// [−32768, 32768)).
+    ///
+    /// ```
+    /// use neurosurf_core::scalar::ScalarKind;
+    /// assert_eq!(ScalarKind::Q16_16.encode(1.5), Some(0x0001_8000_i32.to_le_bytes()));
+    /// assert_eq!(ScalarKind::F32.encode(f64::NAN), None);
+    /// ```
+    pub fn encode(self, value: f64) -> Option<[u8; 4]> {
+        if !value.is_finite() {
+            return None;
+        }
+        match self {
+            ScalarKind::F32 => {
+                let narrowed = value as f32;
+                narrowed.is_finite().then(|| narrowed.to_le_bytes())
+            }
+            ScalarKind::Q16_16 => Q16::checked_from_num(value).map(|q| q.to_bits().to_le_bytes()),
+        }
+    }
+}
+
+/// A number type the models are evaluated in: `f32` or [`Q16`].
+///
+/// Sealed: the models rely on the documented accuracy and saturation behaviour of each
+/// implementation. Every operation is total — none panics, none wraps; fixed-point
+/// operations saturate at the ends of the range.
+pub trait Scalar:
+    Copy + Default + PartialEq + PartialOrd + Debug + sealed::Sealed + 'static
+{
+    /// Wide accumulator for dot products (`f32` for `f32`, Q32.32 in an `i64` for [`Q16`]).
+    type Acc: Copy + Debug;
+
+    /// The kind tag of this scalar.
+    const KIND: ScalarKind;
+    /// 0.
+    const ZERO: Self;
+    /// 1.
+    const ONE: Self;
+    /// Largest parameter magnitude a blob may hold for evaluation in this scalar; the loader
+    /// rejects larger ones so that accumulators provably cannot overflow.
+    const MAX_PARAMETER: f32;
+
+    /// Converts a parameter, `None` if it is not finite or its magnitude exceeds
+    /// [`Scalar::MAX_PARAMETER`].
+    fn from_f32(value: f32) -> Option<Self>;
+    /// Converts an input coordinate: NaN becomes 0, out-of-range values saturate.
+    fn from_f32_saturating(value: f32) -> Self;
+    /// Decodes one stored parameter of kind `stored`; `None` when it is not finite or beyond
+    /// [`Scalar::MAX_PARAMETER`].
+    fn from_stored(bytes: [u8; 4], stored: ScalarKind) -> Option<Self>;
+    /// The nearest `f32`.
+    fn to_f32(self) -> f32;
+    /// The exact value as `f64`.
+    fn to_f64(self) -> f64;
+
+    /// Saturating addition.
+    fn add(self, other: Self) -> Self;
+    /// Saturating subtraction.
+    fn sub(self, other: Self) -> Self;
+    /// Saturating multiplication (rounded to nearest in fixed point).
+    fn mul(self, other: Self) -> Self;
+    /// Saturating negation.
+    fn neg(self) -> Self;
+    /// Absolute value (saturating).
+    fn abs(self) -> Self;
+
+    /// Starts an accumulation at `self` (typically a bias).
+    fn to_acc(self) -> Self::Acc;
+    /// `acc + a·b` in the wide accumulator. Within the parameter bound the loader enforces,
+    /// at most 64 terms of inputs bounded by the saturated range cannot overflow it.
+    fn mac(acc: Self::Acc, a: Self, b: Self) -> Self::Acc;
+    /// Rounds an accumulator back to the scalar, saturating.
+    fn from_acc(acc: Self::Acc) -> Self;
+
+    /// The activation a(H) = 1.7159·tanh(2H/3).
+    fn activation(h: Self) -> Self;
+    /// a′(H), computed from `a = a(H)`: a′ = (2/3)(1.7159 − a²/1.7159).
+    fn activation_slope(a: Self) -> Self;
+    /// a″(H), computed from `a = a(H)` and `slope = a′(H)`: a″ = −(4/3)·a·a′/1.7159.
+    fn activation_curvature(a: Self, slope: Self) -> Self;
+
+    /// Square root; 0 for negative inputs.
+    fn sqrt(self) -> Self;
+    /// 1/x; `None` when x is 0 or the result is not representable.
+    fn recip(self) -> Option<Self>;
+}
+
+/// Dot product of two equally long slices, starting from `init` (extra elements of the longer
+/// slice are ignored).
+#[inline]
+pub fn dot<S: Scalar>(init: S, a: &[S], b: &[S]) -> S {
+    let mut acc = init.to_acc();
+    for (&x, &y) in a.iter().zip(b) {
+        acc = S::mac(acc, x, y);
+    }
+    S::from_acc(acc)
+}
+
+/// Scales a 3-vector to unit length; `None` when its length is 0 (or underflows).
+///
+/// ```
+/// use neurosurf_core::scalar::{normalize3, Q16, Scalar};
+/// let n = normalize3([3.0_f32, 0.0, 4.0]).unwrap();
+/// assert!((n[0] - 0.6).abs() < 1e-6 && (n[2] - 0.8).abs() < 1e-6);
+/// let q = normalize3([Q16::from_num(3), Q16::ZERO, Q16::from_num(4)]).unwrap();
+/// assert!((q[2].to_f32() - 0.8).abs() < 1e-4);
+/// ```
+pub fn normalize3<S: Scalar>(v: [S; 3]) -> Option<[S; 3]> {
+    let [x, y, z] = v;
+    // Scale down by the largest component first so squares stay in range for fixed point
+    // and do not underflow for f32.
+    let largest = x.abs().max_scalar(y.abs()).max_scalar(z.abs());
+    let inv_largest = largest.recip()?;
+    let (x, y, z) = (x.mul(inv_largest), y.mul(inv_largest), z.mul(inv_largest));
+    let mut acc = S::ZERO.to_acc();
+    acc = S::mac(acc, x, x);
+    acc = S::mac(acc, y, y);
+    acc = S::mac(acc, z, z);
+    let inv_len = S::from_acc(acc).sqrt().recip()?;
+    Some([x.mul(inv_len), y.mul(inv_len), z.mul(inv_len)])
+}
+
+/// Ordering helpers available on every scalar.
+trait MaxScalar: Scalar {
+    fn max_scalar(self, other: Self) -> Self {
+        if other > self { other } else { self }
+    }
+}
+impl<S: Scalar> MaxScalar for S {}

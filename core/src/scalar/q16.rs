@@ -1,0 +1,197 @@
+//! [`Scalar`] for Q16.16 fixed point (`fixed::types::I16F16`).
+//!
+//! Designed for a Cortex-M4 without relying on its FPU: products are 32×32→64-bit
+//! (`SMULL`/`SMLAL`), dot products accumulate in Q32.32 and are rounded once, the activation is
+//! a 641-entry table with linear interpolation (no division anywhere in a neuron). Every
+//! operation saturates at the ends of the range instead of wrapping.
+
+use super::activation_table::{FRACTION_BITS, LAST, TABLE};
+use super::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN, Scalar, ScalarKind};
+
+/// Signed Q16.16 fixed point: range [−32768, 32768), resolution 2⁻¹⁶ ≈ 1.5·10⁻⁵.
+pub type Q16 = fixed::types::I16F16;
+
+const ONE_BITS: i64 = 1 << 16;
+const HALF_BITS: i64 = 1 << 15;
+
+const fn q(value: f64) -> i32 {
+    (value * 65536.0 + 0.5) as i32
+}
+const SLOPE_OFFSET: i32 = q(ACTIVATION_GAIN * ACTIVATION_AMPLITUDE);
+const SLOPE_SQUARE: i32 = q(ACTIVATION_GAIN / ACTIVATION_AMPLITUDE);
+const CURVATURE: i32 = q(2.0 * ACTIVATION_GAIN / ACTIVATION_AMPLITUDE);
+
+/// Saturates a Q16.16 value held in an `i64` to `i32` range.
+#[inline(always)]
+fn saturate(bits: i64) -> Q16 {
+    Q16::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+}
+
+/// Rounds a Q32.32 accumulator to Q16.16 (round half up), saturating.
+#[inline(always)]
+fn round_q32(acc: i64) -> Q16 {
+    saturate(acc.saturating_add(HALF_BITS) >> 16)
+}
+
+impl Scalar for Q16 {
+    type Acc = i64;
+
+    const KIND: ScalarKind = ScalarKind::Q16_16;
+    const ZERO: Self = Q16::ZERO;
+    const ONE: Self = Q16::ONE;
+    /// 1024: with |parameter| ≤ 2¹⁰ (2²⁶ in bits) and inputs below 2³¹ bits, each product is
+    /// below 2⁵⁷ and 64 of them stay below 2⁶³.
+    const MAX_PARAMETER: f32 = 1024.0;
+
+    #[inline]
+    fn from_f32(value: f32) -> Option<Self> {
+        (value.is_finite() && value.abs() <= Self::MAX_PARAMETER).then(|| Q16::from_num(value))
+    }
+    #[inline]
+    fn from_f32_saturating(value: f32) -> Self {
+        if value.is_nan() {
+            Q16::ZERO
+        } else {
+            Q16::saturating_from_num(value)
+        }
+    }
+    #[inline]
+    fn from_stored(bytes: [u8; 4], stored: ScalarKind) -> Option<Self> {
+        match stored {
+            ScalarKind::F32 => Self::from_f32(f32::from_le_bytes(bytes)),
+            ScalarKind::Q16_16 => {
+                let value = Q16::from_bits(i32::from_le_bytes(bytes));
+                (value.to_bits().unsigned_abs() <= (Self::MAX_PARAMETER as u32) << 16)
+                    .then_some(value)
+            }
+        }
+    }
+    #[inline]
+    fn to_f32(self) -> f32 {
+        self.to_num()
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self.to_num()
+    }
+
+    #[inline]
+    fn add(self, other: Self) -> Self {
+        self.saturating_add(other)
+    }
+    #[inline]
+    fn sub(self, other: Self) -> Self {
+        self.saturating_sub(other)
+    }
+    #[inline]
+    fn mul(self, other: Self) -> Self {
+        round_q32(i64::from(self.to_bits()) * i64::from(other.to_bits()))
+    }
+    #[inline]
+    fn neg(self) -> Self {
+        self.saturating_neg()
+    }
+    #[inline]
+    fn abs(self) -> Self {
+        self.saturating_abs()
+    }
+
+    #[inline(always)]
+    fn to_acc(self) -> i64 {
+        i64::from(self.to_bits()) << 16
+    }
+    #[inline(always)]
+    fn mac(acc: i64, a: Self, b: Self) -> i64 {
+        // Bounded by MAX_PARAMETER (see there); wrapping_add keeps the M4 code to one SMLAL
+        // and cannot actually wrap within that bound.
+        acc.wrapping_add(i64::from(a.to_bits()) * i64::from(b.to_bits()))
+    }
+    #[inline(always)]
+    fn from_acc(acc: i64) -> Self {
+        round_q32(acc)
+    }
+
+    #[inline]
+    fn activation(h: Self) -> Self {
+        let bits = h.to_bits();
+        let magnitude = bits.unsigned_abs();
+        let index = (magnitude >> FRACTION_BITS) as usize;
+        let value = if index >= LAST {
+            TABLE.get(LAST).copied().unwrap_or(0)
+        } else {
+            let lower = TABLE.get(index).copied().unwrap_or(0);
+            let upper = TABLE.get(index + 1).copied().unwrap_or(lower);
+            let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
+            lower + (((upper - lower) * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
+        };
+        Q16::from_bits(if bits < 0 { -value } else { value })
+    }
+    #[inline]
+    fn activation_slope(a: Self) -> Self {
+        let square = a.mul(a);
+        Q16::from_bits(SLOPE_OFFSET).sub(Q16::from_bits(SLOPE_SQUARE).mul(square))
+    }
+    #[inline]
+    fn activation_curvature(a: Self, slope: Self) -> Self {
+        Q16::from_bits(CURVATURE).mul(a).mul(slope).neg()
+    }
+
+    #[inline]
+    fn sqrt(self) -> Self {
+        let bits = self.to_bits();
+        if bits <= 0 {
+            return Q16::ZERO;
+        }
+        // sqrt(b / 2¹⁶) · 2¹⁶ = sqrt(b · 2¹⁶)
+        saturate(isqrt((bits as u64) << 16) as i64)
+    }
+    #[inline]
+    fn recip(self) -> Option<Self> {
+        let bits = i64::from(self.to_bits());
+        if bits == 0 {
+            return None;
+        }
+        // round(2³² / b), sign-aware
+        let numerator = (ONE_BITS * ONE_BITS) + bits.abs() / 2;
+        let magnitude = numerator / bits.abs();
+        let value = if bits < 0 { -magnitude } else { magnitude };
+        i32::try_from(value).ok().map(Q16::from_bits)
+    }
+}
+
+/// ⌊√n⌋ for a 64-bit integer, by the bit-by-bit method (no division, fixed 32 steps).
+fn isqrt(n: u64) -> u64 {
+    let mut remainder = n;
+    let mut root = 0_u64;
+    let mut bit = 1_u64 << 62;
+    while bit > remainder {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if remainder >= root + bit {
+            remainder -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root
+}
+
+#[cfg(test)]
+mod tests {
+    use super::isqrt;
+
+    #[test]
+    fn isqrt_is_floor_sqrt() {
+        for n in (0..100_000_u64).chain([u64::MAX, u64::MAX - 1, 1 << 62, (1 << 32) - 1]) {
+            let r = isqrt(n);
+            assert!(r * r <= n, "n = {n}");
+            assert!(
+                (r + 1).checked_mul(r + 1).is_none_or(|sq| sq > n),
+                "n = {n}"
+            );
+        }
+    }
+}

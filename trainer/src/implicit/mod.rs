@@ -1,0 +1,1 @@
+//! Carcenac modular implicit surfaces: network, Jacobian, Levenberg–Marquardt, trees.

@@ -1,0 +1,15 @@
+//! # neurosurf-trainer
+//!
+//! The host side of neurosurf: reads point sets and meshes, trains the models of the four
+//! papers in `f64`, writes blobs that `neurosurf-core` evaluates, and evaluates them itself as
+//! the `f64` reference. The `neurosurf` binary is a thin command-line layer over this library.
+
+pub mod error;
+pub mod implicit;
+pub mod io;
+pub mod points;
+pub mod rbf;
+pub mod sample;
+
+pub use error::{Error, Result};
+pub use points::PointSet;

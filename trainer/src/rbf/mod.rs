@@ -1,0 +1,1 @@
+//! The multiquadric RBF baseline (Carcenac §9).

@@ -1,0 +1,1 @@
+//! Point samplers: analytic shapes and meshes.
