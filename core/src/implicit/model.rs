@@ -21,7 +21,7 @@ pub struct ImplicitPayload<'a> {
     /// Module kinds in post-order ([`ModuleKind::code`]).
     #[serde(borrow)]
     pub tree: &'a [u8],
-    /// All parameters in [`super::layout`] order, 4 little-endian bytes each in the blob's
+    /// All parameters in [`ModuleLayout`](super::ModuleLayout) order, 4 little-endian bytes each in the blob's
     /// scalar kind.
     #[serde(borrow)]
     pub parameters: &'a [u8],

@@ -1,1 +1,28 @@
-//! Carcenac modular implicit surfaces: network, Jacobian, Levenberg–Marquardt, trees.
+//! Carcenac's modular implicit surfaces, host side: the `f64` network, the analytic Jacobian,
+//! Levenberg–Marquardt, PCA-box normalization, module trees and automatic features, training,
+//! and conversion to and from blobs.
+
+mod activation;
+mod features;
+mod jacobian;
+mod lm;
+mod network;
+mod normalize;
+mod options;
+mod problem;
+mod train;
+mod tree;
+
+pub use activation::{Activation, activation};
+pub use features::decompose;
+pub use jacobian::{HiddenJet, InputJet, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows};
+pub use lm::{DecayScale, LeastSquares, LmOptions, LmReport, StopReason, levenberg_marquardt};
+pub use network::ImplicitNetwork;
+pub use normalize::{BoxScaling, Normalization};
+pub use options::ImplicitOptions;
+pub use problem::{ModuleData, ModuleProblem};
+pub use train::{ModuleReport, Progress, Trained, TrainingSummary, train};
+pub use tree::TreeSpec;
+
+#[cfg(test)]
+mod tests;

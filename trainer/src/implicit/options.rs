@@ -1,0 +1,46 @@
+//! Training settings for implicit models; defaults are Carcenac's Table 1.
+
+use serde::{Deserialize, Serialize};
+
+use super::lm::LmOptions;
+use super::normalize::BoxScaling;
+
+/// Everything that shapes how an implicit model is trained. Every field is overridable from
+/// the command line.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImplicitOptions {
+    /// Hidden width N (9).
+    pub width: usize,
+    /// Slope s of the field at the surface: the target gradient is −s·n (5).
+    pub slope: f64,
+    /// Weight γ of the gradient errors (0.05).
+    pub gamma: f64,
+    /// Initial weights are uniform in [−w₀, w₀]; biases start at 0 (0.5).
+    pub init_range: f64,
+    /// Side H of the normalization box [−H/2, H/2]³ (2).
+    pub box_size: f64,
+    /// How the PCA box is scaled.
+    pub box_scaling: BoxScaling,
+    /// Levenberg–Marquardt settings (λ = 1.2·10⁻⁴, μ₀ = 10⁻⁴, θ = 2, threshold 10⁻⁵).
+    pub lm: LmOptions,
+    /// Seed of the weight initialization.
+    pub seed: u64,
+    /// Fewest control points a leaf module accepts.
+    pub min_points: usize,
+}
+
+impl Default for ImplicitOptions {
+    fn default() -> Self {
+        ImplicitOptions {
+            width: 9,
+            slope: 5.0,
+            gamma: 0.05,
+            init_range: 0.5,
+            box_size: 2.0,
+            box_scaling: BoxScaling::Isotropic,
+            lm: LmOptions::default(),
+            seed: 1,
+            min_points: 4,
+        }
+    }
+}

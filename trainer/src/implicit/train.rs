@@ -1,0 +1,409 @@
+//! Training a module tree: every leaf on its feature's points (in parallel), then every node
+//! on the union of its leaves' points with its children frozen (Carcenac §3, §5).
+
+use std::time::Instant;
+
+use nalgebra::{Matrix3, Vector3};
+use neurosurf_core::implicit::ModuleKind;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::jacobian::{MAX_INPUTS, TrainedLayout};
+use super::lm::{LmReport, levenberg_marquardt};
+use super::network::ImplicitNetwork;
+use super::normalize::Normalization;
+use super::options::ImplicitOptions;
+use super::problem::{ModuleData, ModuleProblem};
+use super::tree::TreeSpec;
+use crate::error::{Error, Result};
+use crate::points::PointSet;
+
+/// Outcome of one leaf's training: module index, its box, its weights, its report.
+type TrainedLeaf = (usize, Normalization, Vec<f64>, ModuleReport);
+
+/// How one module's training went.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModuleReport {
+    /// Module index (post-order).
+    pub module: usize,
+    /// Whether it is a node (blending) module.
+    pub node: bool,
+    /// The feature of a leaf.
+    pub feature: Option<u32>,
+    /// Control points it was trained on.
+    pub points: usize,
+    /// Trained parameters.
+    pub parameters: usize,
+    /// The Levenberg–Marquardt run.
+    pub lm: LmReport,
+    /// Wall time in seconds.
+    pub seconds: f64,
+    /// Whether it started from a previous model's weights.
+    pub warm: bool,
+}
+
+/// How a whole training went; stored in the blob's metadata.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainingSummary {
+    /// The tree, as `((0,1),2)`.
+    pub tree: String,
+    /// The options used.
+    pub options: ImplicitOptions,
+    /// One report per module, post-order.
+    pub modules: Vec<ModuleReport>,
+    /// Wall time of the whole training in seconds.
+    pub seconds: f64,
+    /// Iterations per module of the cold start at the head of a warm-start chain (this run's
+    /// own when it was cold): the baseline for "iterations saved".
+    pub cold_iterations: Vec<usize>,
+}
+
+impl TrainingSummary {
+    /// Total accepted LM iterations over all modules.
+    pub fn iterations(&self) -> usize {
+        self.modules.iter().map(|m| m.lm.iterations).sum()
+    }
+
+    /// Whether every module reached the error threshold.
+    pub fn converged(&self) -> bool {
+        self.modules
+            .iter()
+            .all(|m| m.lm.stop == super::lm::StopReason::Converged)
+    }
+}
+
+/// Progress of a training, reported as it happens (possibly from several threads).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Progress {
+    /// A module starts.
+    Started {
+        /// Module index.
+        module: usize,
+        /// Its control points.
+        points: usize,
+    },
+    /// A module accepted an LM iteration.
+    Iteration {
+        /// Module index.
+        module: usize,
+        /// Iteration number.
+        iteration: usize,
+        /// E_s after it.
+        error: f64,
+    },
+    /// A module is done.
+    Finished {
+        /// Module index.
+        module: usize,
+        /// Its final E_s.
+        error: f64,
+        /// Its iterations.
+        iterations: usize,
+    },
+}
+
+/// A trained network and its summary.
+#[derive(Clone, Debug)]
+pub struct Trained {
+    /// The model.
+    pub network: ImplicitNetwork,
+    /// What happened.
+    pub summary: TrainingSummary,
+}
+
+/// Trains a modular implicit surface on `points` (which must carry feature labels matching
+/// `tree`). With `init`, every module starts from that model's weights (warm start: the
+/// animation use case); leaves refit their box to the new points and re-express the inherited
+/// first layer in it, so the starting field is exactly the previous one.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for missing/unused features, features with too few points or a
+/// degenerate box, options out of range, or an `init` model of another shape.
+pub fn train(
+    points: &PointSet,
+    tree: &TreeSpec,
+    options: &ImplicitOptions,
+    init: Option<(&ImplicitNetwork, &[usize])>,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Trained> {
+    let start = Instant::now();
+    check_options(options)?;
+    let labels = points.features.as_ref().ok_or_else(|| {
+        Error::invalid("the points carry no feature labels; decompose them first")
+    })?;
+    let feature_count = labels.iter().map(|&f| f as usize + 1).max().unwrap_or(0);
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); feature_count];
+    for (i, &f) in labels.iter().enumerate() {
+        members[f as usize].push(i);
+    }
+    for (f, m) in members.iter().enumerate() {
+        if m.len() < options.min_points {
+            return Err(Error::invalid(format!(
+                "feature {f} has {} control points; a leaf module needs at least {}",
+                m.len(),
+                options.min_points
+            )));
+        }
+    }
+    tree.check_features(feature_count)?;
+    let mut network = ImplicitNetwork::new(options.width, tree)?;
+    if let Some((previous, _)) = init {
+        check_same_shape(&network, previous)?;
+    }
+
+    // Leaves, in parallel.
+    let leaves: Vec<usize> = (0..network.module_count())
+        .filter(|&i| network.kinds()[i] == ModuleKind::Leaf)
+        .collect();
+    let leaf_results: Vec<Result<TrainedLeaf>> = leaves
+        .par_iter()
+        .map(|&i| {
+            let feature = network.leaf_features()[i].unwrap_or(0);
+            let indices = &members[feature as usize];
+            let positions: Vec<[f64; 3]> = indices.iter().map(|&p| points.positions[p]).collect();
+            let what = format!("feature {feature}");
+            let norm =
+                Normalization::fit(&positions, options.box_size, options.box_scaling, &what)?;
+            let layout = network.trained_layout(i);
+            let initial = match init {
+                Some((previous, _)) => {
+                    let old = previous.normalization(i).unwrap_or(norm);
+                    reexpress_first_layer(&layout, previous.trained_params(i), &old, &norm)
+                }
+                None => random_params(&layout, options.init_range, options.seed, i),
+            };
+            let mut data = ModuleData::new(3);
+            for &p in indices {
+                let values = norm.apply(points.positions[p]);
+                let columns: [[f64; 3]; 3] = std::array::from_fn(|k| norm.matrix.map(|row| row[k]));
+                data.push(
+                    &values,
+                    [&columns[0], &columns[1], &columns[2]],
+                    target(points, p, options),
+                );
+            }
+            let (params, report) = fit_module(
+                i,
+                &data,
+                initial,
+                options,
+                Some(feature),
+                init.is_some(),
+                progress,
+            );
+            Ok((i, norm, params, report))
+        })
+        .collect();
+    let mut reports: Vec<Option<ModuleReport>> = vec![None; network.module_count()];
+    for result in leaf_results {
+        let (i, norm, params, report) = result?;
+        network.set_normalization(i, &norm);
+        network.trained_params_mut(i).copy_from_slice(&params);
+        reports[i] = Some(report);
+    }
+
+    // Nodes, level by level: every node whose children are trained, in parallel.
+    loop {
+        let ready: Vec<usize> = (0..network.module_count())
+            .filter(|&i| reports[i].is_none())
+            .filter(|&i| {
+                network
+                    .children(i)
+                    .is_some_and(|(l, r)| reports[l].is_some() && reports[r].is_some())
+            })
+            .collect();
+        if ready.is_empty() {
+            break;
+        }
+        let results: Vec<(usize, Vec<f64>, ModuleReport)> = ready
+            .par_iter()
+            .map(|&i| {
+                let layout = network.trained_layout(i);
+                let mut data = ModuleData::new(layout.inputs);
+                let mut values = [0.0; MAX_INPUTS];
+                let mut tangents = [[0.0; MAX_INPUTS]; 3];
+                for leaf in network.subtree_leaves(i) {
+                    let feature = network.leaf_features()[leaf].unwrap_or(0);
+                    for &p in &members[feature as usize] {
+                        let input = network.module_input(
+                            i,
+                            points.positions[p],
+                            &mut values,
+                            &mut tangents,
+                        );
+                        data.push(input.values, input.tangents, target(points, p, options));
+                    }
+                }
+                let initial = match init {
+                    Some((previous, _)) => previous.trained_params(i).to_vec(),
+                    None => random_params(&layout, options.init_range, options.seed, i),
+                };
+                let (params, report) =
+                    fit_module(i, &data, initial, options, None, init.is_some(), progress);
+                (i, params, report)
+            })
+            .collect();
+        for (i, params, report) in results {
+            network.trained_params_mut(i).copy_from_slice(&params);
+            reports[i] = Some(report);
+        }
+    }
+
+    let modules: Vec<ModuleReport> = reports.into_iter().flatten().collect();
+    let cold_iterations = match init {
+        Some((_, cold)) if cold.len() == modules.len() => cold.to_vec(),
+        _ => modules.iter().map(|m| m.lm.iterations).collect(),
+    };
+    let summary = TrainingSummary {
+        tree: tree.to_string(),
+        options: options.clone(),
+        modules,
+        seconds: start.elapsed().as_secs_f64(),
+        cold_iterations,
+    };
+    Ok(Trained { network, summary })
+}
+
+fn target(points: &PointSet, p: usize, options: &ImplicitOptions) -> [f64; 3] {
+    points.normals[p].map(|n| -options.slope * n)
+}
+
+fn fit_module(
+    module: usize,
+    data: &ModuleData,
+    mut params: Vec<f64>,
+    options: &ImplicitOptions,
+    feature: Option<u32>,
+    warm: bool,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> (Vec<f64>, ModuleReport) {
+    let start = Instant::now();
+    progress(Progress::Started {
+        module,
+        points: data.len(),
+    });
+    let problem = ModuleProblem::new(data, options.width, options.gamma);
+    let lm: LmReport = levenberg_marquardt(
+        &problem,
+        &mut params,
+        &options.lm,
+        &mut |iteration, error| {
+            progress(Progress::Iteration {
+                module,
+                iteration,
+                error,
+            })
+        },
+    );
+    progress(Progress::Finished {
+        module,
+        error: lm.error,
+        iterations: lm.iterations,
+    });
+    let report = ModuleReport {
+        module,
+        node: feature.is_none(),
+        feature,
+        points: data.len(),
+        parameters: params.len(),
+        lm,
+        seconds: start.elapsed().as_secs_f64(),
+        warm,
+    };
+    (params, report)
+}
+
+/// Weights uniform in [−w₀, w₀], biases 0; a stream per (seed, module).
+fn random_params(layout: &TrainedLayout, range: f64, seed: u64, module: usize) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(module as u64);
+    (0..layout.len)
+        .map(|i| {
+            if layout.is_bias(i) {
+                0.0
+            } else {
+                rng.random_range(-range..=range)
+            }
+        })
+        .collect()
+}
+
+/// Rewrites a leaf's first layer so that, with the new normalization, it computes exactly what
+/// it computed with the old one: W′ = W·A₁A₂⁻¹, b′ = b + W·A₁(c₂ − c₁).
+fn reexpress_first_layer(
+    layout: &TrainedLayout,
+    params: &[f64],
+    old: &Normalization,
+    new: &Normalization,
+) -> Vec<f64> {
+    let mut out = params.to_vec();
+    let a1 = Matrix3::from_fn(|i, j| old.matrix[i][j]);
+    let a2 = Matrix3::from_fn(|i, j| new.matrix[i][j]);
+    let Some(a2_inv) = a2.try_inverse() else {
+        return out;
+    };
+    let m = a1 * a2_inv;
+    let shift = a1 * (Vector3::from(new.center) - Vector3::from(old.center));
+    for j in 0..layout.width {
+        let w = Vector3::new(params[3 * j], params[3 * j + 1], params[3 * j + 2]);
+        let w_new = m.transpose() * w;
+        out[3 * j..3 * j + 3].copy_from_slice(w_new.as_slice());
+        out[layout.a_biases + j] += w.dot(&shift);
+    }
+    out
+}
+
+fn check_same_shape(network: &ImplicitNetwork, previous: &ImplicitNetwork) -> Result<()> {
+    if network.width() != previous.width()
+        || network.kinds() != previous.kinds()
+        || network.leaf_features() != previous.leaf_features()
+    {
+        return Err(Error::invalid(format!(
+            "the initial model (width {}, tree {}) does not match this training (width {}, tree {})",
+            previous.width(),
+            previous.tree(),
+            network.width(),
+            network.tree()
+        )));
+    }
+    Ok(())
+}
+
+fn check_options(o: &ImplicitOptions) -> Result<()> {
+    let positive = [
+        ("slope", o.slope),
+        ("gamma", o.gamma),
+        ("box size", o.box_size),
+        ("theta - 1", o.lm.theta - 1.0),
+        ("mu0", o.lm.mu0),
+    ];
+    for (name, value) in positive {
+        if !(value > 0.0 && value.is_finite()) {
+            return Err(Error::invalid(format!(
+                "option {name} must be positive and finite, got {value}"
+            )));
+        }
+    }
+    let non_negative = [
+        ("lambda", o.lm.lambda),
+        ("init range", o.init_range),
+        ("threshold", o.lm.threshold),
+    ];
+    for (name, value) in non_negative {
+        if !(value >= 0.0 && value.is_finite()) {
+            return Err(Error::invalid(format!(
+                "option {name} must be non-negative and finite, got {value}"
+            )));
+        }
+    }
+    if !(1..=neurosurf_core::implicit::MAX_WIDTH).contains(&o.width) {
+        return Err(Error::invalid(format!(
+            "width {} is outside 1..={}",
+            o.width,
+            neurosurf_core::implicit::MAX_WIDTH
+        )));
+    }
+    Ok(())
+}
