@@ -3,6 +3,7 @@
 use core::fmt;
 
 use crate::blob::ModelKind;
+use crate::scalar::ScalarKind;
 
 /// A quantity a blob declares, named in shape and capacity errors.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -75,6 +76,13 @@ pub enum BlobError {
     UnknownScalarKind {
         /// The byte.
         code: u8,
+    },
+    /// The model kind cannot be stored in this scalar kind (e.g. an implicit model in f64).
+    UnsupportedStorage {
+        /// The model kind.
+        model: ModelKind,
+        /// The scalar kind its parameters claim to be stored in.
+        scalar: ScalarKind,
     },
     /// The blob holds another kind of model than the one asked for.
     WrongModelKind {
@@ -154,6 +162,12 @@ impl fmt::Display for BlobError {
             ),
             BlobError::UnknownModelKind { code } => write!(f, "unknown model kind {code}"),
             BlobError::UnknownScalarKind { code } => write!(f, "unknown scalar kind {code}"),
+            BlobError::UnsupportedStorage { model, scalar } => write!(
+                f,
+                "{} models cannot be stored as {}",
+                model.name(),
+                scalar.name()
+            ),
             BlobError::WrongModelKind { expected, found } => write!(
                 f,
                 "blob holds a {} model, expected {}",

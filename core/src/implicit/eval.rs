@@ -51,7 +51,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     /// Φ at `point`.
     ///
     /// Accuracy: `f32` within ~1e-6 of the `f64` reference for Carcenac-sized modules; Q16.16
-    /// within ~1e-4 (activation error 2⁻¹⁵ per neuron, propagated).
+    /// within ~1e-4 (activation error ≤ 1.25·2⁻¹⁵ per neuron, propagated).
     pub fn field(&self, point: [S; 3]) -> S {
         self.view().field(point)
     }

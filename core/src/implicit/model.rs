@@ -130,6 +130,12 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         payload: &ImplicitPayload<'_>,
         stored: ScalarKind,
     ) -> Result<Self, BlobError> {
+        if !matches!(stored, ScalarKind::F32 | ScalarKind::Q16_16) {
+            return Err(BlobError::UnsupportedStorage {
+                model: blob::ModelKind::Implicit,
+                scalar: stored,
+            });
+        }
         let width = usize::from(payload.width);
         if width == 0 || width > MAX_WIDTH {
             return Err(BlobError::ShapeMismatch {

@@ -33,6 +33,7 @@ impl Scalar for f32 {
         match stored {
             ScalarKind::F32 => Self::from_f32(f32::from_le_bytes(bytes)),
             ScalarKind::Q16_16 => Some(Q16::from_bits(i32::from_le_bytes(bytes)).to_num()),
+            ScalarKind::F64 => None,
         }
     }
     #[inline]

@@ -34,9 +34,12 @@ pub const ACTIVATION_AMPLITUDE: f64 = 1.7159;
 /// 2/3, the input gain of the activation.
 pub const ACTIVATION_GAIN: f64 = 2.0 / 3.0;
 
-/// Largest absolute error of [`Q16`]'s activation against the exact a(H), over all inputs
-/// (measured exhaustively by the tests; the design goal was 2⁻¹⁴).
-pub const Q16_ACTIVATION_MAX_ERROR: f64 = 1.0 / 32768.0;
+/// Largest absolute error of [`Q16`]'s activation against the exact a(H), over all inputs:
+/// 1.25·2⁻¹⁵ ≈ 3.81·10⁻⁵. Measured exhaustively by the tests (`core/tests/activation.rs`, every
+/// Q16.16 input in [−12, 12] plus the saturated tails): 3.067·10⁻⁵ = 2.01 LSB, at H = −0.86728
+/// (interpolation error of the 1/64-step table plus the table's and the interpolation's
+/// roundings). The design goal was 2⁻¹⁴.
+pub const Q16_ACTIVATION_MAX_ERROR: f64 = 1.25 / 32768.0;
 
 /// Largest absolute error of `f32`'s activation against the exact a(H) (libm `tanhf` plus
 /// two roundings).
@@ -57,6 +60,9 @@ pub enum ScalarKind {
     F32,
     /// Signed Q16.16 fixed point (`I16F16`), two's complement, little endian.
     Q16_16,
+    /// IEEE-754 binary64, little endian: only host-side model kinds (the RBF baseline) store
+    /// this; no core model loads it and no core [`Scalar`] evaluates in it.
+    F64,
 }
 
 impl ScalarKind {
@@ -65,6 +71,7 @@ impl ScalarKind {
         match self {
             ScalarKind::F32 => 1,
             ScalarKind::Q16_16 => 2,
+            ScalarKind::F64 => 3,
         }
     }
 
@@ -73,13 +80,17 @@ impl ScalarKind {
         match code {
             1 => Some(ScalarKind::F32),
             2 => Some(ScalarKind::Q16_16),
+            3 => Some(ScalarKind::F64),
             _ => None,
         }
     }
 
     /// Bytes per stored parameter.
     pub const fn stored_bytes(self) -> usize {
-        4
+        match self {
+            ScalarKind::F32 | ScalarKind::Q16_16 => 4,
+            ScalarKind::F64 => 8,
+        }
     }
 
     /// A short lowercase name (`"f32"`, `"q16.16"`), as used on the command line.
@@ -87,13 +98,15 @@ impl ScalarKind {
         match self {
             ScalarKind::F32 => "f32",
             ScalarKind::Q16_16 => "q16.16",
+            ScalarKind::F64 => "f64",
         }
     }
 
     /// Encodes one parameter for storage in this kind (round to nearest).
     ///
     /// Returns `None` when `value` is not finite or not representable (Q16.16 covers
-    /// [−32768, 32768)).
+    /// [−32768, 32768)), and for [`ScalarKind::F64`], whose 8-byte words host code writes
+    /// itself.
     ///
     /// ```
     /// use neurosurf_core::scalar::ScalarKind;
@@ -110,6 +123,7 @@ impl ScalarKind {
                 narrowed.is_finite().then(|| narrowed.to_le_bytes())
             }
             ScalarKind::Q16_16 => Q16::checked_from_num(value).map(|q| q.to_bits().to_le_bytes()),
+            ScalarKind::F64 => None,
         }
     }
 }

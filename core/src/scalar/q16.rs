@@ -64,6 +64,7 @@ impl Scalar for Q16 {
                 (value.to_bits().unsigned_abs() <= (Self::MAX_PARAMETER as u32) << 16)
                     .then_some(value)
             }
+            ScalarKind::F64 => None,
         }
     }
     #[inline]
