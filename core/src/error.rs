@@ -9,6 +9,7 @@ use crate::scalar::ScalarKind;
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Quantity {
     /// Neurons per hidden layer.
     Width,
@@ -35,6 +36,7 @@ impl fmt::Display for Quantity {
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum BlobError {
     /// The bytes end before the blob does.
     Truncated {
@@ -214,6 +216,7 @@ impl core::error::Error for BlobError {}
 /// Slices of different lengths were given to a batch evaluation.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LengthMismatch {
     /// Number of input points.
     pub inputs: usize,

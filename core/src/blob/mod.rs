@@ -54,6 +54,7 @@ pub const TRAILER_LEN: usize = 4;
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ModelKind {
     /// Carcenac's modular implicit surface (a tree of MLP modules), see [`crate::implicit`].
     Implicit,
@@ -91,6 +92,7 @@ impl ModelKind {
 /// The decoded fixed-size header of a blob.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BlobHeader {
     /// Format version (always [`FORMAT_VERSION`] once parsed).
     pub version: u16,

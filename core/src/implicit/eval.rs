@@ -9,6 +9,7 @@ use crate::scalar::{Scalar, normalize3};
 /// Φ and ∇Φ at one point.
 #[derive(Copy, Clone, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FieldGradient<S> {
     /// Φ(x): 0 on the surface, > 0 inside, < 0 outside.
     pub value: S,

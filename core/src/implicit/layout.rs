@@ -25,6 +25,7 @@ pub const NORMALIZATION_LEN: usize = 12;
 /// Leaf or node.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ModuleKind {
     /// Learns one feature from the 3 input coordinates: 3 → N → N → 1.
     Leaf,
