@@ -4,7 +4,10 @@
 //! papers in `f64`, writes blobs that `neurosurf-core` evaluates, and evaluates them itself as
 //! the `f64` reference. The `neurosurf` binary is a thin command-line layer over this library.
 
+pub mod demo;
 pub mod error;
+pub mod evaluate;
+pub mod fidelity;
 pub mod implicit;
 pub mod io;
 pub mod points;

@@ -10,10 +10,16 @@
 //! neurons of its children) through hidden layers of width N to one output. Each input comes
 //! with its tangents — derivatives with respect to the world coordinates x₀, x₁, x₂ — so the
 //! module's output gradient is ∇Φ in world space.
+//!
+//! Training evaluates [`LANES`] control points at once, one per SIMD lane
+//! ([`forward_lanes`], [`jacobian_lanes`]): the same sweeps with a vectorizable tanh, compiled
+//! for AVX2 and FMA when the CPU has them (see `problem.rs`).
 
 use neurosurf_core::implicit::MAX_WIDTH;
+use neurosurf_core::scalar::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN};
 
 use super::activation::activation;
+use super::lm::madd;
 
 /// Most inputs a module can have (a node: two children of width [`MAX_WIDTH`]).
 pub const MAX_INPUTS: usize = 2 * MAX_WIDTH;
@@ -217,6 +223,13 @@ fn hidden(
 
 /// Writes the four Jacobian rows of one point into `rows` (4 × `layout.len`, row-major):
 /// ∂Φ/∂θ, then γ·∂(∂Φ/∂xₖ)/∂θ for k = 0, 1, 2.
+///
+/// The four backward sweeps share most of their work. The Φ row starts with no tangent
+/// adjoint, and none appears on the way down, so its weight derivatives are plain outer
+/// products H̄·Oᵀ. The γ∂Φ/∂xₖ row starts with ᵏĪ = γa′ and no other tangent adjoint, and at
+/// every layer that adjoint, ᵏĪ = a′·Σ w·ᵏĪ, does not depend on k: one vector serves all three
+/// rows, and only the value adjoints H̄ differ. The arithmetic per entry is that of the
+/// general sweep (the terms it skips are exact zeros).
 pub fn jacobian_rows(
     layout: &TrainedLayout,
     params: &[f64],
@@ -225,132 +238,720 @@ pub fn jacobian_rows(
     gamma: f64,
     rows: &mut [f64],
 ) {
+    let n = layout.width;
+    let d = layout.inputs;
     let p = layout.len;
-    for (r, row) in rows.chunks_exact_mut(p).take(4).enumerate() {
-        // Seeds at the output neuron: adjoints of its net input H and net-input tangents ᵏI.
-        let (h_bar, i_bar, scale) = if r == 0 {
-            (tape.out_slope, [0.0; 3], 1.0)
+    let (a, b) = (&tape.a, &tape.b);
+    let w_out = &params[layout.out_weights..layout.out_weights + n];
+    let w_b = &params[layout.b_weights..layout.b_biases];
+    let mut rows: [&mut [f64]; 4] = {
+        let (r0, rest) = rows.split_at_mut(p);
+        let (r1, rest) = rest.split_at_mut(p);
+        let (r2, r3) = rest.split_at_mut(p);
+        [r0, r1, r2, &mut r3[..p]]
+    };
+
+    // Seeds at the output neuron: H̄ per row, and the tangent adjoint of the gradient rows.
+    let h_seed = [
+        tape.out_slope,
+        tape.out_curvature * tape.out_net_tangent[0] * gamma,
+        tape.out_curvature * tape.out_net_tangent[1] * gamma,
+        tape.out_curvature * tape.out_net_tangent[2] * gamma,
+    ];
+    let i_seed = tape.out_slope * gamma;
+
+    // Output layer; adjoints of hidden b's outputs.
+    let mut value_bar = [[0.0; MAX_WIDTH]; 4];
+    let mut tangent_bar = [0.0; MAX_WIDTH];
+    for (r, row) in rows.iter_mut().enumerate() {
+        let h = h_seed[r];
+        let out = &mut row[layout.out_weights..layout.out_weights + n];
+        if r == 0 {
+            for j in 0..n {
+                out[j] = h * b.value[j];
+            }
         } else {
-            let m = r - 1;
-            let mut i_bar = [0.0; 3];
-            i_bar[m] = tape.out_slope;
-            (tape.out_curvature * tape.out_net_tangent[m], i_bar, gamma)
-        };
-        backward(
-            layout,
-            params,
-            input,
-            tape,
-            h_bar * scale,
-            i_bar.map(|x| x * scale),
-            row,
-        );
+            let t = &b.tangent[r - 1];
+            for j in 0..n {
+                out[j] = h * b.value[j] + i_seed * t[j];
+            }
+        }
+        row[layout.out_bias] = h;
+        for j in 0..n {
+            value_bar[r][j] = w_out[j] * h;
+        }
+    }
+    for j in 0..n {
+        tangent_bar[j] = w_out[j] * i_seed;
+    }
+
+    // Hidden b; adjoints of hidden a's outputs.
+    let (b_h, b_i) = layer_adjoints(n, b, &value_bar, &tangent_bar);
+    let a_jet = [
+        &a.value[..n],
+        &a.tangent[0][..n],
+        &a.tangent[1][..n],
+        &a.tangent[2][..n],
+    ];
+    write_layer(
+        n,
+        n,
+        layout.b_weights,
+        layout.b_biases,
+        &b_h,
+        &b_i,
+        a_jet,
+        &mut rows,
+    );
+    let mut value_bar = [[0.0; MAX_WIDTH]; 4];
+    let mut tangent_bar = [0.0; MAX_WIDTH];
+    for j in 0..n {
+        let w_row = &w_b[j * n..(j + 1) * n];
+        for r in 0..4 {
+            let h = b_h[r][j];
+            for c in 0..n {
+                value_bar[r][c] += w_row[c] * h;
+            }
+        }
+        let t = b_i[j];
+        for c in 0..n {
+            tangent_bar[c] += w_row[c] * t;
+        }
+    }
+
+    // Hidden a.
+    let (a_h, a_i) = layer_adjoints(n, a, &value_bar, &tangent_bar);
+    let x_jet = [
+        &input.values[..d],
+        &input.tangents[0][..d],
+        &input.tangents[1][..d],
+        &input.tangents[2][..d],
+    ];
+    write_layer(
+        n,
+        d,
+        layout.a_weights,
+        layout.a_biases,
+        &a_h,
+        &a_i,
+        x_jet,
+        &mut rows,
+    );
+}
+
+/// A hidden layer's net-input adjoints from its output adjoints: H̄ per row (Ō·a′, plus
+/// ᵏḠ·a″·ᵏI in the gradient rows) and the shared ᵏĪ = ᵏḠ·a′.
+#[inline(always)]
+fn layer_adjoints(
+    n: usize,
+    tape: &HiddenTape,
+    value_bar: &[[f64; MAX_WIDTH]; 4],
+    tangent_bar: &[f64; MAX_WIDTH],
+) -> ([[f64; MAX_WIDTH]; 4], [f64; MAX_WIDTH]) {
+    let mut h_bar = [[0.0; MAX_WIDTH]; 4];
+    let mut i_bar = [0.0; MAX_WIDTH];
+    for j in 0..n {
+        h_bar[0][j] = value_bar[0][j] * tape.slope[j];
+        for k in 0..3 {
+            h_bar[1 + k][j] = value_bar[1 + k][j] * tape.slope[j]
+                + tangent_bar[j] * tape.curvature[j] * tape.net_tangent[k][j];
+        }
+        i_bar[j] = tangent_bar[j] * tape.slope[j];
+    }
+    (h_bar, i_bar)
+}
+
+/// A hidden layer's weight and bias derivatives in all four rows: ∂/∂w_jc = H̄_j·O_c in the Φ
+/// row, H̄_j·O_c + Ī_j·ᵏO_c in the gradient row k, where O are the layer's inputs.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn write_layer(
+    n: usize,
+    d: usize,
+    weights: usize,
+    biases: usize,
+    h_bar: &[[f64; MAX_WIDTH]; 4],
+    i_bar: &[f64; MAX_WIDTH],
+    inputs: [&[f64]; 4],
+    rows: &mut [&mut [f64]; 4],
+) {
+    for (r, row) in rows.iter_mut().enumerate() {
+        let (w_grads, rest) = row[weights..].split_at_mut(n * d);
+        let values = &inputs[0][..d];
+        for (j, grad_row) in w_grads.chunks_exact_mut(d).enumerate() {
+            let h = h_bar[r][j];
+            if r == 0 {
+                for c in 0..d {
+                    grad_row[c] = h * values[c];
+                }
+            } else {
+                let t = &inputs[r][..d];
+                let i = i_bar[j];
+                for c in 0..d {
+                    grad_row[c] = h * values[c] + i * t[c];
+                }
+            }
+        }
+        rest[biases - weights - n * d..][..n].copy_from_slice(&h_bar[r][..n]);
     }
 }
 
-/// One backward sweep from the output neuron's adjoints (H̄, ᵏĪ) to every parameter.
-fn backward(
+/// Control points the trainer pushes through a module together, one per SIMD lane (4 × f64: one AVX2
+/// register).
+pub const LANES: usize = 4;
+
+/// One value per lane.
+pub(crate) type Lanes = [f64; LANES];
+
+/// The inputs of [`LANES`] points, lane-minor: `values[c][l]`, `tangents[k][c][l]`.
+#[derive(Clone, Debug)]
+pub(crate) struct InputLanes {
+    pub values: [Lanes; MAX_INPUTS],
+    pub tangents: [[Lanes; MAX_INPUTS]; 3],
+}
+
+impl InputLanes {
+    pub const ZERO: Self = InputLanes {
+        values: [[0.0; LANES]; MAX_INPUTS],
+        tangents: [[[0.0; LANES]; MAX_INPUTS]; 3],
+    };
+}
+
+/// tanh on every lane, from eᵘ − 1 with u = 2|y|: tanh|y| = (eᵘ − 1)/(eᵘ − 1 + 2).
+///
+/// Within a few ulps of `f64::tanh` (see the tests), without a call per value: u = k·ln 2 + r
+/// with |r| ≤ ln 2/2, eʳ − 1 by its Taylor series to r¹³ (the next term is below 10⁻¹⁷·r),
+/// eᵘ − 1 = 2ᵏ(eʳ − 1) + (2ᵏ − 1). For k = 0 (|y| < 0.17) that is the series itself, so
+/// small arguments keep their relative accuracy. |y| > 20 gives ±1 (as tanh does to the last
+/// bit), NaN stays NaN.
+#[inline(always)]
+pub(crate) fn tanh_lanes<const FMA: bool>(y: Lanes) -> Lanes {
+    // 1.5·2⁵²: adding it rounds a small number to an integer held in the low mantissa bits.
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    // ln 2 to 21 bits, so k·LN2_HI is exact; and the rest.
+    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_0000_0000);
+    const LN2_LO: f64 = 4.749_325_039_031_672_6e-7;
+    // (eʳ − 1)/r = Σ rⁱ/(i + 1)!.
+    const SERIES: [f64; 13] = [
+        1.0,
+        1.0 / 2.0,
+        1.0 / 6.0,
+        1.0 / 24.0,
+        1.0 / 120.0,
+        1.0 / 720.0,
+        1.0 / 5_040.0,
+        1.0 / 40_320.0,
+        1.0 / 362_880.0,
+        1.0 / 3_628_800.0,
+        1.0 / 39_916_800.0,
+        1.0 / 479_001_600.0,
+        1.0 / 6_227_020_800.0,
+    ];
+    let mut out = [0.0; LANES];
+    for l in 0..LANES {
+        let u = 2.0 * y[l].abs();
+        let u = if u > 40.0 { 40.0 } else { u };
+        let shifted = madd::<FMA>(u, std::f64::consts::LOG2_E, ROUND);
+        let k = shifted - ROUND;
+        let r = madd::<FMA>(-k, LN2_LO, madd::<FMA>(-k, LN2_HI, u));
+        let mut series = SERIES[12];
+        for &c in SERIES[..12].iter().rev() {
+            series = madd::<FMA>(series, r, c);
+        }
+        let expm1_r = r * series;
+        // 2ᵏ from k's bits in `shifted`.
+        let exponent = shifted
+            .to_bits()
+            .wrapping_sub(ROUND.to_bits())
+            .wrapping_add(1023);
+        let scale = f64::from_bits(exponent << 52);
+        let expm1 = madd::<FMA>(scale, expm1_r, scale - 1.0);
+        out[l] = (expm1 / (expm1 + 2.0)).copysign(y[l]);
+    }
+    out
+}
+
+/// [`activation`] on every lane: (a, a′, a″), with [`tanh_lanes`].
+#[inline(always)]
+fn activation_lanes<const FMA: bool>(h: Lanes) -> [Lanes; 3] {
+    let t = tanh_lanes::<FMA>(h.map(|x| ACTIVATION_GAIN * x));
+    let mut out = [[0.0; LANES]; 3];
+    for l in 0..LANES {
+        let slope = ACTIVATION_AMPLITUDE * ACTIVATION_GAIN * (1.0 - t[l] * t[l]);
+        out[0][l] = ACTIVATION_AMPLITUDE * t[l];
+        out[1][l] = slope;
+        out[2][l] = -2.0 * ACTIVATION_GAIN * t[l] * slope;
+    }
+    out
+}
+
+/// One hidden layer on [`LANES`] points.
+#[derive(Clone, Debug)]
+struct HiddenLanes {
+    value: [Lanes; MAX_WIDTH],
+    slope: [Lanes; MAX_WIDTH],
+    curvature: [Lanes; MAX_WIDTH],
+    net_tangent: [[Lanes; MAX_WIDTH]; 3],
+    tangent: [[Lanes; MAX_WIDTH]; 3],
+}
+
+impl HiddenLanes {
+    const ZERO: Self = HiddenLanes {
+        value: [[0.0; LANES]; MAX_WIDTH],
+        slope: [[0.0; LANES]; MAX_WIDTH],
+        curvature: [[0.0; LANES]; MAX_WIDTH],
+        net_tangent: [[[0.0; LANES]; MAX_WIDTH]; 3],
+        tangent: [[[0.0; LANES]; MAX_WIDTH]; 3],
+    };
+}
+
+/// [`Tape`] of [`LANES`] points, lane-minor.
+#[derive(Clone, Debug)]
+pub(crate) struct TapeLanes {
+    a: HiddenLanes,
+    b: HiddenLanes,
+    out_slope: Lanes,
+    out_curvature: Lanes,
+    out_net_tangent: [Lanes; 3],
+    /// Φ.
+    pub value: Lanes,
+    /// ∇Φ.
+    pub gradient: [Lanes; 3],
+}
+
+impl TapeLanes {
+    pub const ZERO: Self = TapeLanes {
+        a: HiddenLanes::ZERO,
+        b: HiddenLanes::ZERO,
+        out_slope: [0.0; LANES],
+        out_curvature: [0.0; LANES],
+        out_net_tangent: [[0.0; LANES]; 3],
+        value: [0.0; LANES],
+        gradient: [[0.0; LANES]; 3],
+    };
+}
+
+/// [`hidden`] on [`LANES`] points: net inputs first, then the activations (independent
+/// chains the CPU overlaps).
+#[inline(always)]
+fn hidden_lanes<const FMA: bool>(
+    n: usize,
+    weights: &[f64],
+    biases: &[f64],
+    values: &[Lanes],
+    tangents: [&[Lanes]; 3],
+    out: &mut HiddenLanes,
+) {
+    let d = values.len();
+    let mut net = [[0.0; LANES]; MAX_WIDTH];
+    for j in 0..n {
+        let row = &weights[j * d..(j + 1) * d];
+        let mut h = [biases[j]; LANES];
+        let mut t = [[0.0; LANES]; 3];
+        for c in 0..d {
+            let w = row[c];
+            for l in 0..LANES {
+                h[l] = madd::<FMA>(w, values[c][l], h[l]);
+                for k in 0..3 {
+                    t[k][l] = madd::<FMA>(w, tangents[k][c][l], t[k][l]);
+                }
+            }
+        }
+        net[j] = h;
+        for k in 0..3 {
+            out.net_tangent[k][j] = t[k];
+        }
+    }
+    for j in 0..n {
+        let [value, slope, curvature] = activation_lanes::<FMA>(net[j]);
+        out.value[j] = value;
+        out.slope[j] = slope;
+        out.curvature[j] = curvature;
+        for k in 0..3 {
+            for l in 0..LANES {
+                out.tangent[k][j][l] = slope[l] * out.net_tangent[k][j][l];
+            }
+        }
+    }
+}
+
+/// [`forward`] on [`LANES`] points at once (one per lane), with [`tanh_lanes`] and, when
+/// `FMA`, fused multiply–adds.
+#[inline(always)]
+pub(crate) fn forward_lanes<const FMA: bool>(
     layout: &TrainedLayout,
     params: &[f64],
-    input: &InputJet<'_>,
-    tape: &Tape,
-    h_bar: f64,
-    i_bar: [f64; 3],
-    row: &mut [f64],
+    input: &InputLanes,
+    tape: &mut TapeLanes,
 ) {
     let n = layout.width;
     let d = layout.inputs;
-    // Output layer.
-    let w_out = &params[layout.out_weights..layout.out_weights + n];
-    let b = &tape.b;
-    let mut value_bar = [0.0; MAX_WIDTH];
-    let mut tangent_bar = [[0.0; MAX_WIDTH]; 3];
-    for j in 0..n {
-        row[layout.out_weights + j] = h_bar * b.value[j]
-            + i_bar[0] * b.tangent[0][j]
-            + i_bar[1] * b.tangent[1][j]
-            + i_bar[2] * b.tangent[2][j];
-        value_bar[j] = w_out[j] * h_bar;
-        for k in 0..3 {
-            tangent_bar[k][j] = w_out[j] * i_bar[k];
-        }
-    }
-    row[layout.out_bias] = h_bar;
-
-    // Hidden b, then hidden a.
-    let a = &tape.a;
-    let (next_value_bar, next_tangent_bar) = hidden_backward(
+    hidden_lanes::<FMA>(
         n,
-        b,
-        &value_bar,
-        &tangent_bar,
-        &params[layout.b_weights..layout.b_biases],
-        &a.value[..n],
-        [&a.tangent[0][..n], &a.tangent[1][..n], &a.tangent[2][..n]],
-        &mut row[layout.b_weights..layout.out_weights],
-        true,
-    );
-    hidden_backward(
-        n,
-        a,
-        &next_value_bar,
-        &next_tangent_bar,
         &params[layout.a_weights..layout.a_biases],
+        &params[layout.a_biases..layout.a_biases + n],
         &input.values[..d],
         [
             &input.tangents[0][..d],
             &input.tangents[1][..d],
             &input.tangents[2][..d],
         ],
-        &mut row[layout.a_weights..layout.b_weights],
-        false,
+        &mut tape.a,
+    );
+    let a = &tape.a;
+    hidden_lanes::<FMA>(
+        n,
+        &params[layout.b_weights..layout.b_biases],
+        &params[layout.b_biases..layout.b_biases + n],
+        &a.value[..n],
+        [&a.tangent[0][..n], &a.tangent[1][..n], &a.tangent[2][..n]],
+        &mut tape.b,
+    );
+    let b = &tape.b;
+    let w = &params[layout.out_weights..layout.out_weights + n];
+    let mut h = [params[layout.out_bias]; LANES];
+    let mut net_tangent = [[0.0; LANES]; 3];
+    for j in 0..n {
+        for l in 0..LANES {
+            h[l] = madd::<FMA>(w[j], b.value[j][l], h[l]);
+            for k in 0..3 {
+                net_tangent[k][l] = madd::<FMA>(w[j], b.tangent[k][j][l], net_tangent[k][l]);
+            }
+        }
+    }
+    let [value, slope, curvature] = activation_lanes::<FMA>(h);
+    for k in 0..3 {
+        for l in 0..LANES {
+            tape.gradient[k][l] = slope[l] * net_tangent[k][l];
+        }
+    }
+    tape.out_slope = slope;
+    tape.out_curvature = curvature;
+    tape.out_net_tangent = net_tangent;
+    tape.value = value;
+}
+
+/// x·y per lane.
+#[inline(always)]
+fn mul(x: Lanes, y: Lanes) -> Lanes {
+    std::array::from_fn(|l| x[l] * y[l])
+}
+
+/// x·y + z·w per lane (fused once when `FMA`).
+#[inline(always)]
+fn mul_add2<const FMA: bool>(x: Lanes, y: Lanes, z: Lanes, w: Lanes) -> Lanes {
+    std::array::from_fn(|l| madd::<FMA>(x[l], y[l], z[l] * w[l]))
+}
+
+/// [`jacobian_rows`] of [`LANES`] points at once: `out[r · stride + θ][l]` = row r of point l.
+///
+/// The same sweeps and the same arithmetic as [`jacobian_rows`], one point per lane (with
+/// fused multiply–adds when `FMA`).
+#[inline(always)]
+pub(crate) fn jacobian_lanes<const FMA: bool>(
+    layout: &TrainedLayout,
+    params: &[f64],
+    input: &InputLanes,
+    tape: &TapeLanes,
+    gamma: f64,
+    out: &mut [Lanes],
+    stride: usize,
+) {
+    let n = layout.width;
+    let d = layout.inputs;
+    let p = layout.len;
+    let (a, b) = (&tape.a, &tape.b);
+    let w_out = &params[layout.out_weights..layout.out_weights + n];
+    let w_b = &params[layout.b_weights..layout.b_biases];
+    let mut rows: [&mut [Lanes]; 4] = {
+        let (r0, rest) = out.split_at_mut(stride);
+        let (r1, rest) = rest.split_at_mut(stride);
+        let (r2, r3) = rest.split_at_mut(stride);
+        [&mut r0[..p], &mut r1[..p], &mut r2[..p], &mut r3[..p]]
+    };
+
+    let mut h_seed = [tape.out_slope; 4];
+    for m in 0..3 {
+        h_seed[1 + m] =
+            std::array::from_fn(|l| tape.out_curvature[l] * tape.out_net_tangent[m][l] * gamma);
+    }
+    let i_seed: Lanes = tape.out_slope.map(|s| s * gamma);
+
+    let mut value_bar = [[[0.0; LANES]; MAX_WIDTH]; 4];
+    let mut tangent_bar = [[0.0; LANES]; MAX_WIDTH];
+    for (r, row) in rows.iter_mut().enumerate() {
+        let h = h_seed[r];
+        let o = &mut row[layout.out_weights..layout.out_weights + n];
+        if r == 0 {
+            for j in 0..n {
+                o[j] = mul(h, b.value[j]);
+            }
+        } else {
+            for j in 0..n {
+                o[j] = mul_add2::<FMA>(h, b.value[j], i_seed, b.tangent[r - 1][j]);
+            }
+        }
+        row[layout.out_bias] = h;
+        for j in 0..n {
+            value_bar[r][j] = h.map(|x| w_out[j] * x);
+        }
+    }
+    for j in 0..n {
+        tangent_bar[j] = i_seed.map(|x| w_out[j] * x);
+    }
+
+    let (b_h, b_i) = layer_adjoints_lanes::<FMA>(n, b, &value_bar, &tangent_bar);
+    write_layer_lanes::<FMA>(
+        n,
+        n,
+        layout.b_weights,
+        layout.b_biases,
+        &b_h,
+        &b_i,
+        [&a.value, &a.tangent[0], &a.tangent[1], &a.tangent[2]],
+        &mut rows,
+    );
+    let mut value_bar = [[[0.0; LANES]; MAX_WIDTH]; 4];
+    let mut tangent_bar = [[0.0; LANES]; MAX_WIDTH];
+    for j in 0..n {
+        let w_row = &w_b[j * n..(j + 1) * n];
+        for c in 0..n {
+            let w = w_row[c];
+            for r in 0..4 {
+                for l in 0..LANES {
+                    value_bar[r][c][l] = madd::<FMA>(w, b_h[r][j][l], value_bar[r][c][l]);
+                }
+            }
+            for l in 0..LANES {
+                tangent_bar[c][l] = madd::<FMA>(w, b_i[j][l], tangent_bar[c][l]);
+            }
+        }
+    }
+
+    let (a_h, a_i) = layer_adjoints_lanes::<FMA>(n, a, &value_bar, &tangent_bar);
+    write_layer_lanes::<FMA>(
+        n,
+        d,
+        layout.a_weights,
+        layout.a_biases,
+        &a_h,
+        &a_i,
+        [
+            &input.values[..d],
+            &input.tangents[0][..d],
+            &input.tangents[1][..d],
+            &input.tangents[2][..d],
+        ],
+        &mut rows,
     );
 }
 
-/// Backward through one hidden layer: from adjoints of its outputs (Ō, ᵏḠ) to its weights and
-/// biases (written to `grads`: weights row-major, then biases), and — when `propagate` — to
-/// the adjoints of its inputs.
-#[allow(clippy::too_many_arguments)]
-fn hidden_backward(
+/// [`layer_adjoints`] per lane.
+#[inline(always)]
+fn layer_adjoints_lanes<const FMA: bool>(
     n: usize,
-    tape: &HiddenTape,
-    value_bar: &[f64; MAX_WIDTH],
-    tangent_bar: &[[f64; MAX_WIDTH]; 3],
-    weights: &[f64],
-    inputs: &[f64],
-    input_tangents: [&[f64]; 3],
-    grads: &mut [f64],
-    propagate: bool,
-) -> ([f64; MAX_WIDTH], [[f64; MAX_WIDTH]; 3]) {
-    let d = inputs.len();
-    let mut in_value_bar = [0.0; MAX_WIDTH];
-    let mut in_tangent_bar = [[0.0; MAX_WIDTH]; 3];
-    let (weight_grads, bias_grads) = grads.split_at_mut(n * d);
+    tape: &HiddenLanes,
+    value_bar: &[[Lanes; MAX_WIDTH]; 4],
+    tangent_bar: &[Lanes; MAX_WIDTH],
+) -> ([[Lanes; MAX_WIDTH]; 4], [Lanes; MAX_WIDTH]) {
+    let mut h_bar = [[[0.0; LANES]; MAX_WIDTH]; 4];
+    let mut i_bar = [[0.0; LANES]; MAX_WIDTH];
     for j in 0..n {
-        // H̄ = Ō·a′ + Σₖ ᵏḠ·a″·ᵏI ;  ᵏĪ = ᵏḠ·a′
-        let mut h_bar = value_bar[j] * tape.slope[j];
-        let mut i_bar = [0.0; 3];
+        h_bar[0][j] = mul(value_bar[0][j], tape.slope[j]);
         for k in 0..3 {
-            h_bar += tangent_bar[k][j] * tape.curvature[j] * tape.net_tangent[k][j];
-            i_bar[k] = tangent_bar[k][j] * tape.slope[j];
+            h_bar[1 + k][j] = std::array::from_fn(|l| {
+                madd::<FMA>(
+                    value_bar[1 + k][j][l],
+                    tape.slope[j][l],
+                    tangent_bar[j][l] * tape.curvature[j][l] * tape.net_tangent[k][j][l],
+                )
+            });
         }
-        bias_grads[j] = h_bar;
-        let grad_row = &mut weight_grads[j * d..(j + 1) * d];
-        for c in 0..d {
-            grad_row[c] = h_bar * inputs[c]
-                + i_bar[0] * input_tangents[0][c]
-                + i_bar[1] * input_tangents[1][c]
-                + i_bar[2] * input_tangents[2][c];
+        i_bar[j] = mul(tangent_bar[j], tape.slope[j]);
+    }
+    (h_bar, i_bar)
+}
+
+/// [`write_layer`] per lane.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn write_layer_lanes<const FMA: bool>(
+    n: usize,
+    d: usize,
+    weights: usize,
+    biases: usize,
+    h_bar: &[[Lanes; MAX_WIDTH]; 4],
+    i_bar: &[Lanes; MAX_WIDTH],
+    inputs: [&[Lanes]; 4],
+    rows: &mut [&mut [Lanes]; 4],
+) {
+    for (r, row) in rows.iter_mut().enumerate() {
+        let (w_grads, rest) = row[weights..].split_at_mut(n * d);
+        let values = &inputs[0][..d];
+        for (j, grad_row) in w_grads.chunks_exact_mut(d).enumerate() {
+            let h = h_bar[r][j];
+            if r == 0 {
+                for c in 0..d {
+                    grad_row[c] = mul(h, values[c]);
+                }
+            } else {
+                let t = &inputs[r][..d];
+                let i = i_bar[j];
+                for c in 0..d {
+                    grad_row[c] = mul_add2::<FMA>(h, values[c], i, t[c]);
+                }
+            }
         }
-        if propagate {
-            let w_row = &weights[j * d..(j + 1) * d];
-            for c in 0..d {
-                in_value_bar[c] += w_row[c] * h_bar;
-                for k in 0..3 {
-                    in_tangent_bar[k][c] += w_row[c] * i_bar[k];
+        rest[biases - weights - n * d..][..n].copy_from_slice(&h_bar[r][..n]);
+    }
+}
+
+/// Copies lane-minor rows (`lanes[r · stride + θ][l]`, from [`jacobian_lanes`]) of the first
+/// `count` points to row-major rows `rows[(4l + r) · stride + θ]`, for θ < `stride` (a multiple
+/// of 4), by 4 × 4 transposes (AVX shuffles when `AVX`).
+#[inline(always)]
+pub(crate) fn transpose_lanes<const AVX: bool>(
+    lanes: &[Lanes],
+    stride: usize,
+    count: usize,
+    rows: &mut [f64],
+) {
+    assert!(stride.is_multiple_of(4));
+    assert!(lanes.len() >= 4 * stride && rows.len() >= 4 * count * stride);
+    #[cfg(target_arch = "x86_64")]
+    if AVX && count == LANES {
+        // SAFETY: `AVX` builds run only on CPUs with AVX2; the sizes are checked above.
+        unsafe { transpose_avx(lanes, stride, rows) };
+        return;
+    }
+    for r in 0..4 {
+        let src = lanes[r * stride..(r + 1) * stride].as_chunks::<4>().0;
+        for (c0, tile) in src.iter().enumerate() {
+            for l in 0..count {
+                let dst = &mut rows[(4 * l + r) * stride + 4 * c0..][..4];
+                for t in 0..4 {
+                    dst[t] = tile[t][l];
                 }
             }
         }
     }
-    (in_value_bar, in_tangent_bar)
+}
+
+/// [`transpose_lanes`] of [`LANES`] points with AVX shuffles.
+///
+/// # Safety
+/// The CPU has AVX2; `lanes` holds 4 · `stride` entries, `rows` 16 · `stride`, and `stride`
+/// is a multiple of 4.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn transpose_avx(lanes: &[Lanes], stride: usize, rows: &mut [f64]) {
+    use std::arch::x86_64::{
+        _mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_storeu_pd, _mm256_unpackhi_pd,
+        _mm256_unpacklo_pd,
+    };
+    let src = lanes.as_ptr().cast::<f64>();
+    let dst = rows.as_mut_ptr();
+    for r in 0..4 {
+        for c in (0..stride).step_by(4) {
+            // SAFETY: in bounds by the caller's contract.
+            unsafe {
+                let tile = src.add((r * stride + c) * LANES);
+                let t0 = _mm256_loadu_pd(tile);
+                let t1 = _mm256_loadu_pd(tile.add(4));
+                let t2 = _mm256_loadu_pd(tile.add(8));
+                let t3 = _mm256_loadu_pd(tile.add(12));
+                let lo01 = _mm256_unpacklo_pd(t0, t1);
+                let hi01 = _mm256_unpackhi_pd(t0, t1);
+                let lo23 = _mm256_unpacklo_pd(t2, t3);
+                let hi23 = _mm256_unpackhi_pd(t2, t3);
+                let row = |l: usize| dst.add((4 * l + r) * stride + c);
+                _mm256_storeu_pd(row(0), _mm256_permute2f128_pd::<0x20>(lo01, lo23));
+                _mm256_storeu_pd(row(1), _mm256_permute2f128_pd::<0x20>(hi01, hi23));
+                _mm256_storeu_pd(row(2), _mm256_permute2f128_pd::<0x31>(lo01, lo23));
+                _mm256_storeu_pd(row(3), _mm256_permute2f128_pd::<0x31>(hi01, hi23));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod lane_tests {
+    use super::*;
+    use crate::implicit::lm::cpu_has_fma;
+
+    /// Distance in units in the last place.
+    fn ulps(a: f64, b: f64) -> u64 {
+        if a == b {
+            return 0;
+        }
+        let key = |x: f64| {
+            let bits = x.to_bits() as i64;
+            if bits < 0 { i64::MIN - bits } else { bits }
+        };
+        key(a).abs_diff(key(b))
+    }
+
+    fn worst_ulps<const FMA: bool>(ys: &[f64]) -> u64 {
+        let mut worst = 0;
+        for y in ys.chunks(LANES) {
+            let mut lanes = [0.0; LANES];
+            lanes[..y.len()].copy_from_slice(y);
+            let t = tanh_lanes::<FMA>(lanes);
+            for (l, &x) in y.iter().enumerate() {
+                worst = worst.max(ulps(t[l], x.tanh()));
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn lane_tanh_is_within_a_few_ulps() {
+        let mut ys: Vec<f64> = (-400_000..=400_000)
+            .map(|i| f64::from(i) * 6.1e-5)
+            .collect();
+        ys.extend((-300..=10).map(|e| 2f64.powi(e) * 1.37));
+        ys.extend((-300..=10).map(|e| -(2f64.powi(e) * 0.93)));
+        ys.extend([
+            0.0,
+            -0.0,
+            0.17328679513998632,
+            19.99,
+            20.01,
+            40.0,
+            1e300,
+            f64::MAX,
+        ]);
+        let worst = worst_ulps::<false>(&ys);
+        eprintln!("tanh_lanes: worst {worst} ulps");
+        assert!(worst <= 4, "{worst}");
+        if cpu_has_fma() {
+            // The FMA build runs the same code with fused operations: check it under FMA.
+            #[target_feature(enable = "avx2,fma")]
+            fn fused(ys: &[f64]) -> u64 {
+                worst_ulps::<true>(ys)
+            }
+            // SAFETY: the CPU has AVX2 and FMA.
+            let worst = unsafe { fused(&ys) };
+            eprintln!("tanh_lanes (FMA): worst {worst} ulps");
+            assert!(worst <= 4, "{worst}");
+        }
+        let special = tanh_lanes::<false>([f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0]);
+        assert!(special[0].is_nan());
+        assert_eq!(special[1], 1.0);
+        assert_eq!(special[2], -1.0);
+        assert!(special[3] == 0.0 && special[3].is_sign_negative());
+    }
+
+    #[test]
+    fn lane_activation_matches_the_scalar_one() {
+        for i in -200..=200 {
+            let h = f64::from(i) * 0.05;
+            let [v, s, c] = activation_lanes::<false>([h; LANES]);
+            let a = activation(h);
+            assert!((v[0] - a.value).abs() <= 1e-15);
+            assert!((s[0] - a.slope).abs() <= 1e-15);
+            assert!((c[0] - a.curvature).abs() <= 1e-15);
+        }
+    }
 }

@@ -3,23 +3,31 @@
 //! and conversion to and from blobs.
 
 mod activation;
+mod blob;
 mod features;
 mod jacobian;
 mod lm;
 mod network;
 mod normalize;
 mod options;
+mod pipeline;
 mod problem;
 mod train;
 mod tree;
 
 pub use activation::{Activation, activation};
+pub use blob::{DecodedImplicit, ImplicitMetadata, frame, from_blob, to_blob};
 pub use features::decompose;
-pub use jacobian::{HiddenJet, InputJet, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows};
-pub use lm::{DecayScale, LeastSquares, LmOptions, LmReport, StopReason, levenberg_marquardt};
+pub use jacobian::{
+    HiddenJet, InputJet, LANES, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows,
+};
+pub use lm::{
+    DecayScale, LeastSquares, LmOptions, LmReport, NormalEquations, StopReason, levenberg_marquardt,
+};
 pub use network::ImplicitNetwork;
 pub use normalize::{BoxScaling, Normalization};
 pub use options::ImplicitOptions;
+pub use pipeline::{FitRequest, feature_centroids, fit};
 pub use problem::{ModuleData, ModuleProblem};
 pub use train::{ModuleReport, Progress, Trained, TrainingSummary, train};
 pub use tree::TreeSpec;

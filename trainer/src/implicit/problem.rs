@@ -1,7 +1,10 @@
 //! The least-squares problem of one module: its control points' inputs and target gradients.
 
-use super::jacobian::{InputJet, TrainedLayout, forward, jacobian_rows};
-use super::lm::LeastSquares;
+use super::jacobian::{
+    InputJet, InputLanes, LANES, TapeLanes, TrainedLayout, forward_lanes, jacobian_lanes,
+    transpose_lanes,
+};
+use super::lm::{LeastSquares, NormalEquations, cpu_has_fma};
 
 /// A module's training data: per control point, the module's inputs with their tangents
 /// (derivatives with respect to world x), and the target gradient −s·n.
@@ -68,11 +71,15 @@ impl ModuleData {
 
 /// Residuals e = [Φ, γ(∂Φ/∂xₖ + s·nₖ)] of every control point of a module, as a
 /// [`LeastSquares`] problem over the module's trained parameters.
+///
+/// Points go through the network [`LANES`] at a time, one per SIMD lane (with AVX2 and FMA
+/// when the CPU has them), and their Jacobian rows go straight to the normal equations.
 #[derive(Clone, Debug)]
 pub struct ModuleProblem<'a> {
     data: &'a ModuleData,
     layout: TrainedLayout,
     gamma: f64,
+    fma: bool,
 }
 
 impl<'a> ModuleProblem<'a> {
@@ -82,6 +89,7 @@ impl<'a> ModuleProblem<'a> {
             data,
             layout: TrainedLayout::new(data.inputs(), width),
             gamma,
+            fma: cpu_has_fma(),
         }
     }
 
@@ -97,6 +105,112 @@ impl<'a> ModuleProblem<'a> {
             out[1 + k] = self.gamma * (gradient[k] - target[k]);
         }
     }
+
+    /// Loads points `first..first + count` into the lanes (the last repeated in spare lanes).
+    fn gather(&self, first: usize, count: usize, lanes: &mut InputLanes) {
+        let d = self.data.inputs;
+        for l in 0..LANES {
+            let input = self.data.input(first + l.min(count - 1));
+            for c in 0..d {
+                lanes.values[c][l] = input.values[c];
+                for k in 0..3 {
+                    lanes.tangents[k][c][l] = input.tangents[k][c];
+                }
+            }
+        }
+    }
+
+    /// The residuals of the points in `tape` (from `first` on) into `out`.
+    fn lane_residuals(&self, first: usize, tape: &TapeLanes, out: &mut [f64]) {
+        for (l, point) in out.chunks_exact_mut(4).enumerate() {
+            let gradient = [
+                tape.gradient[0][l],
+                tape.gradient[1][l],
+                tape.gradient[2][l],
+            ];
+            self.point_residuals(first + l, tape.value[l], gradient, point);
+        }
+    }
+
+    #[inline(always)]
+    fn residuals_impl<const FMA: bool>(&self, params: &[f64], residuals: &mut [f64]) {
+        let mut lanes = InputLanes::ZERO;
+        let mut tape = TapeLanes::ZERO;
+        for (group, out) in residuals.chunks_mut(4 * LANES).enumerate() {
+            let first = group * LANES;
+            self.gather(first, out.len() / 4, &mut lanes);
+            forward_lanes::<FMA>(&self.layout, params, &lanes, &mut tape);
+            self.lane_residuals(first, &tape, out);
+        }
+    }
+
+    /// Residuals and the Jacobian rows of [`LANES`] points at a time: for each group, its
+    /// residuals and the rows of its `count` points, row-major with `stride` (4 per point), in
+    /// `block`.
+    ///
+    /// A loop over the groups rather than a callback, so that everything is inlined into the
+    /// AVX2 build.
+    #[inline(always)]
+    fn jacobian_group<const FMA: bool>(
+        &self,
+        params: &[f64],
+        first: usize,
+        out: &mut [f64],
+        work: &mut (InputLanes, TapeLanes, Vec<[f64; LANES]>),
+        stride: usize,
+        block: &mut [f64],
+    ) {
+        let (lanes, tape, rows) = work;
+        let count = out.len() / 4;
+        self.gather(first, count, lanes);
+        forward_lanes::<FMA>(&self.layout, params, lanes, tape);
+        self.lane_residuals(first, tape, out);
+        jacobian_lanes::<FMA>(&self.layout, params, lanes, tape, self.gamma, rows, stride);
+        transpose_lanes::<FMA>(rows, stride, count, block);
+    }
+
+    /// Scratch space of [`Self::jacobian_group`].
+    fn jacobian_work(stride: usize) -> (InputLanes, TapeLanes, Vec<[f64; LANES]>) {
+        (
+            InputLanes::ZERO,
+            TapeLanes::ZERO,
+            vec![[0.0; LANES]; 4 * stride],
+        )
+    }
+
+    #[inline(always)]
+    fn normal_equations_impl<const FMA: bool>(
+        &self,
+        params: &[f64],
+        residuals: &mut [f64],
+        normal: &mut NormalEquations,
+    ) {
+        let stride = normal.stride();
+        let mut work = Self::jacobian_work(stride);
+        for (group, out) in residuals.chunks_mut(4 * LANES).enumerate() {
+            // The group's rows go straight into the accumulator's block.
+            let (block, e) = normal.rows_mut(out.len());
+            self.jacobian_group::<FMA>(params, group * LANES, out, &mut work, stride, block);
+            e.copy_from_slice(out);
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn residuals_fma(&self, params: &[f64], residuals: &mut [f64]) {
+        self.residuals_impl::<true>(params, residuals);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn normal_equations_fma(
+        &self,
+        params: &[f64],
+        residuals: &mut [f64],
+        normal: &mut NormalEquations,
+    ) {
+        self.normal_equations_impl::<true>(params, residuals, normal);
+    }
 }
 
 impl LeastSquares for ModuleProblem<'_> {
@@ -109,20 +223,135 @@ impl LeastSquares for ModuleProblem<'_> {
     }
 
     fn residuals(&self, params: &[f64], residuals: &mut [f64]) {
-        for (i, out) in residuals.chunks_exact_mut(4).enumerate() {
-            let tape = forward(&self.layout, params, &self.data.input(i));
-            self.point_residuals(i, tape.value, tape.gradient, out);
+        #[cfg(target_arch = "x86_64")]
+        if self.fma {
+            // SAFETY: `fma` comes from `cpu_has_fma`: this CPU has AVX2 and FMA.
+            unsafe { self.residuals_fma(params, residuals) };
+            return;
+        }
+        self.residuals_impl::<false>(params, residuals);
+    }
+
+    /// The rows [`Self::normal_equations`] uses (portable arithmetic).
+    fn jacobian(&self, params: &[f64], residuals: &mut [f64], jacobian: &mut [f64]) {
+        let p = self.layout.len;
+        let stride = p.div_ceil(4) * 4;
+        let mut work = Self::jacobian_work(stride);
+        let mut block = vec![0.0; 4 * LANES * stride];
+        let groups = residuals
+            .chunks_mut(4 * LANES)
+            .zip(jacobian.chunks_mut(4 * LANES * p));
+        for (group, (out, dst)) in groups.enumerate() {
+            self.jacobian_group::<false>(params, group * LANES, out, &mut work, stride, &mut block);
+            for (d, s) in dst.chunks_exact_mut(p).zip(block.chunks_exact(stride)) {
+                d.copy_from_slice(&s[..p]);
+            }
         }
     }
 
-    fn jacobian(&self, params: &[f64], residuals: &mut [f64], jacobian: &mut [f64]) {
-        let p = self.layout.len;
-        let rows = jacobian.chunks_exact_mut(4 * p);
-        for (i, (out, rows)) in residuals.chunks_exact_mut(4).zip(rows).enumerate() {
-            let input = self.data.input(i);
-            let tape = forward(&self.layout, params, &input);
-            self.point_residuals(i, tape.value, tape.gradient, out);
-            jacobian_rows(&self.layout, params, &input, &tape, self.gamma, rows);
+    /// J [`LANES`] points at a time, straight into the accumulator's block: J is never stored
+    /// whole. The residuals are those of [`Self::residuals`].
+    fn normal_equations(
+        &self,
+        params: &[f64],
+        residuals: &mut [f64],
+        normal: &mut NormalEquations,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if self.fma {
+            // SAFETY: `fma` comes from `cpu_has_fma`: this CPU has AVX2 and FMA.
+            unsafe { self.normal_equations_fma(params, residuals, normal) };
+            return;
+        }
+        self.normal_equations_impl::<false>(params, residuals, normal);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::implicit::jacobian::{forward, jacobian_rows};
+
+    /// Random data and weights for a module with `d` inputs and width `n`.
+    fn random_problem(d: usize, n: usize, points: usize, seed: u64) -> (ModuleData, Vec<f64>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut data = ModuleData::new(d);
+        for _ in 0..points {
+            let values: Vec<f64> = (0..d).map(|_| rng.random_range(-1.5..1.5)).collect();
+            let t: [Vec<f64>; 3] =
+                std::array::from_fn(|_| (0..d).map(|_| rng.random_range(-2.0..2.0)).collect());
+            let target = std::array::from_fn(|_| rng.random_range(-5.0..5.0));
+            data.push(&values, [&t[0], &t[1], &t[2]], target);
+        }
+        let params = (0..TrainedLayout::new(d, n).len)
+            .map(|_| rng.random_range(-0.8..0.8))
+            .collect();
+        (data, params)
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-12 * (1.0 + a.abs().max(b.abs()))
+    }
+
+    /// The batched residuals, Jacobian and normal equations equal the per-point `forward` and
+    /// `jacobian_rows` (up to rounding: lanes use their own tanh, and FMA when the CPU has it),
+    /// in the portable build and, when the CPU has it, the AVX2 one.
+    #[test]
+    fn lanes_match_the_per_point_sweeps() {
+        for (d, n, points, seed) in [(3, 9, 13, 1), (3, 1, 4, 2), (3, 16, 9, 3), (18, 9, 7, 4)] {
+            let (data, params) = random_problem(d, n, points, seed);
+            for fma in [false, cpu_has_fma()] {
+                let mut problem = ModuleProblem::new(&data, n, 0.37);
+                problem.fma = fma;
+                check_against_per_point(&problem, &params);
+            }
+        }
+    }
+
+    fn check_against_per_point(problem: &ModuleProblem<'_>, params: &[f64]) {
+        let (data, layout) = (problem.data, problem.layout);
+        let (p, points, what) = (
+            layout.len,
+            data.len(),
+            format!("{layout:?} {}", problem.fma),
+        );
+        let mut expected_e = vec![0.0; 4 * points];
+        let mut expected_j = vec![0.0; 4 * points * p];
+        for i in 0..points {
+            let tape = forward(&layout, params, &data.input(i));
+            problem.point_residuals(i, tape.value, tape.gradient, &mut expected_e[4 * i..]);
+            let rows = &mut expected_j[4 * i * p..4 * (i + 1) * p];
+            jacobian_rows(&layout, params, &data.input(i), &tape, problem.gamma, rows);
+        }
+        let all_close = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(a, b)| close(*a, *b));
+        let mut e = vec![0.0; 4 * points];
+        problem.residuals(params, &mut e);
+        assert!(all_close(&e, &expected_e), "{what}");
+        let mut j = vec![0.0; 4 * points * p];
+        e.fill(0.0);
+        problem.jacobian(params, &mut e, &mut j);
+        assert!(all_close(&e, &expected_e), "{what}");
+        assert!(all_close(&j, &expected_j), "{what}");
+
+        let mut normal = NormalEquations::new(p);
+        e.fill(0.0);
+        problem.normal_equations(params, &mut e, &mut normal);
+        normal.finish();
+        assert!(all_close(&e, &expected_e), "{what}");
+        let mut reference = NormalEquations::new(p);
+        reference.add_jacobian(&expected_j, &expected_e);
+        reference.finish();
+        for r in 0..p {
+            assert!(close(normal.gradient(r), reference.gradient(r)), "{what}");
+            for c in r..p {
+                assert!(
+                    close(normal.gram(r, c), reference.gram(r, c)),
+                    "{what} {r} {c}"
+                );
+            }
         }
     }
 }

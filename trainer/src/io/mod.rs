@@ -1,5 +1,19 @@
-//! Files in and out: PLY (ascii and binary), OBJ, whitespace point lists; atomic writes.
+//! Files in and out: PLY (ascii and binary, via `ply-rs-bw`), OBJ (read via `tobj`), whitespace
+//! point lists; atomic writes.
+//!
+//! Readers name the file, and where known the line, element, vertex or property, in every
+//! [`Error::Format`]; writers go through [`write_atomic_with`] so a failed write never leaves
+//! a partial file.
+//!
+//! [`Error::Format`]: crate::Error::Format
 
 mod atomic;
+mod mesh;
+mod obj;
+mod ply;
+mod text;
 
 pub use atomic::{write_atomic, write_atomic_with};
+pub use mesh::{Mesh, read_mesh, write_mesh};
+pub use ply::{PlyEncoding, read_points, write_mesh_ply, write_points_ply};
+pub use text::read_query_points;

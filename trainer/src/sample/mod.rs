@@ -1,1 +1,46 @@
 //! Point samplers: analytic shapes and meshes.
+//!
+//! Every sampler draws points area-uniformly on the surface with exact outward unit normals,
+//! from a [`ChaCha8Rng`](rand_chacha::ChaCha8Rng) seeded with the caller's seed, so the same
+//! seed always gives the same points on every platform.
+
+mod mesh;
+mod shape;
+
+pub use mesh::sample_mesh;
+pub use shape::{HEAD_FEATURES, Shape, sample_shape};
+
+use crate::error::{Error, Result};
+
+/// The largest point count a sampler accepts; more is almost certainly a typo and would
+/// exhaust memory.
+pub const MAX_SAMPLES: usize = 50_000_000;
+
+/// Checks a requested point count.
+fn check_count(count: usize) -> Result<()> {
+    if count == 0 {
+        return Err(Error::invalid("the point count must be at least 1"));
+    }
+    if count > MAX_SAMPLES {
+        return Err(Error::invalid(format!(
+            "{count} points requested, at most {MAX_SAMPLES} are supported"
+        )));
+    }
+    Ok(())
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}

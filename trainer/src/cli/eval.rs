@@ -1,0 +1,84 @@
+//! `neurosurf eval`: Φ and ∇Φ of a model at query points, as CSV (or JSON).
+
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use serde::Serialize;
+
+use neurosurf_trainer::evaluate::{LoadedModel, Precision};
+use neurosurf_trainer::io::read_query_points;
+
+use super::output;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The model blob.
+    model: PathBuf,
+    /// Query points: PLY, or text with 3 (or 6) numbers per line.
+    #[arg(long)]
+    points: PathBuf,
+    /// `f64` (the trainer's reference), `f32` or `q16.16` (through neurosurf-core).
+    #[arg(long, default_value = "f64")]
+    scalar: Precision,
+    /// Print JSON objects instead of CSV.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Row {
+    x: f64,
+    y: f64,
+    z: f64,
+    phi: f64,
+    gx: f64,
+    gy: f64,
+    gz: f64,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let model = LoadedModel::read(&args.model)?;
+    let points = read_query_points(&args.points)?;
+    let samples = model
+        .evaluate(&points, args.scalar)
+        .with_context(|| format!("cannot evaluate {}", args.model.display()))?;
+    if args.json {
+        let rows: Vec<Row> = points
+            .iter()
+            .zip(&samples)
+            .map(|(p, (phi, g))| Row {
+                x: p[0],
+                y: p[1],
+                z: p[2],
+                phi: *phi,
+                gx: g[0],
+                gy: g[1],
+                gz: g[2],
+            })
+            .collect();
+        return output::json(&rows);
+    }
+    let stdout = std::io::stdout();
+    let mut out = BufWriter::new(stdout.lock());
+    write_csv(&mut out, &points, &samples).context("cannot write to stdout")?;
+    Ok(())
+}
+
+/// Writes the CSV: header `x,y,z,phi,gx,gy,gz`, then one line per point with every number in
+/// its shortest exact decimal form (f32 and Q16.16 results are exact in f64).
+pub fn write_csv(
+    out: &mut impl Write,
+    points: &[[f64; 3]],
+    samples: &[(f64, [f64; 3])],
+) -> std::io::Result<()> {
+    writeln!(out, "x,y,z,phi,gx,gy,gz")?;
+    for (p, (phi, g)) in points.iter().zip(samples) {
+        writeln!(
+            out,
+            "{},{},{},{},{},{},{}",
+            p[0], p[1], p[2], phi, g[0], g[1], g[2]
+        )?;
+    }
+    out.flush()
+}

@@ -1,0 +1,119 @@
+//! `neurosurf info`: what a blob holds.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use serde::Serialize;
+
+use neurosurf_trainer::evaluate::LoadedModel;
+use neurosurf_trainer::implicit::TrainingSummary;
+use neurosurf_trainer::rbf::RbfModel;
+
+use super::output;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The model blob.
+    model: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Info<'a> {
+    kind: &'static str,
+    stored_as: &'static str,
+    blob_bytes: usize,
+    parameters: usize,
+    width: Option<usize>,
+    tree: Option<String>,
+    modules: Option<usize>,
+    leaves: Option<usize>,
+    /// Multiply–accumulates of one field evaluation and of one field+gradient evaluation.
+    macs: Option<(usize, usize)>,
+    centers: Option<usize>,
+    training: Option<&'a TrainingSummary>,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let model = LoadedModel::read(&args.model)?;
+    let info = match &model {
+        LoadedModel::Implicit { bytes, decoded } => {
+            let net = &decoded.network;
+            let macs = neurosurf_core::implicit::ImplicitModel::<f32>::from_blob(bytes)
+                .ok()
+                .map(|m| (m.mac_count(false), m.mac_count(true)));
+            Info {
+                kind: "implicit",
+                stored_as: decoded.stored_as.name(),
+                blob_bytes: bytes.len(),
+                parameters: net.params().len(),
+                width: Some(net.width()),
+                tree: Some(net.tree().to_string()),
+                modules: Some(net.module_count()),
+                leaves: Some(net.subtree_leaves(net.root()).len()),
+                macs,
+                centers: None,
+                training: decoded.metadata.as_ref().and_then(|m| m.summary.as_ref()),
+            }
+        }
+        LoadedModel::Rbf(rbf) => Info {
+            kind: "rbf",
+            stored_as: "f64",
+            blob_bytes: std::fs::metadata(&args.model).map_or(0, |m| m.len() as usize),
+            parameters: rbf.parameter_count(),
+            width: None,
+            tree: None,
+            modules: None,
+            leaves: None,
+            macs: None,
+            centers: Some(RbfModel::centers(rbf).len()),
+            training: None,
+        },
+    };
+    if args.json {
+        return output::json(&info);
+    }
+    println!("{}: {} model", args.model.display(), info.kind);
+    println!("  stored as    {}", info.stored_as);
+    println!("  blob         {} bytes", info.blob_bytes);
+    println!("  parameters   {}", info.parameters);
+    if let (Some(width), Some(tree)) = (info.width, &info.tree) {
+        println!(
+            "  tree         {tree} ({} modules, {} leaves, width {width})",
+            info.modules.unwrap_or(0),
+            info.leaves.unwrap_or(0)
+        );
+    }
+    if let Some((field, gradient)) = info.macs {
+        println!("  MACs         {field} per field, {gradient} per field+gradient");
+    }
+    if let Some(centers) = info.centers {
+        println!("  centers      {centers}");
+    }
+    if let Some(t) = info.training {
+        println!(
+            "  training     {} iterations, {:.3} s, {}",
+            t.iterations(),
+            t.seconds,
+            if t.converged() {
+                "converged"
+            } else {
+                "NOT converged"
+            }
+        );
+        for m in &t.modules {
+            println!(
+                "    module {:>2} {:<4} feature {:<4} {:>5} points {:>4} iterations  E {:.2e}",
+                m.module,
+                if m.node { "node" } else { "leaf" },
+                m.feature.map_or("-".to_string(), |f| f.to_string()),
+                m.points,
+                m.lm.iterations,
+                m.lm.error
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,285 @@
+//! `neurosurf train implicit|rbf`: control points in, blob out.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::{Subcommand, ValueEnum};
+use serde::Serialize;
+
+use neurosurf_core::scalar::ScalarKind;
+use neurosurf_trainer::implicit::{
+    self, BoxScaling, DecodedImplicit, FitRequest, ImplicitOptions, TrainingSummary, TreeSpec,
+};
+use neurosurf_trainer::io::{read_points, write_atomic};
+use neurosurf_trainer::rbf::{self, RbfOptions, RbfReport};
+
+use super::{output, progress};
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Carcenac's modular implicit surface: a tree of small MLP modules trained by
+    /// Levenberg–Marquardt (defaults: the paper's Table 1).
+    Implicit(ImplicitArgs),
+    /// The multiquadric RBF baseline (Carcenac §9): a direct dense solve, host-only model.
+    Rbf(RbfArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ImplicitArgs {
+    /// Control points: PLY with x y z nx ny nz and an optional integer `feature`.
+    #[arg(long)]
+    points: PathBuf,
+    /// Split unlabelled points into K spatial features (ignored when the points have labels).
+    #[arg(long, value_name = "K")]
+    features: Option<usize>,
+    /// Module tree over the features, e.g. `((0,1),2)`; default: balanced by proximity.
+    #[arg(long, value_name = "SPEC")]
+    tree: Option<TreeSpec>,
+    /// Warm start from a model of the same tree (animation frames).
+    #[arg(long, value_name = "M0.nsb")]
+    init: Option<PathBuf>,
+    /// Output blob.
+    #[arg(long, short)]
+    out: PathBuf,
+    /// How the blob stores parameters.
+    #[arg(long, value_enum, default_value_t = Storage::F32)]
+    scalar: Storage,
+    /// Hidden width N.
+    #[arg(long, default_value_t = 9)]
+    width: usize,
+    /// Slope s of Φ at the surface (target ∇Φ = −s·n).
+    #[arg(long, default_value_t = 5.0)]
+    slope: f64,
+    /// Weight γ of the gradient residuals.
+    #[arg(long, default_value_t = 0.05)]
+    gamma: f64,
+    /// Weight decay λ.
+    #[arg(long, default_value_t = 1.2e-4)]
+    lambda: f64,
+    /// Initial weights uniform in [−w₀, w₀].
+    #[arg(long = "init-range", default_value_t = 0.5, value_name = "W0")]
+    init_range: f64,
+    /// Side H of the normalization box [−H/2, H/2]³.
+    #[arg(long = "box-size", default_value_t = 2.0, value_name = "H")]
+    box_size: f64,
+    /// PCA box scaling: one scale (keeps the shape) or per axis (the paper's literal reading).
+    #[arg(long = "box-scaling", value_enum, default_value_t = Scaling::Isotropic)]
+    box_scaling: Scaling,
+    /// Initial LM damping μ₀.
+    #[arg(long, default_value_t = 1e-4)]
+    mu0: f64,
+    /// LM damping ratio θ.
+    #[arg(long, default_value_t = 2.0)]
+    theta: f64,
+    /// Stop when the criterion E_s reaches this.
+    #[arg(long, default_value_t = 1e-5)]
+    threshold: f64,
+    /// Iteration cap per module.
+    #[arg(long = "max-iterations", default_value_t = 2000)]
+    max_iterations: usize,
+    /// Fewest control points per feature.
+    #[arg(long = "min-points", default_value_t = 4)]
+    min_points: usize,
+    /// Seed of the weight initialization (and of the feature decomposition).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Print a JSON summary instead of text.
+    #[arg(long)]
+    json: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Copy, Clone, Debug, ValueEnum)]
+enum Storage {
+    F32,
+    #[value(name = "q16.16")]
+    Q16,
+}
+
+impl Storage {
+    fn kind(self) -> ScalarKind {
+        match self {
+            Storage::F32 => ScalarKind::F32,
+            Storage::Q16 => ScalarKind::Q16_16,
+        }
+    }
+}
+
+#[derive(Copy, Clone, Debug, ValueEnum)]
+enum Scaling {
+    Isotropic,
+    PerAxis,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct RbfArgs {
+    /// Control points: PLY with x y z nx ny nz.
+    #[arg(long)]
+    points: PathBuf,
+    /// Output blob (host-only model kind `rbf`).
+    #[arg(long, short)]
+    out: PathBuf,
+    /// Multiquadric shape parameter c².
+    #[arg(long, default_value_t = 1e-3)]
+    c2: f64,
+    /// Print a JSON summary instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(command: &Command) -> Result<()> {
+    match command {
+        Command::Implicit(args) => implicit(args),
+        Command::Rbf(args) => rbf(args),
+    }
+}
+
+#[derive(Serialize)]
+struct ImplicitSummary<'a> {
+    out: &'a Path,
+    blob_bytes: usize,
+    scalar: &'static str,
+    parameters: usize,
+    converged: bool,
+    iterations: usize,
+    /// Iterations the warm start saved against the cold start of its chain.
+    iterations_saved: Option<i64>,
+    training: &'a TrainingSummary,
+}
+
+fn implicit(args: &ImplicitArgs) -> Result<()> {
+    let points = read_points(&args.points)?;
+    let init = args.init.as_deref().map(read_init).transpose()?;
+    let mut options = ImplicitOptions {
+        width: args.width,
+        slope: args.slope,
+        gamma: args.gamma,
+        init_range: args.init_range,
+        box_size: args.box_size,
+        box_scaling: match args.box_scaling {
+            Scaling::Isotropic => BoxScaling::Isotropic,
+            Scaling::PerAxis => BoxScaling::PerAxis,
+        },
+        seed: args.seed,
+        min_points: args.min_points,
+        ..ImplicitOptions::default()
+    };
+    options.lm.lambda = args.lambda;
+    options.lm.mu0 = args.mu0;
+    options.lm.theta = args.theta;
+    options.lm.threshold = args.threshold;
+    options.lm.max_iterations = args.max_iterations;
+    let request = FitRequest {
+        features: args.features,
+        tree: args.tree.clone(),
+        init,
+    };
+    let bar = progress::training_bar("training", args.quiet || args.json);
+    let trained = implicit::fit(points, &request, &options, &|event| {
+        progress::update(&bar, event);
+    })
+    .with_context(|| format!("cannot train on {}", args.points.display()))?;
+    bar.finish_and_clear();
+    let summary = &trained.summary;
+    let bytes = implicit::to_blob(&trained.network, Some(summary), args.scalar.kind())?;
+    write_atomic(&args.out, &bytes)?;
+    let saved = (request.init.is_some() && !summary.cold_iterations.is_empty()).then(|| {
+        summary.cold_iterations.iter().sum::<usize>() as i64 - summary.iterations() as i64
+    });
+    let report = ImplicitSummary {
+        out: &args.out,
+        blob_bytes: bytes.len(),
+        scalar: args.scalar.kind().name(),
+        parameters: trained.network.params().len(),
+        converged: summary.converged(),
+        iterations: summary.iterations(),
+        iterations_saved: saved,
+        training: summary,
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "trained {} ({} modules, {} parameters) in {:.3} s, {} iterations{}",
+        summary.tree,
+        summary.modules.len(),
+        report.parameters,
+        summary.seconds,
+        report.iterations,
+        match saved {
+            Some(s) => format!(" ({s} fewer than the cold start)"),
+            None => String::new(),
+        }
+    );
+    for m in &summary.modules {
+        println!(
+            "  module {:>2} {:<4} {:>5} points {:>4} iterations  E {:.2e}  {:?}",
+            m.module,
+            if m.node { "node" } else { "leaf" },
+            m.points,
+            m.lm.iterations,
+            m.lm.error,
+            m.lm.stop
+        );
+    }
+    if !report.converged {
+        eprintln!(
+            "warning: not every module reached the threshold {:.1e}",
+            options.lm.threshold
+        );
+    }
+    println!(
+        "wrote {} ({} bytes, {})",
+        args.out.display(),
+        bytes.len(),
+        report.scalar
+    );
+    Ok(())
+}
+
+fn read_init(path: &Path) -> Result<DecodedImplicit> {
+    let bytes = std::fs::read(path)
+        .with_context(|| format!("cannot read the initial model {}", path.display()))?;
+    let decoded = implicit::from_blob(&bytes, path)
+        .with_context(|| format!("cannot use {} as the initial model", path.display()))?;
+    Ok(decoded)
+}
+
+#[derive(Serialize)]
+struct RbfSummary<'a> {
+    out: &'a Path,
+    blob_bytes: usize,
+    report: &'a RbfReport,
+}
+
+fn rbf(args: &RbfArgs) -> Result<()> {
+    let points = read_points(&args.points)?.validated()?;
+    let options = RbfOptions {
+        c2: args.c2,
+        ..RbfOptions::default()
+    };
+    let (model, report) = rbf::fit(&points, &options)
+        .with_context(|| format!("cannot fit an RBF to {}", args.points.display()))?;
+    let bytes = model.to_blob()?;
+    write_atomic(&args.out, &bytes)?;
+    let summary = RbfSummary {
+        out: &args.out,
+        blob_bytes: bytes.len(),
+        report: &report,
+    };
+    if args.json {
+        return output::json(&summary);
+    }
+    println!(
+        "fitted an RBF on {} points ({} unknowns) in {:.3} s; condition estimate {:.2e}, max residual {:.1e}",
+        report.points,
+        report.unknowns,
+        report.seconds,
+        report.condition_estimate,
+        report.max_residual
+    );
+    println!("wrote {} ({} bytes)", args.out.display(), bytes.len());
+    Ok(())
+}

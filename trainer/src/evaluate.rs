@@ -1,0 +1,170 @@
+//! Evaluating a blob at many points in a chosen precision: the trainer's `f64` reference, or
+//! the core in `f32` or Q16.16 — exactly what a microcontroller would compute.
+
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+
+use neurosurf_core::blob::{self, ModelKind};
+use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
+use neurosurf_core::scalar::{Q16, Scalar};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::implicit::{self, DecodedImplicit};
+use crate::rbf::RbfModel;
+
+/// The arithmetic a model is evaluated in.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Precision {
+    /// The trainer's reference: parameters widened to `f64`, evaluated in `f64`.
+    F64,
+    /// The core in IEEE binary32.
+    F32,
+    /// The core in Q16.16 fixed point.
+    Q16,
+}
+
+impl Precision {
+    /// Every precision, reference first.
+    pub const ALL: [Precision; 3] = [Precision::F64, Precision::F32, Precision::Q16];
+
+    /// The command-line name: `f64`, `f32`, `q16.16`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+            Precision::Q16 => "q16.16",
+        }
+    }
+}
+
+impl fmt::Display for Precision {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Precision {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "f64" => Ok(Precision::F64),
+            "f32" => Ok(Precision::F32),
+            "q16.16" | "q16" | "i16f16" => Ok(Precision::Q16),
+            _ => Err(Error::invalid(format!(
+                "unknown scalar {s:?}: expected f64, f32 or q16.16"
+            ))),
+        }
+    }
+}
+
+/// Φ and ∇Φ at one point, in `f64` whatever the precision it was computed in.
+pub type Sample = (f64, [f64; 3]);
+
+/// A model read from a blob file, ready to evaluate.
+#[derive(Debug)]
+pub enum LoadedModel {
+    /// A modular implicit surface; `bytes` is the blob, for the core.
+    Implicit {
+        /// The blob.
+        bytes: Vec<u8>,
+        /// Its `f64` reading.
+        decoded: Box<DecodedImplicit>,
+    },
+    /// The RBF baseline (host only).
+    Rbf(RbfModel),
+}
+
+impl LoadedModel {
+    /// Reads and validates the blob at `path`.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if unreadable, [`Error::Blob`] / [`Error::Format`] if rejected.
+    pub fn read(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Self::from_bytes(bytes, path)
+    }
+
+    /// Validates a blob; `path` names it in errors.
+    ///
+    /// # Errors
+    /// [`Error::Blob`] / [`Error::Format`] if rejected.
+    pub fn from_bytes(bytes: Vec<u8>, path: &Path) -> Result<Self> {
+        let (header, _) = blob::parse(&bytes).map_err(|source| Error::Blob {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        match header.model {
+            ModelKind::Implicit => {
+                let decoded = implicit::from_blob(&bytes, path)?;
+                Ok(LoadedModel::Implicit {
+                    bytes,
+                    decoded: Box::new(decoded),
+                })
+            }
+            ModelKind::Rbf => Ok(LoadedModel::Rbf(RbfModel::from_blob(&bytes, path)?)),
+            other => Err(Error::format(
+                path,
+                format!("{} models cannot be evaluated here", other.name()),
+            )),
+        }
+    }
+
+    /// The model kind.
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            LoadedModel::Implicit { .. } => ModelKind::Implicit,
+            LoadedModel::Rbf(_) => ModelKind::Rbf,
+        }
+    }
+
+    /// Φ and ∇Φ at every point in `precision`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the model cannot be evaluated in that precision (an RBF
+    /// outside `f64`; an implicit model whose parameters exceed Q16.16's range or the core's
+    /// capacity).
+    pub fn evaluate(&self, points: &[[f64; 3]], precision: Precision) -> Result<Vec<Sample>> {
+        match (self, precision) {
+            (LoadedModel::Implicit { decoded, .. }, Precision::F64) => {
+                Ok(points.iter().map(|&p| decoded.network.eval(p)).collect())
+            }
+            (LoadedModel::Implicit { bytes, .. }, Precision::F32) => {
+                evaluate_core::<f32>(bytes, points)
+            }
+            (LoadedModel::Implicit { bytes, .. }, Precision::Q16) => {
+                evaluate_core::<Q16>(bytes, points)
+            }
+            (LoadedModel::Rbf(model), Precision::F64) => {
+                Ok(points.iter().map(|&p| model.field_gradient(p)).collect())
+            }
+            (LoadedModel::Rbf(_), other) => Err(Error::invalid(format!(
+                "the RBF baseline is a host-only model: it evaluates in f64, not {other}"
+            ))),
+        }
+    }
+}
+
+/// Runs the core's batch evaluation in scalar `S` (points rounded to `S`, saturating).
+fn evaluate_core<S: Scalar>(bytes: &[u8], points: &[[f64; 3]]) -> Result<Vec<Sample>> {
+    let model = ImplicitModel::<S>::from_blob(bytes).map_err(|e| {
+        Error::invalid(format!(
+            "the core cannot load this model in {}: {e}",
+            S::KIND.name()
+        ))
+    })?;
+    let inputs: Vec<[S; 3]> = points
+        .iter()
+        .map(|p| p.map(|c| S::from_f32_saturating(c as f32)))
+        .collect();
+    let mut out = vec![FieldGradient::<S>::default(); inputs.len()];
+    model
+        .field_gradient_batch(&inputs, &mut out)
+        .map_err(|e| Error::invalid(format!("batch evaluation: {e}")))?;
+    Ok(out
+        .iter()
+        .map(|fg| (fg.value.to_f64(), fg.gradient.map(S::to_f64)))
+        .collect())
+}

@@ -1,0 +1,183 @@
+//! Converting between the trainer's `f64` network and the core's blob.
+//!
+//! The blob's parameters are the network's parameters, in the same layout, rounded to the
+//! stored scalar. Its metadata (opaque to the core) is a postcard-encoded [`ImplicitMetadata`]:
+//! the feature each leaf learned and, when the model was trained here, the training summary —
+//! so `neurosurf info` can tell the model's story and `--init` can check it warm-starts the
+//! right tree.
+
+use neurosurf_core::blob::{self, ModelKind};
+use neurosurf_core::implicit::{ImplicitPayload, ModuleKind};
+use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+use std::path::Path;
+
+use neurosurf_core::BlobError;
+use serde::{Deserialize, Serialize};
+
+use super::network::ImplicitNetwork;
+use super::train::TrainingSummary;
+use crate::error::{Error, Result};
+
+/// What the trainer stores next to the parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImplicitMetadata {
+    /// Feature index of each module in post-order (`None` for nodes).
+    pub leaf_features: Vec<Option<u32>>,
+    /// How the model was trained, when it was.
+    pub summary: Option<TrainingSummary>,
+}
+
+/// An implicit blob read back into the trainer.
+#[derive(Clone, Debug)]
+pub struct DecodedImplicit {
+    /// The network, parameters widened to `f64` exactly.
+    pub network: ImplicitNetwork,
+    /// The trainer's metadata, if the blob carries readable metadata.
+    pub metadata: Option<ImplicitMetadata>,
+    /// How the parameters were stored.
+    pub stored_as: ScalarKind,
+}
+
+/// Encodes `network` as a blob storing its parameters as `scalar`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when a parameter cannot be stored: not finite, or outside what the
+/// core loads for that scalar (`±Q16::MAX_PARAMETER` for Q16.16), or a scalar the core's
+/// implicit models are not stored in.
+pub fn to_blob(
+    network: &ImplicitNetwork,
+    summary: Option<&TrainingSummary>,
+    scalar: ScalarKind,
+) -> Result<Vec<u8>> {
+    let limit = match scalar {
+        ScalarKind::F32 => f64::from(f32::MAX),
+        ScalarKind::Q16_16 => f64::from(<Q16 as Scalar>::MAX_PARAMETER),
+        other => {
+            return Err(Error::invalid(format!(
+                "implicit models are stored as f32 or q16.16, not {}",
+                other.name()
+            )));
+        }
+    };
+    let mut parameters = Vec::with_capacity(network.params().len() * 4);
+    for (index, &value) in network.params().iter().enumerate() {
+        let word = scalar
+            .encode(value)
+            .filter(|_| value.abs() <= limit)
+            .ok_or_else(|| {
+                Error::invalid(format!(
+                    "parameter {index} = {value} cannot be stored as {} (limit ±{limit})",
+                    scalar.name()
+                ))
+            })?;
+        parameters.extend_from_slice(&word);
+    }
+    let metadata = ImplicitMetadata {
+        leaf_features: network.leaf_features().to_vec(),
+        summary: summary.cloned(),
+    };
+    let metadata = postcard::to_allocvec(&metadata)
+        .map_err(|e| Error::invalid(format!("cannot encode the model metadata: {e}")))?;
+    let tree: Vec<u8> = network.kinds().iter().map(|k| k.code()).collect();
+    let width = u8::try_from(network.width())
+        .map_err(|_| Error::invalid(format!("width {} does not fit", network.width())))?;
+    let payload = ImplicitPayload {
+        width,
+        tree: &tree,
+        parameters: &parameters,
+        metadata: &metadata,
+    };
+    frame(ModelKind::Implicit, scalar, &payload)
+}
+
+/// Frames any serializable payload as a blob, sizing the buffer exactly.
+///
+/// # Errors
+/// [`Error::InvalidInput`] if the payload does not serialize.
+pub fn frame<T: Serialize + ?Sized>(
+    model: ModelKind,
+    scalar: ScalarKind,
+    payload: &T,
+) -> Result<Vec<u8>> {
+    let needed = match blob::write(model, scalar, payload, &mut []) {
+        Err(BlobError::BufferTooSmall { needed, .. }) => needed,
+        Ok(len) => len,
+        Err(e) => return Err(Error::invalid(format!("cannot encode the blob: {e}"))),
+    };
+    let mut out = vec![0; needed];
+    let len = blob::write(model, scalar, payload, &mut out)
+        .map_err(|e| Error::invalid(format!("cannot encode the blob: {e}")))?;
+    out.truncate(len);
+    Ok(out)
+}
+
+/// Reads an implicit blob back into an `f64` network (parameters widened exactly). `path`
+/// only names the source in errors.
+///
+/// # Errors
+/// [`Error::Blob`] for framing, kind, storage and non-finite parameters; [`Error::Format`]
+/// when the tree and parameters do not form a model.
+pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
+    let rejected = |source| Error::Blob {
+        path: path.to_path_buf(),
+        source,
+    };
+    let (header, payload) = ImplicitPayload::from_blob(bytes).map_err(rejected)?;
+    let stored_as = header.scalar;
+    if stored_as.stored_bytes() != 4 {
+        return Err(rejected(BlobError::UnsupportedStorage {
+            model: ModelKind::Implicit,
+            scalar: stored_as,
+        }));
+    }
+    let mut kinds = Vec::with_capacity(payload.tree.len());
+    for (module, &code) in payload.tree.iter().enumerate() {
+        kinds.push(ModuleKind::from_code(code).ok_or(rejected(BlobError::InvalidTree { module }))?);
+    }
+    if !payload.parameters.len().is_multiple_of(4) {
+        return Err(Error::format(
+            path,
+            format!(
+                "{} parameter bytes is not a whole number of 4-byte words",
+                payload.parameters.len()
+            ),
+        ));
+    }
+    let mut params = Vec::with_capacity(payload.parameters.len() / 4);
+    for (index, chunk) in payload.parameters.chunks_exact(4).enumerate() {
+        let word = [chunk[0], chunk[1], chunk[2], chunk[3]];
+        let value = match stored_as {
+            ScalarKind::F32 => f64::from(f32::from_le_bytes(word)),
+            _ => f64::from(i32::from_le_bytes(word)) / 65536.0,
+        };
+        if !value.is_finite() {
+            return Err(rejected(BlobError::NonFiniteParameter { index }));
+        }
+        params.push(value);
+    }
+    let metadata: Option<ImplicitMetadata> = postcard::from_bytes(payload.metadata).ok();
+    let leaf_features = match &metadata {
+        Some(m) if m.leaf_features.len() == kinds.len() => m.leaf_features.clone(),
+        _ => {
+            // Foreign blob: number the leaves in post-order.
+            let mut next = 0;
+            kinds
+                .iter()
+                .map(|k| {
+                    (*k == ModuleKind::Leaf).then(|| {
+                        next += 1;
+                        next - 1
+                    })
+                })
+                .collect()
+        }
+    };
+    let network =
+        ImplicitNetwork::from_parts(usize::from(payload.width), kinds, leaf_features, params)
+            .map_err(|e| Error::format(path, format!("not a valid implicit model: {e}")))?;
+    Ok(DecodedImplicit {
+        network,
+        metadata,
+        stored_as,
+    })
+}

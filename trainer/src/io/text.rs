@@ -1,0 +1,187 @@
+//! Query point lists: PLY, or whitespace-separated text.
+
+use std::io::Read;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+
+use super::mesh::extension;
+use super::ply::read_ply_positions;
+
+/// Reads points at which to evaluate a model.
+///
+/// A file whose extension is `.ply` (any case), or which starts with the `ply` magic line, is
+/// read as PLY: the `x y z` of its `vertex` element. Anything else is whitespace-separated
+/// text: blank lines and lines whose first non-blank character is `#` are skipped, every
+/// other line holds exactly 3 numbers (`x y z`) or 6 (`x y z nx ny nz`, the normal is
+/// ignored). An empty list is not an error.
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the line (text) or
+/// vertex (PLY) and the offending token for unparseable lines, a wrong number of values, or
+/// a coordinate that is not finite.
+pub fn read_query_points(path: &Path) -> Result<Vec<[f64; 3]>> {
+    if extension(path).as_deref() == Some("ply") || has_ply_magic(path)? {
+        let points = read_ply_positions(path)?;
+        if let Some((i, p)) = points
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.iter().any(|c| !c.is_finite()))
+        {
+            return Err(Error::format(
+                path,
+                format!("vertex {i} has a non-finite coordinate {p:?}"),
+            ));
+        }
+        return Ok(points);
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_text_points(path, &bytes)
+}
+
+/// Whether the file starts with the PLY magic line.
+fn has_ply_magic(path: &Path) -> Result<bool> {
+    let mut head = [0u8; 4];
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut filled = 0;
+    while filled < head.len() {
+        match file.read(&mut head[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(Error::io(path, e)),
+        }
+    }
+    Ok(&head[..filled] == b"ply\n" || &head[..filled] == b"ply\r")
+}
+
+fn parse_text_points(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
+    let mut points = Vec::new();
+    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        let line_no = i + 1;
+        let err = |message: String| Error::format(path, format!("line {line_no}: {message}"));
+        let line = std::str::from_utf8(raw).map_err(|_| err("not valid UTF-8".into()))?;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let mut values = [0.0f64; 3];
+        let mut count = 0;
+        for token in line.split_ascii_whitespace() {
+            let value: f64 = token
+                .parse()
+                .map_err(|_| err(format!("'{token}' is not a number")))?;
+            if !value.is_finite() {
+                return Err(err(format!("'{token}' is not a finite number")));
+            }
+            if count < 3 {
+                values[count] = value;
+            }
+            count += 1;
+        }
+        if count != 3 && count != 6 {
+            return Err(err(format!(
+                "expected 3 numbers (x y z) or 6 (x y z nx ny nz), found {count}"
+            )));
+        }
+        points.push(values);
+    }
+    Ok(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Vec<[f64; 3]>> {
+        parse_text_points(Path::new("q.txt"), text.as_bytes())
+    }
+
+    fn message(e: Error) -> String {
+        match e {
+            Error::Format { path, message } => {
+                assert_eq!(path, Path::new("q.txt"));
+                message
+            }
+            other => panic!("expected a format error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn parses_three_and_six_columns_with_comments() {
+        let text = "# query points\n\n  1 2 3\n\t-1.5e-3   0 +4\r\n  # indented comment\n\
+                    7 8 9 0 0 1\n   \n";
+        assert_eq!(
+            parse(text).unwrap(),
+            vec![[1.0, 2.0, 3.0], [-1.5e-3, 0.0, 4.0], [7.0, 8.0, 9.0]]
+        );
+        assert_eq!(parse("").unwrap(), Vec::<[f64; 3]>::new());
+        assert_eq!(parse("# nothing\n").unwrap(), Vec::<[f64; 3]>::new());
+    }
+
+    #[test]
+    fn errors_name_line_and_token() {
+        let e = message(parse("1 2 3\n\n4 five 6\n").unwrap_err());
+        assert!(e.contains("line 3") && e.contains("'five'"), "{e}");
+        let e = message(parse("1 2 3\n1 2\n").unwrap_err());
+        assert!(e.contains("line 2") && e.contains("found 2"), "{e}");
+        let e = message(parse("# c\n1 2 3 4\n").unwrap_err());
+        assert!(e.contains("line 2") && e.contains("found 4"), "{e}");
+        let e = message(parse("1 2 3 4 5 6 7\n").unwrap_err());
+        assert!(e.contains("line 1") && e.contains("found 7"), "{e}");
+        let e = message(parse("1 2 3\n0 nan 0\n").unwrap_err());
+        assert!(e.contains("line 2") && e.contains("'nan'"), "{e}");
+        let e = message(parse("1,2,3\n").unwrap_err());
+        assert!(e.contains("line 1") && e.contains("'1,2,3'"), "{e}");
+        let e = message(parse_text_points(Path::new("q.txt"), b"1 2 3\n\xff 1 2\n").unwrap_err());
+        assert!(e.contains("line 2") && e.contains("UTF-8"), "{e}");
+    }
+
+    #[test]
+    fn chooses_ply_by_extension_or_magic() {
+        let dir = tempfile::tempdir().unwrap();
+        let ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+                   property float z\nend_header\n1 2 3\n4 5 6\n";
+        let expected = vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+        for name in ["q.ply", "q.PLY", "q.dat"] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, ply).unwrap();
+            assert_eq!(read_query_points(&path).unwrap(), expected, "{name}");
+        }
+        let path = dir.path().join("q.xyz");
+        std::fs::write(&path, "1 2 3\n4 5 6 0 0 1\n").unwrap();
+        assert_eq!(read_query_points(&path).unwrap(), expected);
+        // A short text file is not mistaken for PLY.
+        let path = dir.path().join("short.txt");
+        std::fs::write(&path, "1 2 3").unwrap();
+        assert_eq!(read_query_points(&path).unwrap(), vec![[1.0, 2.0, 3.0]]);
+
+        let path = dir.path().join("text.ply");
+        std::fs::write(&path, "1 2 3\n").unwrap();
+        assert!(matches!(
+            read_query_points(&path),
+            Err(Error::Format { .. })
+        ));
+        let e = read_query_points(&dir.path().join("missing.txt")).unwrap_err();
+        assert!(matches!(e, Error::Io { .. }), "{e}");
+    }
+
+    #[test]
+    fn non_finite_ply_query_points_are_rejected() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("nan.ply");
+        let mut bytes =
+            b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double x\n\
+                          property double y\nproperty double z\nend_header\n"
+                .to_vec();
+        for v in [0.0, 1.0, 2.0, 3.0, f64::INFINITY, 5.0] {
+            bytes.extend(f64::to_le_bytes(v));
+        }
+        std::fs::write(&path, bytes).unwrap();
+        let e = read_query_points(&path).unwrap_err();
+        assert!(
+            matches!(e, Error::Format { .. }) && e.to_string().contains("vertex 1"),
+            "{e}"
+        );
+    }
+}

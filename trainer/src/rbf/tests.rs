@@ -1,0 +1,466 @@
+//! Tests of the RBF baseline: interpolation, gradient, fidelity on a torus, errors, blobs.
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use neurosurf_core::BlobError;
+use neurosurf_core::blob::ModelKind;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::*;
+use crate::error::Error;
+use crate::implicit::frame;
+use crate::points::PointSet;
+
+/// Torus major radius (axis z).
+const R: f64 = 1.0;
+/// Torus minor radius.
+const TUBE: f64 = 0.4;
+/// Its diameter, the unit of the distance metric.
+const DIAMETER: f64 = 2.0 * (R + TUBE);
+
+/// `n` area-uniform points on the torus with exact outward normals.
+fn torus(n: usize, seed: u64) -> PointSet {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut positions = Vec::with_capacity(n);
+    let mut normals = Vec::with_capacity(n);
+    while positions.len() < n {
+        let u = rng.random_range(0.0..2.0 * PI);
+        let v = rng.random_range(0.0..2.0 * PI);
+        // Area element ∝ R + r·cos v: accept with that density.
+        if rng.random_range(0.0..R + TUBE) > R + TUBE * v.cos() {
+            continue;
+        }
+        let ring = R + TUBE * v.cos();
+        positions.push([ring * u.cos(), ring * u.sin(), TUBE * v.sin()]);
+        normals.push([v.cos() * u.cos(), v.cos() * u.sin(), v.sin()]);
+    }
+    PointSet {
+        positions,
+        normals,
+        features: None,
+    }
+}
+
+/// `n` Fibonacci points on the sphere of radius `radius`.
+fn sphere(n: usize, radius: f64) -> PointSet {
+    let golden = PI * (3.0 - 5.0_f64.sqrt());
+    let normals: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let rho = (1.0 - z * z).sqrt();
+            let t = golden * i as f64;
+            [rho * t.cos(), rho * t.sin(), z]
+        })
+        .collect();
+    PointSet {
+        positions: normals.iter().map(|n| n.map(|c| radius * c)).collect(),
+        normals,
+        features: None,
+    }
+}
+
+/// Medians over `held_out` of the distance estimate |f|/|∇f| (% of the diameter) and of the
+/// angle (degrees) between −∇f/|∇f| and the true normal.
+fn fidelity(model: &RbfModel, held_out: &PointSet) -> (f64, f64) {
+    let f = crate::fidelity::Fidelity::measure(held_out, DIAMETER, |p| model.field_gradient(p))
+        .expect("a non-empty held-out set");
+    (f.median_distance_percent, f.median_angle_degrees)
+}
+
+fn offset(p: [f64; 3], n: [f64; 3], epsilon: f64) -> [f64; 3] {
+    [
+        p[0] + epsilon * n[0],
+        p[1] + epsilon * n[1],
+        p[2] + epsilon * n[2],
+    ]
+}
+
+fn is_invalid(result: crate::Result<(RbfModel, RbfReport)>, needle: &str) -> bool {
+    match result {
+        Err(Error::InvalidInput(message)) => {
+            assert!(message.contains(needle), "{message:?} lacks {needle:?}");
+            true
+        }
+        Err(other) => panic!("unexpected error {other}"),
+        Ok(_) => false,
+    }
+}
+
+#[test]
+fn sphere_constraints_are_interpolated() {
+    let points = sphere(150, 0.8);
+    let options = RbfOptions::default();
+    let (model, report) = fit(&points, &options).unwrap();
+    assert_eq!(report.points, 150);
+    assert_eq!(report.unknowns, 304);
+    assert_eq!(model.parameter_count(), 304);
+    assert_eq!(model.centers().len(), 300);
+    assert!(report.max_residual < 1e-10, "{report:?}");
+    assert!(report.condition_estimate > 1.0 && report.condition_estimate.is_finite());
+    let target = -options.epsilon * options.slope;
+    for (p, n) in points.positions.iter().zip(&points.normals) {
+        assert!(model.field(*p).abs() < 1e-8);
+        let off = model.field(offset(*p, *n, options.epsilon));
+        assert!((off - target).abs() < 1e-8, "{off} vs {target}");
+        // The surface normal points outward.
+        let normal = model.normal(*p).unwrap();
+        let cos: f64 = (0..3).map(|k| normal[k] * n[k]).sum();
+        assert!(cos > 0.99, "{cos}");
+    }
+    // Polynomial side conditions hold.
+    let scale: f64 = model.weights().iter().map(|w| w.abs()).sum();
+    let sum: f64 = model.weights().iter().sum();
+    assert!(sum.abs() < 1e-12 * scale, "{sum} vs {scale}");
+    for k in 0..3 {
+        let moment: f64 = model
+            .weights()
+            .iter()
+            .zip(model.centers())
+            .map(|(w, c)| w * c[k])
+            .sum();
+        assert!(moment.abs() < 1e-12 * scale, "{moment}");
+    }
+    // Sign convention: positive inside, negative outside.
+    assert!(model.field([0.0; 3]) > 0.0);
+    assert!(model.field([2.0, 0.3, -0.1]) < 0.0);
+    println!("sphere 150: {report:?}");
+}
+
+#[test]
+fn gradient_matches_central_differences() {
+    let (model, _) = fit(&torus(96, 3), &RbfOptions::default()).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let h = 1e-5;
+    for _ in 0..50 {
+        let p: [f64; 3] = std::array::from_fn(|_| rng.random_range(-1.6..1.6));
+        let (value, gradient) = model.field_gradient(p);
+        assert_eq!(value.to_bits(), model.field(p).to_bits());
+        for k in 0..3 {
+            let (mut plus, mut minus) = (p, p);
+            plus[k] += h;
+            minus[k] -= h;
+            let numeric = (model.field(plus) - model.field(minus)) / (2.0 * h);
+            let tolerance = 1e-6 * (1.0 + gradient[k].abs());
+            assert!(
+                (numeric - gradient[k]).abs() < tolerance,
+                "∂{k} at {p:?}: {numeric} vs {}",
+                gradient[k]
+            );
+        }
+    }
+}
+
+/// Fits `n` torus points and measures the fidelity on 2000 held-out surface points.
+fn torus_fidelity(n: usize) -> (f64, f64, RbfReport) {
+    let (model, report) = fit(&torus(n, 1), &RbfOptions::default()).unwrap();
+    let (distance, angle) = fidelity(&model, &torus(2000, 99));
+    println!(
+        "torus {n}: median distance {distance:.3} % of D, median angle {angle:.2}°, \
+         {:.1} ms, κ₁ ≈ {:.2e}, max residual {:.1e}",
+        1e3 * report.seconds,
+        report.condition_estimate,
+        report.max_residual
+    );
+    (distance, angle, report)
+}
+
+#[test]
+fn torus_96_fidelity() {
+    let (distance, angle, report) = torus_fidelity(96);
+    assert!(distance < 0.4 && angle < 4.0, "{distance} {angle}");
+    assert!(report.max_residual < 1e-10);
+}
+
+#[test]
+fn torus_336_fidelity() {
+    let (distance, angle, report) = torus_fidelity(336);
+    assert!(distance < 0.08 && angle < 1.2, "{distance} {angle}");
+    assert!(report.max_residual < 1e-10);
+}
+
+/// Prints the fidelity and solve time for Carcenac's Table 5 point counts; run with
+/// `cargo test --release -p neurosurf-trainer rbf::tests::table -- --ignored --nocapture`.
+#[test]
+#[ignore = "timing table; run in release"]
+fn table() {
+    for n in [48, 96, 160, 336, 576] {
+        torus_fidelity(n);
+    }
+}
+
+#[test]
+fn rejects_bad_input() {
+    let options = RbfOptions::default();
+    assert!(is_invalid(fit(&sphere(3, 1.0), &options), "at least 4"));
+
+    let mut duplicate = sphere(20, 1.0);
+    duplicate.positions[7] = duplicate.positions[3];
+    duplicate.normals[7] = duplicate.normals[3];
+    assert!(is_invalid(
+        fit(&duplicate, &options),
+        "control point 3 and control point 7 coincide"
+    ));
+
+    // A control point sitting on another's off-surface point.
+    let mut collide = sphere(20, 1.0);
+    collide.positions[5] = offset(collide.positions[2], collide.normals[2], options.epsilon);
+    assert!(is_invalid(fit(&collide, &options), "coincide"));
+
+    let mut nan = sphere(20, 1.0);
+    nan.positions[4][1] = f64::NAN;
+    assert!(is_invalid(fit(&nan, &options), "control point 4"));
+    let mut nan = sphere(20, 1.0);
+    nan.normals[6][2] = f64::NAN;
+    assert!(is_invalid(fit(&nan, &options), "control point 6"));
+    let mut zero = sphere(20, 1.0);
+    zero.normals[1] = [0.0; 3];
+    assert!(is_invalid(fit(&zero, &options), "control point 1"));
+
+    let mut short = sphere(20, 1.0);
+    short.normals.pop();
+    assert!(is_invalid(
+        fit(&short, &options),
+        "20 positions but 19 normals"
+    ));
+
+    let huge = PointSet {
+        positions: vec![[0.0; 3]; MAX_POINTS + 1],
+        normals: vec![[0.0, 0.0, 1.0]; MAX_POINTS + 1],
+        features: None,
+    };
+    assert!(is_invalid(
+        fit(&huge, &options),
+        &format!("at most {MAX_POINTS}")
+    ));
+
+    for bad in [
+        RbfOptions {
+            c2: 0.0,
+            ..options.clone()
+        },
+        RbfOptions {
+            epsilon: f64::NAN,
+            ..options.clone()
+        },
+        RbfOptions {
+            slope: -1.0,
+            ..options.clone()
+        },
+    ] {
+        assert!(is_invalid(
+            fit(&sphere(20, 1.0), &bad),
+            "must be finite and positive"
+        ));
+    }
+}
+
+#[test]
+fn near_duplicates_are_rejected_or_exact() {
+    // Two points 10⁻⁷ apart: either rejected as singular or still interpolated.
+    let mut close = sphere(40, 1.0);
+    close.positions[9] = offset(close.positions[8], [1.0, 0.0, 0.0], 1e-7);
+    close.normals[9] = close.normals[8];
+    match fit(&close, &RbfOptions::default()) {
+        Ok((_, report)) => assert!(report.max_residual < 1e-7, "{report:?}"),
+        Err(e) => assert!(e.to_string().contains("singular"), "{e}"),
+    }
+}
+
+#[test]
+fn coplanar_control_points_fit_but_coplanar_centres_do_not() {
+    // A planar patch with normals off the plane: the off-surface points leave it.
+    let positions: Vec<[f64; 3]> = (0..25)
+        .map(|i| [(i % 5) as f64 * 0.25, (i / 5) as f64 * 0.25, 0.0])
+        .collect();
+    let patch = PointSet {
+        normals: vec![[0.0, 0.0, 1.0]; 25],
+        positions,
+        features: None,
+    };
+    let (model, report) = fit(&patch, &RbfOptions::default()).unwrap();
+    assert!(report.max_residual < 1e-10);
+    // Between the control points the plane is still (nearly) the zero set, with +z outward.
+    let (f, g) = model.field_gradient([0.37, 0.61, 0.0]);
+    assert!(f.abs() < 1e-3, "{f}");
+    assert!(g[2] < 0.0);
+
+    // A circle in z = 0 with in-plane normals: every centre lies in the plane.
+    let flat = PointSet {
+        positions: (0..12)
+            .map(|i| {
+                let t = i as f64 * PI / 6.0;
+                [t.cos(), t.sin(), 0.0]
+            })
+            .collect(),
+        normals: (0..12)
+            .map(|i| {
+                let t = i as f64 * PI / 6.0;
+                [t.cos(), t.sin(), 0.0]
+            })
+            .collect(),
+        features: None,
+    };
+    assert!(is_invalid(fit(&flat, &RbfOptions::default()), "coplanar"));
+}
+
+#[test]
+fn blob_round_trip_is_bit_exact() {
+    let (model, _) = fit(&torus(48, 5), &RbfOptions::default()).unwrap();
+    let bytes = model.to_blob().unwrap();
+    let path = Path::new("torus.rbf");
+    let again = RbfModel::from_blob(&bytes, path).unwrap();
+    assert_eq!(again, model);
+    assert_eq!(again.to_blob().unwrap(), bytes);
+    assert_eq!(again.c2().to_bits(), model.c2().to_bits());
+    for (a, b) in again.weights().iter().zip(model.weights()) {
+        assert_eq!(a.to_bits(), b.to_bits());
+    }
+    let p = [0.3, -1.1, 0.2];
+    assert_eq!(again.field(p).to_bits(), model.field(p).to_bits());
+    assert_eq!(bytes[6], ModelKind::Rbf.code());
+    assert_eq!(bytes[7], RBF_SCALAR.code());
+}
+
+#[test]
+fn blob_rejects_bad_bytes() {
+    let (model, _) = fit(&sphere(10, 1.0), &RbfOptions::default()).unwrap();
+    let bytes = model.to_blob().unwrap();
+    let path = Path::new("bad.rbf");
+    let blob_error = |bytes: &[u8]| match RbfModel::from_blob(bytes, path) {
+        Err(Error::Blob { source, path: p }) => {
+            assert_eq!(p, path);
+            source
+        }
+        other => panic!("expected a blob error, got {other:?}"),
+    };
+    let mut corrupt = bytes.clone();
+    corrupt[40] ^= 4;
+    assert!(matches!(
+        blob_error(&corrupt),
+        BlobError::CrcMismatch { .. }
+    ));
+    assert!(matches!(
+        blob_error(&bytes[..bytes.len() - 1]),
+        BlobError::Truncated { .. }
+    ));
+
+    // Hand-built payloads: (centres, values, scalar, kind).
+    let build = |m: u32, values: &[f64], kind: ModelKind| {
+        let parameters: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        frame(
+            kind,
+            RBF_SCALAR,
+            &(m, parameters.as_slice(), [0_u8; 0].as_slice()),
+        )
+        .unwrap()
+    };
+    let mut values = vec![1e-3, 0.1, 0.2, 0.3, 0.4, 0.0, 0.0, 0.0, 1.0];
+    assert!(RbfModel::from_blob(&build(1, &values, ModelKind::Rbf), path).is_ok());
+    assert!(matches!(
+        blob_error(&build(1, &values, ModelKind::Implicit)),
+        BlobError::WrongModelKind { .. }
+    ));
+    assert!(matches!(
+        blob_error(&build(2, &values, ModelKind::Rbf)),
+        BlobError::ShapeMismatch {
+            expected: 13,
+            found: 9,
+            ..
+        }
+    ));
+    values[6] = f64::INFINITY;
+    assert!(matches!(
+        blob_error(&build(1, &values, ModelKind::Rbf)),
+        BlobError::NonFiniteParameter { index: 6 }
+    ));
+    values[6] = 0.0;
+    values[0] = 0.0;
+    assert!(matches!(
+        RbfModel::from_blob(&build(1, &values, ModelKind::Rbf), path),
+        Err(Error::Format { .. })
+    ));
+    assert!(matches!(
+        RbfModel::from_blob(&build(0, &values[..5], ModelKind::Rbf), path),
+        Err(Error::Format { .. })
+    ));
+    let f32_blob = frame(
+        ModelKind::Rbf,
+        neurosurf_core::scalar::ScalarKind::F32,
+        &(1_u32, [0_u8; 72].as_slice(), [0_u8; 0].as_slice()),
+    )
+    .unwrap();
+    assert!(matches!(
+        blob_error(&f32_blob),
+        BlobError::UnsupportedStorage { .. }
+    ));
+    let trailing = frame(
+        ModelKind::Rbf,
+        RBF_SCALAR,
+        &(1_u32, [0_u8; 72].as_slice(), [0_u8; 0].as_slice(), 7_u8),
+    )
+    .unwrap();
+    assert!(matches!(blob_error(&trailing), BlobError::MalformedPayload));
+}
+
+#[test]
+fn model_new_validates() {
+    assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], 0.0, 1e-3).is_ok());
+    assert!(RbfModel::new(vec![], vec![], [0.0; 3], 0.0, 1e-3).is_err());
+    assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0, 2.0], [0.0; 3], 0.0, 1e-3).is_err());
+    assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], 0.0, 0.0).is_err());
+    assert!(RbfModel::new(vec![[f64::NAN; 3]], vec![1.0], [0.0; 3], 0.0, 1e-3).is_err());
+    assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], f64::NAN, 1e-3).is_err());
+    // φ(0) = c, so one unit weight at the origin gives f = √c² there.
+    let model = RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], 0.0, 0.25).unwrap();
+    assert_eq!(model.field([0.0; 3]), 0.5);
+    assert_eq!(model.field_gradient([0.0; 3]).1, [0.0; 3]);
+    assert_eq!(model.normal([0.0; 3]), None);
+}
+
+#[test]
+fn saddle_solver_matches_lu_and_condition_estimate_is_close() {
+    use nalgebra::{DMatrix, DVector};
+
+    use super::condition::symmetric_inverse_norm1;
+    use super::solve::SaddleSolver;
+
+    let points = torus(30, 8);
+    let mut centers = points.positions.clone();
+    for (p, n) in points.positions.iter().zip(&points.normals) {
+        centers.push(offset(*p, *n, 0.05));
+    }
+    let m = centers.len();
+    let kernel = |i: usize, j: usize| {
+        let (a, b) = (centers[i], centers[j]);
+        multiquadric([a[0] - b[0], a[1] - b[1], a[2] - b[2]], 1e-3)
+    };
+    let rows: Vec<[f64; 4]> = centers.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect();
+    let full = DMatrix::from_fn(m + 4, m + 4, |i, j| match (i < m, j < m) {
+        (true, true) => kernel(i, j),
+        (true, false) => rows[i][j - m],
+        (false, true) => rows[j][i - m],
+        (false, false) => 0.0,
+    });
+    let solver = SaddleSolver::new(DMatrix::from_fn(m, m, kernel), &rows).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let rhs: Vec<f64> = (0..m + 4).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let ours = solver.solve_stacked(&rhs);
+    let lu = full.clone().lu().solve(&DVector::from_vec(rhs)).unwrap();
+    let scale = lu.amax();
+    for (a, b) in ours.iter().zip(lu.iter()) {
+        assert!((a - b).abs() < 1e-7 * scale, "{a} vs {b}");
+    }
+    let inverse = full.clone().try_inverse().unwrap();
+    let norm1 = |a: &DMatrix<f64>| {
+        a.column_iter()
+            .map(|c| c.iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max)
+    };
+    assert!((solver.norm1() - norm1(&full)).abs() < 1e-12 * norm1(&full));
+    let exact = norm1(&inverse);
+    let estimate = symmetric_inverse_norm1(m + 4, |x| solver.solve_stacked(x));
+    println!("‖M⁻¹‖₁ exact {exact:.4e}, estimate {estimate:.4e}");
+    assert!(estimate <= exact * (1.0 + 1e-6) && estimate >= exact / 3.0);
+}
