@@ -104,3 +104,24 @@ fn metadata_summary(bytes: &[u8]) -> Option<neurosurf_trainer::implicit::Trainin
         .metadata
         .and_then(|m| m.summary)
 }
+
+#[test]
+fn training_is_deterministic_for_a_seed_even_with_parallel_leaves() {
+    use neurosurf_trainer::implicit::TreeSpec;
+    let points = sample_shape(&Shape::Head, 99, 5).unwrap();
+    let request = FitRequest {
+        tree: Some("((0,1),2)".parse::<TreeSpec>().unwrap()),
+        ..FitRequest::default()
+    };
+    let run = |seed| {
+        let options = ImplicitOptions {
+            seed,
+            ..ImplicitOptions::default()
+        };
+        let trained = implicit::fit(points.clone(), &request, &options, &|_| {}).unwrap();
+        implicit::to_blob(&trained.network, None, ScalarKind::F32).unwrap()
+    };
+    let first = run(3);
+    assert_eq!(first, run(3), "same seed, different model");
+    assert_ne!(first, run(4), "the seed does not reach the initialization");
+}
