@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every check and every test of the workspace: the README's test command, and CI's.
-# Needs only rustup's stable toolchain (with rustfmt and clippy) on a fresh machine.
+# Needs only rustup's stable toolchain (with rustfmt and clippy), gcc, python3 and apt on a fresh
+# machine: firmware-sim/scripts/setup.sh installs the Cortex-M toolchain and QEMU idempotently.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -14,5 +15,10 @@ step "docs"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
 step "core with its optional features (defmt, serde)"
 cargo check -p neurosurf-core --features defmt,serde --quiet
+step "core for a Cortex-M4F (thumbv7em-none-eabihf: no std, no alloc)"
+firmware-sim/scripts/setup.sh >/dev/null
+RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 CARGO_TARGET_DIR=target/thumbv7em /usr/bin/cargo build \
+    --quiet --release -p neurosurf-core --features defmt \
+    --target thumbv7em-none-eabihf -Zbuild-std=core
 step "tests"
 cargo test --workspace
