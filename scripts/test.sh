@@ -9,16 +9,16 @@ step() { printf '\n==> %s\n' "$*"; }
 
 step "format"
 cargo fmt --all --check
+cargo fmt --manifest-path firmware-sim/firmware/Cargo.toml --check
 step "lints"
 cargo clippy --workspace --all-targets -- -D warnings
 step "docs"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
 step "core with its optional features (defmt, serde)"
 cargo check -p neurosurf-core --features defmt,serde --quiet
-step "core for a Cortex-M4F (thumbv7em-none-eabihf: no std, no alloc)"
+step "firmware for the simulated Cortex-M4F (core for thumbv7em-none-eabihf: no std, no heap)"
 firmware-sim/scripts/setup.sh >/dev/null
-RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 CARGO_TARGET_DIR=target/thumbv7em /usr/bin/cargo build \
-    --quiet --release -p neurosurf-core --features defmt \
-    --target thumbv7em-none-eabihf -Zbuild-std=core
+(cd firmware-sim/firmware && RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
+    CARGO_TARGET_DIR=../../target/firmware /usr/bin/cargo build --quiet --release)
 step "tests"
 cargo test --workspace

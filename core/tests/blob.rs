@@ -207,6 +207,31 @@ fn metadata_is_opaque() {
     assert_eq!(a.field_gradient(p), b.field_gradient(p));
 }
 
+/// `load` replaces a model in place (how firmware fills a `static`), and a rejected blob
+/// leaves it empty rather than half-loaded.
+#[test]
+fn load_in_place_replaces_the_model_and_a_failure_leaves_it_empty() {
+    let first = Sample::new(3, 4, PAIR);
+    let second = Sample::new(5, 2, SINGLE_LEAF);
+    let mut model = ImplicitModel::<Q16>::new();
+    let p = [Q16::from_num(0.25), Q16::from_num(-0.5), Q16::ZERO];
+    assert_eq!(model.module_count(), 0);
+    assert_eq!(model.field(p), Q16::ZERO);
+    model.load(&first.blob(ScalarKind::Q16_16)).unwrap();
+    let direct = ImplicitModel::<Q16>::from_blob(&first.blob(ScalarKind::Q16_16)).unwrap();
+    assert_eq!(model.field_gradient(p), direct.field_gradient(p));
+    model.load(&second.blob(ScalarKind::F32)).unwrap();
+    let direct = ImplicitModel::<Q16>::from_blob(&second.blob(ScalarKind::F32)).unwrap();
+    assert_eq!((model.module_count(), model.width()), (1, 2));
+    assert_eq!(model.field_gradient(p), direct.field_gradient(p));
+    let mut broken = first.blob(ScalarKind::Q16_16);
+    let last = broken.len() - 1;
+    broken[last] ^= 1;
+    assert!(model.load(&broken).is_err());
+    assert_eq!((model.module_count(), model.parameter_count()), (0, 0));
+    assert_eq!(model.field(p), Q16::ZERO);
+}
+
 /// A 16-high tree (the most the evaluator's recursion allows) loads and evaluates correctly.
 #[test]
 fn tallest_tree_loads_and_evaluates() {

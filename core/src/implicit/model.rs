@@ -106,6 +106,18 @@ pub struct ImplicitModel<
 }
 
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
+    /// An empty model (no modules: every evaluation gives zero), to be filled by
+    /// [`ImplicitModel::load`]. `const`, so firmware can place a model in a `static` and load
+    /// blobs into it in place, with no large temporary on the stack.
+    pub const fn new() -> Self {
+        ImplicitModel {
+            width: 0,
+            modules: Vec::new(),
+            parameters: Vec::new(),
+            stored_as: S::KIND,
+        }
+    }
+
     /// Decodes and validates a blob, converting its parameters to `S`.
     ///
     /// # Errors
@@ -113,8 +125,20 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     /// payload, invalid width or tree, parameter count disagreeing with the tree, capacities of
     /// this type exceeded, non-finite or (for fixed point) out-of-range parameters.
     pub fn from_blob(bytes: &[u8]) -> Result<Self, BlobError> {
-        let (header, payload) = ImplicitPayload::from_blob(bytes)?;
-        let result = Self::from_payload(&payload, header.scalar);
+        let mut model = Self::new();
+        model.load(bytes)?;
+        Ok(model)
+    }
+
+    /// Replaces this model by the one in `bytes`, in place (see [`ImplicitModel::from_blob`]).
+    /// On error the model is left empty.
+    ///
+    /// # Errors
+    /// As [`ImplicitModel::from_blob`].
+    pub fn load(&mut self, bytes: &[u8]) -> Result<(), BlobError> {
+        self.clear();
+        let result = ImplicitPayload::from_blob(bytes)
+            .and_then(|(header, payload)| self.load_payload(&payload, header.scalar));
         #[cfg(feature = "defmt")]
         if let Err(e) = &result {
             defmt::warn!("implicit blob rejected: {}", e);
@@ -130,6 +154,37 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         payload: &ImplicitPayload<'_>,
         stored: ScalarKind,
     ) -> Result<Self, BlobError> {
+        let mut model = Self::new();
+        model.load_payload(payload, stored)?;
+        Ok(model)
+    }
+
+    /// Replaces this model by a decoded payload, in place. On error the model is left empty.
+    ///
+    /// # Errors
+    /// As [`ImplicitModel::from_payload`].
+    pub fn load_payload(
+        &mut self,
+        payload: &ImplicitPayload<'_>,
+        stored: ScalarKind,
+    ) -> Result<(), BlobError> {
+        self.clear();
+        let result = self.fill(payload, stored);
+        if result.is_err() {
+            self.clear();
+        }
+        result
+    }
+
+    /// Makes this the empty model.
+    fn clear(&mut self) {
+        self.width = 0;
+        self.modules.clear();
+        self.parameters.clear();
+        self.stored_as = S::KIND;
+    }
+
+    fn fill(&mut self, payload: &ImplicitPayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
         if !matches!(stored, ScalarKind::F32 | ScalarKind::Q16_16) {
             return Err(BlobError::UnsupportedStorage {
                 model: blob::ModelKind::Implicit,
@@ -144,8 +199,9 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                 found: width,
             });
         }
-        let modules = build_tree::<M>(payload.tree, width)?;
-        let needed = modules
+        build_tree(&mut self.modules, payload.tree, width)?;
+        let needed = self
+            .modules
             .last()
             .map_or(0, |m| m.offset + ModuleLayout::new(m.kind, width).len);
         let word = stored.stored_bytes();
@@ -164,7 +220,6 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                 capacity: P,
             });
         }
-        let mut parameters = Vec::new();
         for (index, chunk) in payload.parameters.chunks_exact(4).enumerate() {
             let bytes: [u8; 4] = chunk.try_into().map_err(|_| BlobError::MalformedPayload)?;
             let value = S::from_stored(bytes, stored).ok_or_else(|| {
@@ -174,7 +229,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                     BlobError::ParameterOutOfRange { index }
                 }
             })?;
-            parameters
+            self.parameters
                 .push(value)
                 .map_err(|_| BlobError::CapacityExceeded {
                     what: Quantity::Parameters,
@@ -182,12 +237,9 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                     capacity: P,
                 })?;
         }
-        Ok(ImplicitModel {
-            width,
-            modules,
-            parameters,
-            stored_as: stored,
-        })
+        self.width = width;
+        self.stored_as = stored;
+        Ok(())
     }
 
     /// Hidden width N.
@@ -244,8 +296,18 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     }
 }
 
+impl<S: Scalar, const P: usize, const M: usize> Default for ImplicitModel<S, P, M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// Checks a post-order tree and computes each module's offset, subtree and children.
-fn build_tree<const M: usize>(tree: &[u8], width: usize) -> Result<Vec<ModuleEntry, M>, BlobError> {
+fn build_tree<const M: usize>(
+    modules: &mut Vec<ModuleEntry, M>,
+    tree: &[u8],
+    width: usize,
+) -> Result<(), BlobError> {
     if tree.is_empty() {
         return Err(BlobError::ShapeMismatch {
             what: Quantity::Modules,
@@ -260,7 +322,7 @@ fn build_tree<const M: usize>(tree: &[u8], width: usize) -> Result<Vec<ModuleEnt
             capacity: M,
         });
     }
-    let mut modules: Vec<ModuleEntry, M> = Vec::new();
+    modules.clear();
     // Roots of the subtrees completed so far, as module indices.
     let mut pending: Vec<usize, M> = Vec::new();
     let mut offset = 0_usize;
@@ -312,5 +374,5 @@ fn build_tree<const M: usize>(tree: &[u8], width: usize) -> Result<Vec<ModuleEnt
             module: tree.len() - 1,
         });
     }
-    Ok(modules)
+    Ok(())
 }

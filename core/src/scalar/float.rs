@@ -37,6 +37,10 @@ impl Scalar for f32 {
         }
     }
     #[inline]
+    fn to_le_bytes(self) -> [u8; 4] {
+        f32::to_le_bytes(self)
+    }
+    #[inline]
     fn to_f32(self) -> f32 {
         self
     }

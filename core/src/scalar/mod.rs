@@ -158,6 +158,9 @@ pub trait Scalar:
     /// Decodes one stored parameter of kind `stored`; `None` when it is not finite or beyond
     /// [`Scalar::MAX_PARAMETER`].
     fn from_stored(bytes: [u8; 4], stored: ScalarKind) -> Option<Self>;
+    /// The raw little-endian bits in this scalar's own [`ScalarKind`] (`f32` bits, Q16.16
+    /// bits): the exact value, for transport and bit-for-bit comparison.
+    fn to_le_bytes(self) -> [u8; 4];
     /// The nearest `f32`.
     fn to_f32(self) -> f32;
     /// The exact value as `f64`.

@@ -68,6 +68,10 @@ impl Scalar for Q16 {
         }
     }
     #[inline]
+    fn to_le_bytes(self) -> [u8; 4] {
+        self.to_bits().to_le_bytes()
+    }
+    #[inline]
     fn to_f32(self) -> f32 {
         self.to_num()
     }

@@ -1,0 +1,180 @@
+//! Building the firmware and reading its ELF.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use neurosurf_sim_protocol::{REGION_START_SYMBOL, REGION_STOP_SYMBOL};
+use object::{Object, ObjectSection, ObjectSymbol, SectionFlags};
+
+use crate::{SimError, Toolchain};
+
+/// Where RAM starts on the target (Cortex-M SRAM region).
+const RAM_ORIGIN: u64 = 0x2000_0000;
+
+/// Memory the firmware occupies, against the budget it is linked for.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Footprint {
+    /// Bytes of flash: vector table, code, read-only data and `.data` initializers.
+    pub flash_bytes: u64,
+    /// Flash the firmware is linked for (`memory.x`).
+    pub flash_budget: u64,
+    /// Bytes of statically allocated RAM (`.data`, `.bss`, `.uninit`).
+    pub static_ram_bytes: u64,
+    /// RAM the firmware is linked for (`memory.x`); the stack gets what statics leave.
+    pub ram_budget: u64,
+}
+
+/// The built firmware: its ELF and what the runner needs from it.
+#[derive(Clone, Debug)]
+pub struct Firmware {
+    /// The ELF QEMU loads.
+    pub elf: PathBuf,
+    /// Entry address of the region-start marker.
+    pub region_start: u64,
+    /// Entry address of the region-stop marker.
+    pub region_stop: u64,
+    /// Memory use.
+    pub footprint: Footprint,
+    /// The whole ELF (the defmt decoder needs its tables).
+    pub(crate) bytes: std::sync::Arc<Vec<u8>>,
+}
+
+impl Firmware {
+    /// Builds the firmware under repository `root` with the Debian toolchain (a no-op when
+    /// nothing changed: cargo caches it in `target/firmware`) and reads the result.
+    ///
+    /// # Errors
+    /// [`SimError::Build`] with the compiler output; [`SimError::Elf`] when the result lacks
+    /// the markers.
+    pub fn build(toolchain: &Toolchain, root: &Path) -> Result<Self, SimError> {
+        let source = root.join("firmware-sim/firmware");
+        let target_dir = root.join("target/firmware");
+        let mut command = Command::new(&toolchain.cargo);
+        command
+            .args(["build", "--release", "--quiet"])
+            .current_dir(&source);
+        // The host build's environment (rustup's toolchain, the test harness's CARGO_* and
+        // flags) must not leak into the Debian toolchain's cross build.
+        for (key, _) in std::env::vars_os() {
+            let key = key.to_string_lossy();
+            let leaks = (key.starts_with("CARGO") && key != "CARGO_HOME")
+                || key.starts_with("RUSTUP")
+                || key.starts_with("RUSTC")
+                || key.starts_with("RUSTFLAGS")
+                || key.starts_with("RUSTDOC");
+            if leaks {
+                command.env_remove(key.as_ref());
+            }
+        }
+        command
+            .env("RUSTC", &toolchain.rustc)
+            .env("RUSTC_BOOTSTRAP", "1")
+            .env("CARGO_TARGET_DIR", &target_dir);
+        let output = command.output().map_err(|e| SimError::Build {
+            what: "the firmware",
+            output: format!("cannot run {}: {e}", toolchain.cargo.display()),
+        })?;
+        if !output.status.success() {
+            return Err(SimError::Build {
+                what: "the firmware",
+                output: String::from_utf8_lossy(&output.stderr).into_owned(),
+            });
+        }
+        let elf = target_dir.join("thumbv7em-none-eabihf/release/neurosurf-firmware");
+        let memory = std::fs::read_to_string(source.join("memory.x"))
+            .map_err(SimError::io(source.join("memory.x")))?;
+        Self::read(&elf, &memory)
+    }
+
+    /// Reads a built firmware ELF, with the `memory.x` it was linked with.
+    ///
+    /// # Errors
+    /// [`SimError::Io`], [`SimError::Elf`].
+    pub fn read(elf: &Path, memory_x: &str) -> Result<Self, SimError> {
+        let bytes = std::fs::read(elf).map_err(SimError::io(elf))?;
+        let bad = |reason: String| SimError::Elf {
+            path: elf.to_path_buf(),
+            reason,
+        };
+        let file = object::File::parse(&*bytes).map_err(|e| bad(e.to_string()))?;
+        let symbol = |name: &str| {
+            file.symbols()
+                .find(|s| s.name() == Ok(name))
+                .map(|s| s.address() & !1)
+                .ok_or_else(|| bad(format!("no symbol {name}")))
+        };
+        let (region_start, region_stop) =
+            (symbol(REGION_START_SYMBOL)?, symbol(REGION_STOP_SYMBOL)?);
+        let (mut flash_bytes, mut static_ram_bytes) = (0, 0);
+        for section in file.sections() {
+            let SectionFlags::Elf { sh_flags } = section.flags() else {
+                continue;
+            };
+            const SHF_ALLOC: u64 = 0x2;
+            if sh_flags & SHF_ALLOC == 0 {
+                continue;
+            }
+            let in_ram = section.address() >= RAM_ORIGIN;
+            let has_bytes = section.file_range().is_some();
+            if in_ram {
+                static_ram_bytes += section.size();
+            }
+            if !in_ram || has_bytes {
+                // .data lives in RAM but its initializers are loaded from flash.
+                flash_bytes += section.size();
+            }
+        }
+        Ok(Firmware {
+            elf: elf.to_path_buf(),
+            region_start,
+            region_stop,
+            footprint: Footprint {
+                flash_bytes,
+                flash_budget: memory_length(memory_x, "FLASH")
+                    .ok_or_else(|| bad("memory.x has no FLASH length".into()))?,
+                static_ram_bytes,
+                ram_budget: memory_length(memory_x, "RAM")
+                    .ok_or_else(|| bad("memory.x has no RAM length".into()))?,
+            },
+            bytes: std::sync::Arc::new(bytes),
+        })
+    }
+}
+
+/// The `LENGTH` of `region` in a `memory.x` (`1M`, `192K` or plain bytes).
+fn memory_length(memory_x: &str, region: &str) -> Option<u64> {
+    let line = memory_x
+        .lines()
+        .find(|line| line.split_whitespace().next() == Some(region))?;
+    let value = line
+        .split("LENGTH")
+        .nth(1)?
+        .trim_start_matches([' ', '='])
+        .trim();
+    let value = value.trim_end_matches(|c: char| c == ',' || c.is_whitespace());
+    let (digits, unit) = value.split_at(
+        value
+            .find(|c: char| !c.is_ascii_digit())
+            .unwrap_or(value.len()),
+    );
+    let scale = match unit.trim() {
+        "" => 1,
+        "K" | "k" => 1024,
+        "M" | "m" => 1024 * 1024,
+        _ => return None,
+    };
+    digits.parse::<u64>().ok().map(|n| n * scale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::memory_length;
+
+    #[test]
+    fn memory_x_lengths_parse() {
+        let text = "MEMORY\n{\n  FLASH : ORIGIN = 0x00000000, LENGTH = 1M\n  RAM   : ORIGIN = 0x20000000, LENGTH = 192K\n}\n";
+        assert_eq!(memory_length(text, "FLASH"), Some(1 << 20));
+        assert_eq!(memory_length(text, "RAM"), Some(192 * 1024));
+        assert_eq!(memory_length(text, "CCM"), None);
+    }
+}

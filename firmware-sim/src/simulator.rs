@@ -1,0 +1,344 @@
+//! One simulated run: files in, QEMU under a time limit, files and counts out.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use defmt_decoder::Table;
+use neurosurf_core::BlobError;
+use neurosurf_core::scalar::{Q16, ScalarKind};
+use neurosurf_sim_protocol::{
+    MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE, RequestHeader, ResultTrailer, Status,
+};
+use wait_timeout::ChildExt;
+
+use crate::{Firmware, SimError, TARGET_MACHINE, Toolchain, log, plugin};
+
+/// What to run on the target.
+#[derive(Copy, Clone, Debug)]
+pub struct Job<'a> {
+    /// The model blob, as the trainer wrote it.
+    pub blob: &'a [u8],
+    /// The scalar to evaluate in (any code is sent; the firmware rejects what it lacks).
+    pub scalar: ScalarKind,
+    /// What to compute.
+    pub op: Op,
+    /// Single points or lane batches.
+    pub mode: Mode,
+    /// Query points (rounded to `f32` already, as the host core receives them).
+    pub points: &'a [[f32; 3]],
+    /// Wall-clock limit; `None` = 30 s plus 1 ms per point.
+    pub time_limit: Option<Duration>,
+}
+
+impl<'a> Job<'a> {
+    /// Φ and ∇Φ at `points` in lane batches, as `neurosurf eval` does on the host.
+    pub fn field_gradient(blob: &'a [u8], scalar: ScalarKind, points: &'a [[f32; 3]]) -> Self {
+        Job {
+            blob,
+            scalar,
+            op: Op::FieldGradient,
+            mode: Mode::Batch,
+            points,
+            time_limit: None,
+        }
+    }
+}
+
+/// A finished run.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// The scalar evaluated in.
+    pub scalar: ScalarKind,
+    /// What was computed.
+    pub op: Op,
+    /// Single points or batches.
+    pub mode: Mode,
+    /// Raw result words, `op.words()` per point (`f32` or Q16.16 bits).
+    pub words: Vec<u32>,
+    /// Stack high-water mark of the run, in bytes.
+    pub stack_bytes: u32,
+    /// Instructions in every timed region; region 0 is empty (the markers' own cost).
+    pub regions: Vec<u64>,
+    /// The decoded defmt log.
+    pub log: Vec<String>,
+}
+
+impl Run {
+    /// Points evaluated.
+    pub fn count(&self) -> usize {
+        self.words.len() / self.op.words().max(1)
+    }
+
+    /// Result words decoded to `f64` (exact for `f32` and Q16.16).
+    pub fn values(&self) -> Vec<f64> {
+        self.words
+            .iter()
+            .map(|&w| match self.scalar {
+                ScalarKind::Q16_16 => Q16::from_bits(w as i32).to_num::<f64>(),
+                _ => f64::from(f32::from_bits(w)),
+            })
+            .collect()
+    }
+
+    /// (Φ, ∇Φ) per point, as the host's `evaluate` returns them; empty unless the op computed
+    /// gradients.
+    pub fn samples(&self) -> Vec<(f64, [f64; 3])> {
+        if self.op != Op::FieldGradient {
+            return Vec::new();
+        }
+        self.values()
+            .chunks_exact(4)
+            .map(|c| (c[0], [c[1], c[2], c[3]]))
+            .collect()
+    }
+
+    /// Guest instructions per evaluated point, the markers' own cost removed: the exact,
+    /// deterministic cost of one evaluation (plus its share of the loop around it).
+    pub fn instructions_per_point(&self) -> f64 {
+        let Some((&empty, timed)) = self.regions.split_first() else {
+            return f64::NAN;
+        };
+        let total: u64 = timed.iter().map(|&c| c.saturating_sub(empty)).sum();
+        total as f64 / self.count().max(1) as f64
+    }
+}
+
+/// The prepared simulator: toolchain located, firmware and plugin built, defmt table loaded.
+#[derive(Clone)]
+pub struct Simulator {
+    toolchain: Toolchain,
+    firmware: Firmware,
+    plugin: PathBuf,
+    table: Arc<Table>,
+}
+
+impl std::fmt::Debug for Simulator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulator")
+            .field("toolchain", &self.toolchain)
+            .field("firmware", &self.firmware.elf)
+            .field("plugin", &self.plugin)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Simulator {
+    /// Gets everything ready (installing the toolchain on first use, building the firmware
+    /// and the plugin when their sources changed). Done once per process; later calls reuse it.
+    ///
+    /// # Errors
+    /// [`SimError::Setup`], [`SimError::Build`], [`SimError::Elf`].
+    pub fn prepare() -> Result<Self, SimError> {
+        static PREPARED: Mutex<Option<Simulator>> = Mutex::new(None);
+        let mut prepared = PREPARED.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(simulator) = prepared.as_ref() {
+            return Ok(simulator.clone());
+        }
+        let simulator = Self::prepare_in(&crate::repository_root())?;
+        *prepared = Some(simulator.clone());
+        Ok(simulator)
+    }
+
+    /// As [`Simulator::prepare`], for the repository at `root`, without caching.
+    ///
+    /// # Errors
+    /// As [`Simulator::prepare`].
+    pub fn prepare_in(root: &Path) -> Result<Self, SimError> {
+        let toolchain = Toolchain::ensure(root)?;
+        let firmware = Firmware::build(&toolchain, root)?;
+        let plugin = plugin::build(&toolchain, root)?;
+        let table = Table::parse(&firmware.bytes)
+            .map_err(|e| SimError::Elf {
+                path: firmware.elf.clone(),
+                reason: format!("defmt table: {e}"),
+            })?
+            .ok_or_else(|| SimError::Elf {
+                path: firmware.elf.clone(),
+                reason: "no defmt table".into(),
+            })?;
+        Ok(Simulator {
+            toolchain,
+            firmware,
+            plugin,
+            table: Arc::new(table),
+        })
+    }
+
+    /// The firmware being run.
+    pub fn firmware(&self) -> &Firmware {
+        &self.firmware
+    }
+
+    /// Runs `job` on the simulated Cortex-M4F.
+    ///
+    /// # Errors
+    /// [`SimError::BlobRejected`] with the core's error when the target refuses the blob;
+    /// [`SimError::Firmware`] for any other failure status (bad request, panic, HardFault);
+    /// [`SimError::Timeout`] when the target hangs; [`SimError::Io`], [`SimError::Protocol`].
+    pub fn run(&self, job: &Job<'_>) -> Result<Run, SimError> {
+        let dir = tempfile::Builder::new()
+            .prefix("neurosurf-sim-")
+            .tempdir()
+            .map_err(SimError::io(std::env::temp_dir()))?;
+        let write = |name: &str, bytes: &[u8]| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, bytes).map_err(SimError::io(path))
+        };
+        write(MODEL_FILE, job.blob)?;
+        let count = u32::try_from(job.points.len()).map_err(|_| {
+            SimError::Protocol(format!(
+                "{} points is too many for one run",
+                job.points.len()
+            ))
+        })?;
+        let header = RequestHeader {
+            scalar: job.scalar.code(),
+            op: job.op,
+            mode: job.mode,
+            count,
+        };
+        let mut request = header.encode().to_vec();
+        for point in job.points {
+            for c in point {
+                request.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        write(REQUEST_FILE, &request)?;
+
+        let plugin_log = dir.path().join("plugin.log");
+        let mut child = Command::new(&self.toolchain.qemu)
+            .args(["-M", TARGET_MACHINE, "-cpu", "cortex-m4"])
+            .args(["-display", "none", "-serial", "null", "-monitor", "none"])
+            .args(["-semihosting-config", "enable=on,target=native"])
+            .arg("-plugin")
+            .arg(format!(
+                "{},start={:#x},stop={:#x}",
+                self.plugin.display(),
+                self.firmware.region_start,
+                self.firmware.region_stop
+            ))
+            .args(["-d", "plugin", "-D"])
+            .arg(&plugin_log)
+            .arg("-kernel")
+            .arg(&self.firmware.elf)
+            .current_dir(dir.path())
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(SimError::io(&self.toolchain.qemu))?;
+        // Drain the pipes while QEMU runs so a chatty target cannot block on them.
+        let drain = |pipe: Option<Box<dyn Read + Send>>| {
+            std::thread::spawn(move || {
+                let mut bytes = Vec::new();
+                if let Some(mut pipe) = pipe {
+                    let _ = pipe.read_to_end(&mut bytes);
+                }
+                bytes
+            })
+        };
+        let stdout = drain(
+            child
+                .stdout
+                .take()
+                .map(|p| Box::new(p) as Box<dyn Read + Send>),
+        );
+        let stderr = drain(
+            child
+                .stderr
+                .take()
+                .map(|p| Box::new(p) as Box<dyn Read + Send>),
+        );
+        let limit = job
+            .time_limit
+            .unwrap_or(Duration::from_secs(30) + Duration::from_millis(job.points.len() as u64));
+        let waited = child
+            .wait_timeout(limit)
+            .map_err(SimError::io(&self.toolchain.qemu))?;
+        let status = match waited {
+            Some(status) => status,
+            None => {
+                let _ = child.kill();
+                let _ = child.wait();
+                let log = log::decode(&self.table, &stdout.join().unwrap_or_default());
+                return Err(SimError::Timeout {
+                    seconds: limit.as_secs(),
+                    log,
+                });
+            }
+        };
+        let log = log::decode(&self.table, &stdout.join().unwrap_or_default());
+        let stderr = String::from_utf8_lossy(&stderr.join().unwrap_or_default()).into_owned();
+        let code = status.code().unwrap_or(-1);
+        let firmware_failure = |message: String| SimError::Firmware {
+            code,
+            message,
+            log: log.clone(),
+        };
+        match Status::from_code(code) {
+            Some(Status::Ok) => {}
+            Some(Status::BlobRejected) => {
+                let (answer, _) = read_result(dir.path())?;
+                let error = postcard::from_bytes::<BlobError>(&answer)
+                    .map_err(|e| SimError::Protocol(format!("undecodable blob error: {e}")))?;
+                return Err(SimError::BlobRejected { error });
+            }
+            Some(other) => return Err(firmware_failure(other.describe().to_string())),
+            None => {
+                return Err(firmware_failure(format!(
+                    "QEMU failed{}",
+                    if stderr.is_empty() {
+                        String::new()
+                    } else {
+                        format!(": {}", stderr.trim())
+                    }
+                )));
+            }
+        }
+        let (answer, trailer) = read_result(dir.path())?;
+        let words_per_point = job.op.words();
+        if usize::from(trailer.words) != words_per_point
+            || trailer.count != count
+            || answer.len() != job.points.len() * words_per_point * 4
+        {
+            return Err(SimError::Protocol(format!(
+                "expected {count} points × {words_per_point} words, got {trailer:?}"
+            )));
+        }
+        let words = answer
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        let plugin_text =
+            std::fs::read_to_string(&plugin_log).map_err(SimError::io(&plugin_log))?;
+        Ok(Run {
+            scalar: job.scalar,
+            op: job.op,
+            mode: job.mode,
+            words,
+            stack_bytes: trailer.stack_bytes,
+            regions: plugin::parse_regions(&plugin_text)?,
+            log,
+        })
+    }
+}
+
+/// The answer bytes and the trailer of the result file.
+fn read_result(dir: &Path) -> Result<(Vec<u8>, ResultTrailer), SimError> {
+    let path = dir.join(RESULT_FILE);
+    let mut bytes = std::fs::read(&path).map_err(SimError::io(&path))?;
+    let trailer = ResultTrailer::decode(&bytes)
+        .map_err(|e| SimError::Protocol(format!("result trailer: {e:?}")))?;
+    bytes.truncate(bytes.len() - ResultTrailer::LEN);
+    if bytes.len() != trailer.answer_bytes as usize {
+        return Err(SimError::Protocol(format!(
+            "result has {} answer bytes, trailer says {}",
+            bytes.len(),
+            trailer.answer_bytes
+        )));
+    }
+    Ok((bytes, trailer))
+}

@@ -1,0 +1,272 @@
+//! The core on a simulated Cortex-M4F (QEMU mps2-an386), against the same core on the host:
+//! trained models go through blobs to the target, and what comes back must be what the host
+//! computes — bit for bit in Q16.16, within 2 ulp in f32 — while bad blobs and bad requests
+//! come back as their error codes, and a hang as a time-out, never as a wrong answer.
+//!
+//! These tests install the toolchain on first use (`firmware-sim/scripts/setup.sh`).
+
+use std::path::Path;
+use std::time::Duration;
+
+use neurosurf_core::implicit::ImplicitModel;
+use neurosurf_core::scalar::ScalarKind;
+use neurosurf_firmware_sim::{Job, Mode, Op, SimError, Simulator, Status};
+use neurosurf_trainer::evaluate::{LoadedModel, Precision, Sample};
+use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions, Trained};
+use neurosurf_trainer::points::PointSet;
+use neurosurf_trainer::sample::{Shape, sample_shape};
+
+const TORUS: Shape = Shape::Torus {
+    major: 1.0,
+    minor: 0.4,
+};
+
+fn simulator() -> Simulator {
+    Simulator::prepare().unwrap_or_else(|e| panic!("simulator not ready: {e}"))
+}
+
+fn train(points: PointSet, tree: Option<&str>) -> Trained {
+    let request = FitRequest {
+        tree: tree.map(|t| t.parse().unwrap()),
+        ..FitRequest::default()
+    };
+    implicit::fit(points, &request, &ImplicitOptions::default(), &|_| {}).unwrap()
+}
+
+fn torus() -> Trained {
+    train(sample_shape(&TORUS, 96, 11).unwrap(), None)
+}
+
+fn head() -> Trained {
+    train(
+        sample_shape(&Shape::Head, 99, 5).unwrap(),
+        Some("((0,1),2)"),
+    )
+}
+
+/// Query points: the held-out surface points plus a spread through the bounding box (both
+/// the surface and the far field, where activations saturate).
+fn queries(shape: &Shape, seed: u64) -> Vec<[f64; 3]> {
+    let mut points = sample_shape(shape, 300, seed).unwrap().positions;
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1_u64 << 53) as f64 * 4.0 - 2.0
+    };
+    for _ in 0..100 {
+        points.push([next(), next(), next()]);
+    }
+    points
+}
+
+fn blob(trained: &Trained, scalar: ScalarKind) -> Vec<u8> {
+    implicit::to_blob(&trained.network, Some(&trained.summary), scalar).unwrap()
+}
+
+fn host(blob: &[u8], points: &[[f64; 3]], precision: Precision) -> Vec<Sample> {
+    LoadedModel::from_bytes(blob.to_vec(), Path::new("m.nsb"))
+        .unwrap()
+        .evaluate(points, precision)
+        .unwrap()
+}
+
+fn as_f32(points: &[[f64; 3]]) -> Vec<[f32; 3]> {
+    points.iter().map(|p| p.map(|c| c as f32)).collect()
+}
+
+/// Distance in units in the last place between two f32 values (same sign assumed near 0).
+fn ulps(a: f64, b: f64) -> u32 {
+    let key = |x: f32| {
+        let bits = x.to_bits() as i32;
+        if bits < 0 {
+            i32::MIN.wrapping_sub(bits)
+        } else {
+            bits
+        }
+    };
+    key(a as f32).abs_diff(key(b as f32))
+}
+
+fn angle_degrees(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let dot: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+    let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    (dot / (norm(a) * norm(b)))
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees()
+}
+
+#[test]
+fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
+    let sim = simulator();
+    for (name, trained, shape) in [("torus", torus(), TORUS), ("head", head(), Shape::Head)] {
+        let points = queries(&shape, 21);
+        let bytes = blob(&trained, ScalarKind::Q16_16);
+        let expected = host(&bytes, &points, Precision::Q16);
+        let points_f32 = as_f32(&points);
+        for mode in [Mode::Batch, Mode::Single] {
+            let job = Job {
+                mode,
+                ..Job::field_gradient(&bytes, ScalarKind::Q16_16, &points_f32)
+            };
+            let run = sim.run(&job).unwrap();
+            assert_eq!(run.samples(), expected, "{name}, {mode:?}");
+            let fields = sim
+                .run(&Job {
+                    op: Op::Field,
+                    ..job
+                })
+                .unwrap()
+                .values();
+            let expected_fields: Vec<f64> = expected.iter().map(|s| s.0).collect();
+            assert_eq!(fields, expected_fields, "{name}, field only, {mode:?}");
+        }
+    }
+}
+
+#[test]
+fn f32_on_the_target_agrees_with_the_host_within_2_ulp() {
+    let sim = simulator();
+    for (name, trained, shape) in [("torus", torus(), TORUS), ("head", head(), Shape::Head)] {
+        let points = queries(&shape, 22);
+        let bytes = blob(&trained, ScalarKind::F32);
+        let expected = host(&bytes, &points, Precision::F32);
+        let run = sim
+            .run(&Job::field_gradient(
+                &bytes,
+                ScalarKind::F32,
+                &as_f32(&points),
+            ))
+            .unwrap();
+        let mut worst = 0;
+        for (got, want) in run.samples().iter().zip(&expected) {
+            worst = worst.max(ulps(got.0, want.0));
+            for k in 0..3 {
+                worst = worst.max(ulps(got.1[k], want.1[k]));
+            }
+        }
+        eprintln!("{name}: worst f32 difference target vs host: {worst} ulp");
+        assert!(worst <= 2, "{name}: {worst} ulp");
+    }
+}
+
+#[test]
+fn q16_normals_on_the_target_are_within_half_a_degree_of_f64_on_the_torus() {
+    let sim = simulator();
+    let trained = torus();
+    let surface = sample_shape(&TORUS, 1000, 31).unwrap().positions;
+    let reference = host(&blob(&trained, ScalarKind::F32), &surface, Precision::F64);
+    let bytes = blob(&trained, ScalarKind::Q16_16);
+    let run = sim
+        .run(&Job::field_gradient(
+            &bytes,
+            ScalarKind::Q16_16,
+            &as_f32(&surface),
+        ))
+        .unwrap();
+    let mut angles: Vec<f64> = run
+        .samples()
+        .iter()
+        .zip(&reference)
+        .map(|(q, f)| angle_degrees(q.1, f.1))
+        .collect();
+    angles.sort_by(f64::total_cmp);
+    let median = angles[angles.len() / 2];
+    eprintln!("Q16.16 on target vs f64: median normal difference {median:.4}°");
+    assert!(median <= 0.5, "median {median}°");
+}
+
+#[test]
+fn corrupt_truncated_and_foreign_blobs_are_rejected_with_the_cores_error() {
+    let sim = simulator();
+    let good = blob(&torus(), ScalarKind::F32);
+    let mut corrupt = good.clone();
+    let middle = corrupt.len() / 2;
+    corrupt[middle] ^= 0x40;
+    let truncated = good[..good.len() - 7].to_vec();
+    let foreign = b"\x89PNG\r\n\x1a\n not a model at all".to_vec();
+    let empty = Vec::new();
+    let points = [[0.5_f32, 0.0, 0.1]];
+    for (name, bytes) in [
+        ("corrupt", &corrupt),
+        ("truncated", &truncated),
+        ("foreign", &foreign),
+        ("empty", &empty),
+    ] {
+        let host_error = ImplicitModel::<f32>::from_blob(bytes).unwrap_err();
+        match sim.run(&Job::field_gradient(bytes, ScalarKind::F32, &points)) {
+            Err(SimError::BlobRejected { error }) => {
+                assert_eq!(error, host_error, "{name}");
+            }
+            other => panic!("{name}: expected a rejection, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn bad_requests_panics_and_hangs_end_with_their_codes() {
+    let sim = simulator();
+    let good = blob(&torus(), ScalarKind::F32);
+    let points = [[0.5_f32, 0.0, 0.1]];
+    let code = |result: Result<_, SimError>| match result {
+        Err(SimError::Firmware { code, .. }) => code,
+        other => panic!("expected a firmware failure, got {other:?}"),
+    };
+    // f64 is a host-only scalar: the target refuses it as a bad request.
+    let job = Job::field_gradient(&good, ScalarKind::F64, &points);
+    assert_eq!(code(sim.run(&job)), i32::from(Status::BadRequest.code()));
+    // A blob larger than the firmware's buffer.
+    let huge = vec![0_u8; 64 * 1024];
+    let job = Job::field_gradient(&huge, ScalarKind::F32, &points);
+    assert_eq!(code(sim.run(&job)), i32::from(Status::BadRequest.code()));
+    let job = Job {
+        op: Op::SelfTestPanic,
+        ..Job::field_gradient(&good, ScalarKind::F32, &points)
+    };
+    assert_eq!(code(sim.run(&job)), i32::from(Status::Panic.code()));
+    let job = Job {
+        op: Op::SelfTestHang,
+        time_limit: Some(Duration::from_secs(2)),
+        ..Job::field_gradient(&good, ScalarKind::F32, &points)
+    };
+    match sim.run(&job) {
+        Err(SimError::Timeout { seconds, log }) => {
+            assert_eq!(seconds, 2);
+            assert!(
+                log.iter().any(|l| l.contains("hanging on purpose")),
+                "{log:?}"
+            );
+        }
+        other => panic!("expected a time-out, got {other:?}"),
+    }
+}
+
+#[test]
+fn every_run_reports_its_cost_and_memory() {
+    let sim = simulator();
+    let bytes = blob(&torus(), ScalarKind::Q16_16);
+    let points = as_f32(&queries(&TORUS, 40));
+    let run = sim
+        .run(&Job::field_gradient(&bytes, ScalarKind::Q16_16, &points))
+        .unwrap();
+    let model = ImplicitModel::<neurosurf_core::scalar::Q16>::from_blob(&bytes).unwrap();
+    let per_point = run.instructions_per_point();
+    // An evaluation cannot cost fewer instructions than it has multiply–accumulates.
+    assert!(per_point >= model.mac_count(true) as f64, "{per_point}");
+    assert_eq!(run.regions.len(), 1 + points.len().div_ceil(64));
+    assert!(run.stack_bytes > 0);
+    let footprint = sim.firmware().footprint;
+    assert!(footprint.flash_bytes > 0 && footprint.flash_bytes < footprint.flash_budget);
+    assert!(
+        footprint.static_ram_bytes + u64::from(run.stack_bytes) < footprint.ram_budget,
+        "{footprint:?}, stack {}",
+        run.stack_bytes
+    );
+    assert!(
+        run.log.iter().any(|l| l.contains("evaluated 400 points")),
+        "{:?}",
+        run.log
+    );
+}
