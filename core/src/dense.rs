@@ -5,35 +5,38 @@ use crate::implicit::{DenseLayout, MAX_WIDTH};
 use crate::jet::Jet;
 use crate::scalar::Scalar;
 
-/// A layer's neurons; entries past the layer's width are zero.
+/// A layer's neurons (the first `width` are meaningful).
 pub(crate) type Layer<S, const L: usize, const D: usize> = [Jet<S, L, D>; MAX_WIDTH];
 
 /// Evaluates the layer at `layout` inside `params` on the concatenation of `first` and
-/// `second`: Hⱼ = bⱼ + Σᵢ Wⱼᵢ·xᵢ, Oⱼ = a(Hⱼ), and tangents ᵏGⱼ = a′(Hⱼ)·Σᵢ Wⱼᵢ·ᵏxᵢ.
+/// `second` into `out[..layout.outputs]`: Hⱼ = bⱼ + Σᵢ Wⱼᵢ·xᵢ, Oⱼ = a(Hⱼ), and tangents
+/// ᵏGⱼ = a′(Hⱼ)·Σᵢ Wⱼᵢ·ᵏxᵢ.
 ///
-/// Parameters missing from a short `params` give zero neurons; the model loader guarantees
-/// the lengths, so that never happens after validation.
+/// Writes nothing when `params` is too short for the layout or `out` too small (the model
+/// loader guarantees both, so that never happens after validation). No allocation, no copy
+/// of a whole layer: the caller owns the buffers.
 #[inline]
 pub(crate) fn dense<S: Scalar, const L: usize, const D: usize>(
     params: &[S],
     layout: &DenseLayout,
     first: &[Jet<S, L, D>],
     second: &[Jet<S, L, D>],
-) -> Layer<S, L, D> {
-    let inputs = layout.inputs;
-    core::array::from_fn(|j| {
-        if j >= layout.outputs {
-            return Jet::ZERO;
-        }
-        let start = layout.weights + j * inputs;
-        match (
-            params.get(start..start + inputs),
-            params.get(layout.biases + j),
-        ) {
-            (Some(row), Some(&bias)) => neuron(row, bias, first, second),
-            _ => Jet::ZERO,
-        }
-    })
+    out: &mut [Jet<S, L, D>],
+) {
+    let (inputs, outputs) = (layout.inputs, layout.outputs);
+    let (Some(weights), Some(biases), Some(out)) = (
+        params.get(layout.weights..layout.weights + inputs * outputs),
+        params.get(layout.biases..layout.biases + outputs),
+        out.get_mut(..outputs),
+    ) else {
+        return;
+    };
+    if inputs == 0 {
+        return;
+    }
+    for ((row, &bias), slot) in weights.chunks_exact(inputs).zip(biases).zip(out) {
+        *slot = neuron(row, bias, first, second);
+    }
 }
 
 /// One neuron: weighted sum of values and tangents, activation, chain rule.

@@ -4,12 +4,6 @@
 //! method syntax (`x.tanh()`), which resolves to `std` on a host build and to another
 //! implementation on the target, so host and target results would silently differ.
 
-/// tanh for `f32` (libm: < 1 ulp).
-#[inline]
-pub(crate) fn tanhf(x: f32) -> f32 {
-    libm::tanhf(x)
-}
-
 /// Square root for `f32` (libm: correctly rounded).
 #[inline]
 pub(crate) fn sqrtf(x: f32) -> f32 {

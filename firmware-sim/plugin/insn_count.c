@@ -2,7 +2,8 @@
  * A QEMU TCG plugin that counts guest instructions executed between two marker functions.
  *
  * Arguments: start=<address>,stop=<address> (the entry addresses of the firmware's
- * neurosurf_region_start / neurosurf_region_stop; the Thumb bit is ignored).
+ * neurosurf_region_start / neurosurf_region_stop; the Thumb bit is ignored), and optionally
+ * profile=1 (see print_profile).
  * Every time the stop marker is reached it prints, through qemu_plugin_outs (enable with
  * `-d plugin`, send to a file with `-D`):
  *
@@ -37,6 +38,8 @@ void qemu_plugin_register_vcpu_tb_exec_cb(struct qemu_plugin_tb *tb, qemu_plugin
                                           enum qemu_plugin_cb_flags flags, void *userdata);
 void qemu_plugin_register_vcpu_insn_exec_cb(struct qemu_plugin_insn *insn, qemu_plugin_vcpu_udata_cb_t cb,
                                             enum qemu_plugin_cb_flags flags, void *userdata);
+typedef void (*qemu_plugin_udata_cb_t)(qemu_plugin_id_t id, void *userdata);
+void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t cb, void *userdata);
 size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *tb);
 struct qemu_plugin_insn *qemu_plugin_tb_get_insn(const struct qemu_plugin_tb *tb, size_t idx);
 uint64_t qemu_plugin_insn_vaddr(const struct qemu_plugin_insn *insn);
@@ -48,10 +51,46 @@ static uint64_t start_address, stop_address;
 static bool open_region;
 static uint64_t count, regions;
 
-static void on_block(unsigned int vcpu, void *n_insns) {
+/* profile=1: also attribute the counted instructions to translation blocks, and print the
+   heaviest blocks of the whole run at exit as `neurosurf-profile <address> <instructions>`. */
+static bool profile;
+#define PROFILE_SLOTS 8192
+static struct block {
+    uint64_t address;
+    uint64_t n_insns;
+    uint64_t executed;
+} blocks[PROFILE_SLOTS];
+static size_t block_count;
+
+static void on_block(unsigned int vcpu, void *data) {
     (void)vcpu;
-    if (open_region) {
-        count += (uint64_t)(uintptr_t)n_insns;
+    if (!open_region) {
+        return;
+    }
+    if (profile) {
+        struct block *b = data;
+        b->executed++;
+        count += b->n_insns;
+    } else {
+        count += (uint64_t)(uintptr_t)data;
+    }
+}
+
+static int heavier(const void *a, const void *b) {
+    const struct block *x = a, *y = b;
+    uint64_t wx = x->executed * x->n_insns, wy = y->executed * y->n_insns;
+    return wx < wy ? 1 : wx > wy ? -1 : 0;
+}
+
+static void print_profile(qemu_plugin_id_t id, void *unused) {
+    char line[96];
+    (void)id;
+    (void)unused;
+    qsort(blocks, block_count, sizeof blocks[0], heavier);
+    for (size_t i = 0; i < block_count && i < 40 && blocks[i].executed > 0; i++) {
+        snprintf(line, sizeof line, "neurosurf-profile 0x%" PRIx64 " %" PRIu64 " %" PRIu64 "\n",
+                 blocks[i].address, blocks[i].n_insns, blocks[i].executed * blocks[i].n_insns);
+        qemu_plugin_outs(line);
     }
 }
 
@@ -78,7 +117,14 @@ static void on_stop(unsigned int vcpu, void *unused) {
 static void on_translate(qemu_plugin_id_t id, struct qemu_plugin_tb *tb) {
     size_t n = qemu_plugin_tb_n_insns(tb);
     (void)id;
-    qemu_plugin_register_vcpu_tb_exec_cb(tb, on_block, QEMU_PLUGIN_CB_NO_REGS, (void *)(uintptr_t)n);
+    void *data = (void *)(uintptr_t)n;
+    if (profile && n > 0 && block_count < PROFILE_SLOTS) {
+        struct block *b = &blocks[block_count++];
+        b->address = qemu_plugin_insn_vaddr(qemu_plugin_tb_get_insn(tb, 0));
+        b->n_insns = n;
+        data = b;
+    }
+    qemu_plugin_register_vcpu_tb_exec_cb(tb, on_block, QEMU_PLUGIN_CB_NO_REGS, data);
     for (size_t i = 0; i < n; i++) {
         struct qemu_plugin_insn *insn = qemu_plugin_tb_get_insn(tb, i);
         uint64_t at = qemu_plugin_insn_vaddr(insn) & ~(uint64_t)1;
@@ -98,6 +144,8 @@ __attribute__((visibility("default"))) int qemu_plugin_install(qemu_plugin_id_t 
             start_address = strtoull(argv[i] + 6, NULL, 0) & ~(uint64_t)1;
         } else if (strncmp(argv[i], "stop=", 5) == 0) {
             stop_address = strtoull(argv[i] + 5, NULL, 0) & ~(uint64_t)1;
+        } else if (strcmp(argv[i], "profile=1") == 0) {
+            profile = true;
         } else {
             fprintf(stderr, "insn_count: unknown argument %s\n", argv[i]);
             return -1;
@@ -108,5 +156,8 @@ __attribute__((visibility("default"))) int qemu_plugin_install(qemu_plugin_id_t 
         return -1;
     }
     qemu_plugin_register_vcpu_tb_trans_cb(id, on_translate);
+    if (profile) {
+        qemu_plugin_register_atexit_cb(id, print_profile, NULL);
+    }
     return 0;
 }

@@ -108,9 +108,12 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         };
         let layout = ModuleLayout::new(entry.kind, model.width);
         let params = model.module_parameters(entry.offset, layout.len);
-        let last = model.last_hidden(self.module, points, MAX_HEIGHT);
+        let mut last = [Jet::ZERO; MAX_WIDTH];
+        model.last_hidden(self.module, points, MAX_HEIGHT, &mut last);
         let hidden = last.get(..model.width).unwrap_or(&[]);
-        let [out, ..] = dense(params, &layout.output, hidden, &[]);
+        let mut out = [Jet::ZERO; 1];
+        dense(params, &layout.output, hidden, &[], &mut out);
+        let [out] = out;
         out
     }
 }
@@ -122,43 +125,49 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         self.parameters.get(offset..offset + len).unwrap_or(&[])
     }
 
-    /// The last hidden layer (b) of module `index`, recursing into children. `budget` bounds
-    /// the recursion (validated tree heights never exhaust it).
+    /// The last hidden layer (b) of module `index` into `out`, recursing into children.
+    /// `budget` bounds the recursion (validated tree heights never exhaust it).
     fn last_hidden<const L: usize, const D: usize>(
         &self,
         index: usize,
         points: &[[S; 3]; L],
         budget: usize,
-    ) -> Layer<S, L, D> {
+        out: &mut Layer<S, L, D>,
+    ) {
         let (Some(entry), Some(budget)) = (self.modules.get(index), budget.checked_sub(1)) else {
-            return [Jet::ZERO; MAX_WIDTH];
+            return;
         };
         let width = self.width;
         let layout = ModuleLayout::new(entry.kind, width);
         let params = self.module_parameters(entry.offset, layout.len);
-        let hidden_a = match entry.kind {
+        let mut hidden_a = [Jet::ZERO; MAX_WIDTH];
+        match entry.kind {
             ModuleKind::Leaf => {
                 let input = normalized_input(params, points);
-                dense(params, &layout.hidden_a, &input, &[])
+                dense(params, &layout.hidden_a, &input, &[], &mut hidden_a);
             }
             ModuleKind::Node => {
-                let left = self.last_hidden(entry.left, points, budget);
-                let right = self.last_hidden(index.saturating_sub(1), points, budget);
-                let (left, right) = (left.get(..width), right.get(..width));
+                // The children's last hidden layers; `out` holds the left one meanwhile.
+                let mut right = [Jet::ZERO; MAX_WIDTH];
+                self.last_hidden(entry.left, points, budget, out);
+                self.last_hidden(index.saturating_sub(1), points, budget, &mut right);
+                let (left, right) = (out.get(..width), right.get(..width));
                 dense(
                     params,
                     &layout.hidden_a,
                     left.unwrap_or(&[]),
                     right.unwrap_or(&[]),
-                )
+                    &mut hidden_a,
+                );
             }
-        };
+        }
         dense(
             params,
             &layout.hidden_b,
             hidden_a.get(..width).unwrap_or(&[]),
             &[],
-        )
+            out,
+        );
     }
 }
 

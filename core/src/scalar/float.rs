@@ -1,4 +1,5 @@
-//! [`Scalar`] for `f32`: IEEE arithmetic, `libm` for tanh and sqrt.
+//! [`Scalar`] for `f32`: IEEE arithmetic, a fast exp-based tanh ([`super::tanh_f32`]), `libm`
+//! for sqrt.
 //!
 //! No fused multiply–add is used, so results are bit-identical on every IEEE-754 target
 //! (x86-64 SSE, Cortex-M4F FPv4) given the same `libm`.
@@ -85,7 +86,7 @@ impl Scalar for f32 {
 
     #[inline]
     fn activation(h: Self) -> Self {
-        AMPLITUDE * math::tanhf(GAIN * h)
+        AMPLITUDE * super::tanh_f32::tanh(GAIN * h)
     }
     #[inline]
     fn activation_slope(a: Self) -> Self {

@@ -21,16 +21,28 @@ const SLOPE_OFFSET: i32 = q(ACTIVATION_GAIN * ACTIVATION_AMPLITUDE);
 const SLOPE_SQUARE: i32 = q(ACTIVATION_GAIN / ACTIVATION_AMPLITUDE);
 const CURVATURE: i32 = q(2.0 * ACTIVATION_GAIN / ACTIVATION_AMPLITUDE);
 
-/// Saturates a Q16.16 value held in an `i64` to `i32` range.
+/// Saturates a Q16.16 value held in an `i64` to `i32` range: one comparison in the common
+/// case (the value fits), which matters in every neuron's epilogue on a Cortex-M4.
 #[inline(always)]
 fn saturate(bits: i64) -> Q16 {
-    Q16::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+    let low = bits as i32;
+    Q16::from_bits(if i64::from(low) == bits {
+        low
+    } else if bits < 0 {
+        i32::MIN
+    } else {
+        i32::MAX
+    })
 }
 
-/// Rounds a Q32.32 accumulator to Q16.16 (round half up), saturating.
+/// Rounds a Q32.32 value to Q16.16 (round half up), saturating.
+///
+/// The add cannot overflow: accumulators stay below 2⁶² in magnitude (see
+/// [`Scalar::MAX_PARAMETER`] for Q16: at most 2·16 products below 2⁵⁷ plus a bias), and a
+/// product of two Q16.16 values is below 2⁶².
 #[inline(always)]
 fn round_q32(acc: i64) -> Q16 {
-    saturate(acc.saturating_add(HALF_BITS) >> 16)
+    saturate(acc.wrapping_add(HALF_BITS) >> 16)
 }
 
 impl Scalar for Q16 {
@@ -40,7 +52,7 @@ impl Scalar for Q16 {
     const ZERO: Self = Q16::ZERO;
     const ONE: Self = Q16::ONE;
     /// 1024: with |parameter| ≤ 2¹⁰ (2²⁶ in bits) and inputs below 2³¹ bits, each product is
-    /// below 2⁵⁷ and 64 of them stay below 2⁶³.
+    /// below 2⁵⁷, and a neuron's at most 2·16 inputs plus its bias stay below 2⁶².
     const MAX_PARAMETER: f32 = 1024.0;
 
     #[inline]
@@ -133,8 +145,17 @@ impl Scalar for Q16 {
     }
     #[inline]
     fn activation_slope(a: Self) -> Self {
-        let square = a.mul(a);
-        Q16::from_bits(SLOPE_OFFSET).sub(Q16::from_bits(SLOPE_SQUARE).mul(square))
+        // For an activation output |a| ≤ 1.7159 nothing here can saturate, so plain i64
+        // arithmetic gives exactly the saturating a·a, SLOPE_SQUARE·(a·a) and the difference.
+        // Other inputs (not produced by `activation`) fall back to the saturating path.
+        let bits = i64::from(a.to_bits());
+        if bits.unsigned_abs() > 2 << 16 {
+            let square = a.mul(a);
+            return Q16::from_bits(SLOPE_OFFSET).sub(Q16::from_bits(SLOPE_SQUARE).mul(square));
+        }
+        let square = (bits * bits + HALF_BITS) >> 16;
+        let scaled = (i64::from(SLOPE_SQUARE) * square + HALF_BITS) >> 16;
+        Q16::from_bits((i64::from(SLOPE_OFFSET) - scaled) as i32)
     }
     #[inline]
     fn activation_curvature(a: Self, slope: Self) -> Self {
