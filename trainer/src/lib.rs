@@ -4,6 +4,7 @@
 //! papers in `f64`, writes blobs that `neurosurf-core` evaluates, and evaluates them itself as
 //! the `f64` reference. The `neurosurf` binary is a thin command-line layer over this library.
 
+pub mod compare;
 pub mod demo;
 pub mod error;
 pub mod evaluate;
@@ -13,6 +14,7 @@ pub mod io;
 pub mod points;
 pub mod rbf;
 pub mod sample;
+pub mod table;
 
 pub use error::{Error, Result};
 pub use points::PointSet;

@@ -1,36 +1,11 @@
 //! The `neurosurf` command line, run as a user would: sample → train → eval → info, and every
 //! kind of bad input answered with a clear error and no damaged output.
 
+mod common;
+
+use common::{fails, ok};
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn neurosurf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_neurosurf"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = neurosurf(args);
-    assert!(
-        out.status.success(),
-        "neurosurf {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8 output")
-}
-
-/// Runs a command that must fail and returns its stderr.
-fn fails(args: &[&str]) -> String {
-    let out = neurosurf(args);
-    assert!(
-        !out.status.success(),
-        "neurosurf {args:?} should have failed"
-    );
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 fn path(dir: &Path, name: &str) -> PathBuf {
     dir.join(name)

@@ -1,11 +1,15 @@
 //! The command line: one module per command, each a thin layer over the library.
 
+mod compare;
 mod demo;
 mod eval;
 mod info;
 mod output;
 mod progress;
 mod sample;
+mod sim;
+mod sim_bench;
+mod target;
 mod train;
 
 use std::process::ExitCode;
@@ -34,6 +38,40 @@ enum Command {
     /// The main job on built-in data: train a torus and a 3-feature head, write their blobs,
     /// and print their accuracy in f64, f32 and Q16.16.
     Demo(demo::Args),
+    /// Evaluate a model on the simulated Cortex-M4F (QEMU); the same CSV as `eval`, or the
+    /// run's cost with `--json`.
+    ///
+    /// The unmodified core runs on a Cortex-M4F under QEMU (`mps2-an386`); the CSV is exactly
+    /// what `neurosurf eval` prints for the same scalar. `--json` prints instead the run's
+    /// cost: instructions per point, multiply–accumulates, flash, static RAM, stack, and the
+    /// target's log. The target has no f64 and does not run host-only models (RBF).
+    Sim(sim::Args),
+    /// Fixed point against float: f32 and Q16.16, on the host and on the simulated target,
+    /// against the f64 reference.
+    ///
+    /// For every evaluation (f32 host, f32 target, q16.16 host, q16.16 target) the report gives
+    /// the max and RMS field error |Φ − Φ_f64|, the max and median angle between the normals
+    /// −∇Φ/|∇Φ| and the f64 normals (points where either gradient is zero are skipped and
+    /// counted), and for the target rows whether every value equals the host's bit for bit,
+    /// with the largest difference in ulps (f32 ulps; 2⁻¹⁶ steps in Q16.16).
+    ///
+    /// Every point is first rounded to f32, which is what the core receives, so the f64
+    /// reference sees the same inputs (Q16.16 then rounds them to 2⁻¹⁶ itself).
+    ///
+    /// Without --points the points come from the model itself: 1000 points uniform in the
+    /// leaves' normalization boxes (fixed seed, so the same model gives the same points), each
+    /// pushed onto the surface by up to 8 Newton steps x ← x − Φ∇Φ/|∇Φ|² in f64 and kept if
+    /// |Φ| < 1e-6 and it stays near a box. If fewer than 50 survive, the box samples are used
+    /// unprojected and the report says so.
+    Compare(compare::Args),
+    /// The cost table on the simulated Cortex-M4F: instructions per evaluation against
+    /// multiply–accumulates, f32 against Q16.16, with flash, static RAM and stack.
+    ///
+    /// Trains two models with fixed seeds (a torus, one leaf of width 9; the 3-feature head
+    /// with tree ((0,1),2)), stores each as f32 and as Q16.16, and runs 64 points on its
+    /// surface for each scalar × op (field, field+gradient) × mode (single, batch). Blob paths
+    /// given as arguments are measured too.
+    SimBench(sim_bench::Args),
 }
 
 /// Parses the arguments, runs the command, and turns an error into a message and exit code 1.
@@ -45,6 +83,9 @@ pub fn main() -> ExitCode {
         Command::Eval(args) => eval::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Demo(args) => demo::run(&args),
+        Command::Sim(args) => sim::run(&args),
+        Command::Compare(args) => compare::run(&args),
+        Command::SimBench(args) => sim_bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

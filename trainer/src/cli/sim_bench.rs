@@ -1,0 +1,276 @@
+//! `neurosurf sim-bench`: what an evaluation costs on the simulated Cortex-M4F — instructions
+//! per evaluation against multiply–accumulates, for f32 and Q16.16, field and field+gradient,
+//! single points and lane batches, with the firmware's flash, RAM and stack.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use neurosurf_core::scalar::ScalarKind;
+use neurosurf_firmware_sim::{Footprint, Job, Mode, Op, TARGET_MACHINE};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use neurosurf_trainer::compare::{EvaluationPoints, SURFACE_SAMPLES};
+use neurosurf_trainer::implicit::{
+    self, FitRequest, ImplicitNetwork, ImplicitOptions, TrainingSummary,
+};
+use neurosurf_trainer::sample::{Shape, sample_shape};
+use neurosurf_trainer::table::{Align, Table};
+
+use super::output;
+use super::target;
+
+/// Points per run: one timed chunk of the firmware.
+const POINTS: usize = 64;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Extra model blobs to measure after the two built-in ones (a torus, one leaf of width 9;
+    /// the 3-feature head with tree ((0,1),2)). Each is run as it is stored, in both scalars.
+    models: Vec<PathBuf>,
+    /// Print JSON instead of the tables.
+    #[arg(long)]
+    json: bool,
+}
+
+/// A model to measure: its blob for each scalar and its evaluation points.
+struct Subject {
+    name: String,
+    path: PathBuf,
+    blobs: Vec<(ScalarKind, Vec<u8>)>,
+    points: Vec<[f32; 3]>,
+}
+
+#[derive(Serialize)]
+struct Row {
+    model: String,
+    scalar: &'static str,
+    op: &'static str,
+    mode: &'static str,
+    points: usize,
+    instructions_per_eval: f64,
+    macs: usize,
+    instructions_per_mac: f64,
+    stack_bytes: u32,
+}
+
+#[derive(Serialize)]
+struct Ratio {
+    model: String,
+    op: &'static str,
+    mode: &'static str,
+    q16_over_f32: f64,
+}
+
+#[derive(Serialize)]
+struct Bench {
+    machine: &'static str,
+    footprint: Footprint,
+    rows: Vec<Row>,
+    ratios: Vec<Ratio>,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let simulator = target::simulator()?;
+    let mut subjects = built_in()?;
+    for path in &args.models {
+        let bytes = target::read_blob(path)?;
+        let decoded = implicit::from_blob(&bytes, path)?;
+        subjects.push(Subject {
+            name: path.display().to_string(),
+            path: path.clone(),
+            points: points(
+                &decoded.network,
+                box_size(decoded.metadata.as_ref().and_then(|m| m.summary.as_ref())),
+            ),
+            blobs: vec![
+                (ScalarKind::F32, bytes.clone()),
+                (ScalarKind::Q16_16, bytes),
+            ],
+        });
+    }
+    let mut jobs = Vec::new();
+    for subject in &subjects {
+        for (scalar, blob) in &subject.blobs {
+            for op in [Op::Field, Op::FieldGradient] {
+                for mode in [Mode::Single, Mode::Batch] {
+                    jobs.push((subject, *scalar, blob, op, mode));
+                }
+            }
+        }
+    }
+    let rows = jobs
+        .par_iter()
+        .map(|&(subject, scalar, blob, op, mode)| {
+            let job = Job {
+                op,
+                mode,
+                ..Job::field_gradient(blob, scalar, &subject.points)
+            };
+            let run = target::run(&simulator, &job, &subject.path)?;
+            let macs = target::mac_count(blob, scalar, op == Op::FieldGradient, &subject.path)?;
+            let instructions = run.instructions_per_point();
+            Ok(Row {
+                model: subject.name.clone(),
+                scalar: scalar.name(),
+                op: target::op_name(op),
+                mode: target::mode_name(mode),
+                points: run.count(),
+                instructions_per_eval: instructions,
+                macs,
+                instructions_per_mac: instructions / macs.max(1) as f64,
+                stack_bytes: run.stack_bytes,
+            })
+        })
+        .collect::<Result<Vec<Row>>>()?;
+    let ratios = ratios(&rows);
+    let bench = Bench {
+        machine: TARGET_MACHINE,
+        footprint: simulator.firmware().footprint,
+        rows,
+        ratios,
+    };
+    if args.json {
+        return output::json(&bench);
+    }
+    print(&bench);
+    Ok(())
+}
+
+/// The two built-in models, trained with fixed seeds, stored in both scalars.
+fn built_in() -> Result<Vec<Subject>> {
+    let torus = Shape::Torus {
+        major: 1.0,
+        minor: 0.4,
+    };
+    let specs = [
+        ("torus (1 leaf, N=9)", torus, 96, 11, None),
+        ("head ((0,1),2), N=9", Shape::Head, 99, 5, Some("((0,1),2)")),
+    ];
+    let mut subjects = Vec::new();
+    for (name, shape, count, seed, tree) in specs {
+        let request = FitRequest {
+            tree: tree.map(str::parse).transpose()?,
+            ..FitRequest::default()
+        };
+        let options = ImplicitOptions {
+            width: 9,
+            ..ImplicitOptions::default()
+        };
+        let trained = implicit::fit(
+            sample_shape(&shape, count, seed)?,
+            &request,
+            &options,
+            &|_| {},
+        )
+        .with_context(|| format!("cannot train the {name} model"))?;
+        let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
+            .into_iter()
+            .map(|scalar| {
+                Ok((
+                    scalar,
+                    implicit::to_blob(&trained.network, Some(&trained.summary), scalar)?,
+                ))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        subjects.push(Subject {
+            name: name.to_string(),
+            path: PathBuf::from(format!("<built-in {name}>")),
+            points: points(&trained.network, box_size(Some(&trained.summary))),
+            blobs,
+        });
+    }
+    Ok(subjects)
+}
+
+fn box_size(summary: Option<&TrainingSummary>) -> f64 {
+    summary.map_or(ImplicitOptions::default().box_size, |s| s.options.box_size)
+}
+
+/// The first [`POINTS`] points on the model's surface, as the core receives them.
+fn points(network: &ImplicitNetwork, box_size: f64) -> Vec<[f32; 3]> {
+    EvaluationPoints::on_surface(network, box_size, SURFACE_SAMPLES)
+        .points
+        .iter()
+        .take(POINTS)
+        .map(|p| p.map(|c| c as f32))
+        .collect()
+}
+
+/// Q16.16 instructions over f32 instructions for every (model, op, mode) measured in both.
+fn ratios(rows: &[Row]) -> Vec<Ratio> {
+    rows.iter()
+        .filter(|r| r.scalar == ScalarKind::F32.name())
+        .filter_map(|f| {
+            let q = rows.iter().find(|q| {
+                q.scalar == ScalarKind::Q16_16.name()
+                    && q.model == f.model
+                    && q.op == f.op
+                    && q.mode == f.mode
+            })?;
+            Some(Ratio {
+                model: f.model.clone(),
+                op: f.op,
+                mode: f.mode,
+                q16_over_f32: q.instructions_per_eval / f.instructions_per_eval,
+            })
+        })
+        .collect()
+}
+
+fn print(bench: &Bench) {
+    println!(
+        "cost of one evaluation on the simulated Cortex-M4F ({}), {POINTS} surface points per run\n",
+        bench.machine
+    );
+    let mut table = Table::new([
+        ("model", Align::Left),
+        ("scalar", Align::Left),
+        ("op", Align::Left),
+        ("mode", Align::Left),
+        ("instr/eval", Align::Right),
+        ("MACs", Align::Right),
+        ("instr/MAC", Align::Right),
+        ("stack B", Align::Right),
+    ]);
+    for r in &bench.rows {
+        table.push([
+            r.model.clone(),
+            r.scalar.to_string(),
+            r.op.to_string(),
+            r.mode.to_string(),
+            format!("{:.1}", r.instructions_per_eval),
+            r.macs.to_string(),
+            format!("{:.2}", r.instructions_per_mac),
+            r.stack_bytes.to_string(),
+        ]);
+    }
+    print!("{table}");
+    let mut ratios = Table::new([
+        ("model", Align::Left),
+        ("op", Align::Left),
+        ("mode", Align::Left),
+        ("q16.16 / f32 instructions", Align::Right),
+    ]);
+    for r in &bench.ratios {
+        ratios.push([
+            r.model.clone(),
+            r.op.to_string(),
+            r.mode.to_string(),
+            format!("{:.2}", r.q16_over_f32),
+        ]);
+    }
+    println!();
+    print!("{ratios}");
+    let f = &bench.footprint;
+    println!(
+        "\nfirmware: flash {} of {} bytes ({:.1} %), static RAM {} of {} bytes ({:.1} %); \
+         the stack column is each run's high-water mark",
+        f.flash_bytes,
+        f.flash_budget,
+        100.0 * f.flash_bytes as f64 / f.flash_budget as f64,
+        f.static_ram_bytes,
+        f.ram_budget,
+        100.0 * f.static_ram_bytes as f64 / f.ram_budget as f64
+    );
+}

@@ -1,0 +1,22 @@
+//! Fixed point against float: how far the core's `f32` and Q16.16 evaluations of a model are
+//! from the trainer's `f64` reference, on the host and on a (simulated) target, and whether
+//! the target computes exactly what the host computes.
+//!
+//! - [`Deviation`]: field errors |Φ − Φ₆₄| and normal angles of one evaluation;
+//! - [`Agreement`]: bit-exactness and ulp distance of two evaluations in the same scalar;
+//! - [`EvaluationPoints`]: where to evaluate when the user gives no points — the model's own
+//!   surface, found by Newton steps from its normalization boxes;
+//! - [`CompareRow`] and [`comparison_table`]: the report `neurosurf compare` prints.
+
+mod agreement;
+mod deviation;
+mod report;
+mod surface;
+
+pub use agreement::{Agreement, ulp_distance};
+pub use deviation::{Deviation, normal_angle_degrees};
+pub use report::{CompareRow, Side, comparison_table};
+pub use surface::{
+    EvaluationPoints, MIN_SURFACE_POINTS, NEWTON_STEPS, PointSource, SURFACE_SAMPLES, SURFACE_SEED,
+    SURFACE_TOLERANCE, round_to_f32,
+};

@@ -1,0 +1,32 @@
+//! Running the `neurosurf` binary from tests.
+
+use std::process::{Command, Output};
+
+/// Runs `neurosurf` with `args`.
+pub fn neurosurf(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_neurosurf"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+/// Runs a command that must succeed and returns its stdout.
+pub fn ok(args: &[&str]) -> String {
+    let out = neurosurf(args);
+    assert!(
+        out.status.success(),
+        "neurosurf {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("utf-8 output")
+}
+
+/// Runs a command that must fail and returns its stderr.
+pub fn fails(args: &[&str]) -> String {
+    let out = neurosurf(args);
+    assert!(
+        !out.status.success(),
+        "neurosurf {args:?} should have failed"
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
