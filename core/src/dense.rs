@@ -1,89 +1,151 @@
-//! The fully connected layer with the scaled-tanh activation: the one hot loop of every
-//! implicit module.
+//! The fully connected layer with the scaled-tanh activation, forward and transposed: the hot
+//! loops of every implicit module.
+//!
+//! Both directions work on blocks of [`BLOCK`] rows (forward) or columns (transposed), so one
+//! load of an input feeds four multiply–accumulates and the accumulators stay in registers.
+//! `L` lanes hold independent points in structure-of-arrays form (`L = 1` for single points):
+//! the innermost loops run over contiguous lanes and vectorize.
 
 use crate::implicit::{DenseLayout, MAX_WIDTH};
-use crate::jet::Jet;
 use crate::scalar::Scalar;
 
-/// A layer's neurons (the first `width` are meaningful).
-pub(crate) type Layer<S, const L: usize, const D: usize> = [Jet<S, L, D>; MAX_WIDTH];
+/// One value per lane for each neuron of a layer (the first `width` are meaningful).
+pub(crate) type Layer<S, const L: usize> = [[S; L]; MAX_WIDTH];
 
-/// Evaluates the layer at `layout` inside `params` on the concatenation of `first` and
-/// `second` into `out[..layout.outputs]`: Hⱼ = bⱼ + Σᵢ Wⱼᵢ·xᵢ, Oⱼ = a(Hⱼ), and tangents
-/// ᵏGⱼ = a′(Hⱼ)·Σᵢ Wⱼᵢ·ᵏxᵢ.
+/// Rows (or columns) processed together.
+const BLOCK: usize = 4;
+
+/// Evaluates the layer at `layout` inside `params` on the concatenation of `inputs.0` and
+/// `inputs.1`: Hⱼ = bⱼ + Σᵢ Wⱼᵢ·xᵢ, `values[j]` = a(Hⱼ).
 ///
-/// Writes nothing when `params` is too short for the layout or `out` too small (the model
-/// loader guarantees both, so that never happens after validation). No allocation, no copy
-/// of a whole layer: the caller owns the buffers.
-#[inline]
-pub(crate) fn dense<S: Scalar, const L: usize, const D: usize>(
+/// Writes nothing when `params` is too short for the layout or the outputs too small (the
+/// model loader guarantees both, so that never happens after validation).
+#[inline(always)]
+pub(crate) fn forward<S: Scalar, const L: usize>(
     params: &[S],
     layout: &DenseLayout,
-    first: &[Jet<S, L, D>],
-    second: &[Jet<S, L, D>],
-    out: &mut [Jet<S, L, D>],
+    inputs: (&[[S; L]], &[[S; L]]),
+    values: &mut [[S; L]],
 ) {
-    let (inputs, outputs) = (layout.inputs, layout.outputs);
-    let (Some(weights), Some(biases), Some(out)) = (
-        params.get(layout.weights..layout.weights + inputs * outputs),
+    let (count, outputs) = (layout.inputs, layout.outputs);
+    let (Some(weights), Some(biases), Some(values)) = (
+        params.get(layout.weights..layout.weights + count * outputs),
         params.get(layout.biases..layout.biases + outputs),
-        out.get_mut(..outputs),
+        values.get_mut(..outputs),
     ) else {
         return;
     };
-    if inputs == 0 {
+    if count == 0 || inputs.0.len() + inputs.1.len() != count {
         return;
     }
-    for ((row, &bias), slot) in weights.chunks_exact(inputs).zip(biases).zip(out) {
-        *slot = neuron(row, bias, first, second);
+    let split = inputs.0.len();
+    for ((row, &bias), value) in weights.chunks_exact(count).zip(biases).zip(values) {
+        let (first, second) = row.split_at(split.min(count));
+        let mut acc = [bias.to_acc(); L];
+        accumulate_row(&mut acc, first, inputs.0);
+        if !second.is_empty() {
+            accumulate_row(&mut acc, second, inputs.1);
+        }
+        for (out, acc) in value.iter_mut().zip(&acc) {
+            *out = S::activation(S::from_acc(*acc));
+        }
     }
 }
 
-/// One neuron: weighted sum of values and tangents, activation, chain rule.
+/// `acc += Σᵢ row[i]·x[i]`.
 #[inline(always)]
-fn neuron<S: Scalar, const L: usize, const D: usize>(
-    row: &[S],
-    bias: S,
-    first: &[Jet<S, L, D>],
-    second: &[Jet<S, L, D>],
-) -> Jet<S, L, D> {
-    let mut value = [bias.to_acc(); L];
-    let mut tangent = [[S::ZERO.to_acc(); L]; D];
-    let (row_first, row_second) = row.split_at(first.len().min(row.len()));
-    accumulate(&mut value, &mut tangent, row_first, first);
-    accumulate(&mut value, &mut tangent, row_second, second);
-    let mut out = Jet::ZERO;
-    for (lane, acc) in value.iter().enumerate() {
-        let a = S::activation(S::from_acc(*acc));
-        let slope = S::activation_slope(a);
-        if let Some(slot) = out.value.get_mut(lane) {
-            *slot = a;
-        }
-        for (out_k, acc_k) in out.tangent.iter_mut().zip(&tangent) {
-            if let (Some(slot), Some(t)) = (out_k.get_mut(lane), acc_k.get(lane)) {
-                *slot = slope.mul(S::from_acc(*t));
-            }
+fn accumulate_row<S: Scalar, const L: usize>(acc: &mut [S::Acc; L], row: &[S], x: &[[S; L]]) {
+    for (x, &w) in x.iter().zip(row) {
+        for (s, &v) in acc.iter_mut().zip(x) {
+            *s = S::mac(*s, w, v);
         }
     }
-    out
 }
 
-/// `acc += Σᵢ wᵢ·xᵢ` over values and tangents, lane by lane.
+/// The transposed layer: δᵢ = Σⱼ Wⱼᵢ·gⱼ for every input i of the layer at `layout`, into the
+/// concatenation of `out.0` and `out.1` (the gradient of Σⱼ gⱼ·Hⱼ with respect to the inputs).
+///
+/// Writes nothing when the slices do not match the layout (never after validation).
 #[inline(always)]
-fn accumulate<S: Scalar, const L: usize, const D: usize>(
-    value: &mut [S::Acc; L],
-    tangent: &mut [[S::Acc; L]; D],
-    weights: &[S],
-    inputs: &[Jet<S, L, D>],
+pub(crate) fn transposed<S: Scalar, const L: usize>(
+    params: &[S],
+    layout: &DenseLayout,
+    g: &[[S; L]],
+    out: (&mut [[S; L]], &mut [[S; L]]),
 ) {
-    for (&w, x) in weights.iter().zip(inputs) {
-        for (acc, &v) in value.iter_mut().zip(&x.value) {
-            *acc = S::mac(*acc, w, v);
-        }
-        for (acc_k, x_k) in tangent.iter_mut().zip(&x.tangent) {
-            for (acc, &t) in acc_k.iter_mut().zip(x_k) {
-                *acc = S::mac(*acc, w, t);
+    let (count, outputs) = (layout.inputs, layout.outputs);
+    let (Some(weights), Some(g)) = (
+        params.get(layout.weights..layout.weights + count * outputs),
+        g.get(..outputs),
+    ) else {
+        return;
+    };
+    if count == 0 || out.0.len() + out.1.len() != count {
+        return;
+    }
+    let mut slots = out.0.iter_mut().chain(out.1.iter_mut());
+    let mut column = 0;
+    while column + BLOCK <= count {
+        let mut acc = [[S::ZERO.to_acc(); L]; BLOCK];
+        let [a0, a1, a2, a3] = &mut acc;
+        let tail = weights.get(column..).unwrap_or(&[]);
+        for (row, g) in tail.chunks(count).zip(g) {
+            let Some(&[w0, w1, w2, w3]) = row.first_chunk::<BLOCK>() else {
+                break;
+            };
+            for ((((&v, s0), s1), s2), s3) in g
+                .iter()
+                .zip(a0.iter_mut())
+                .zip(a1.iter_mut())
+                .zip(a2.iter_mut())
+                .zip(a3.iter_mut())
+            {
+                *s0 = S::mac(*s0, w0, v);
+                *s1 = S::mac(*s1, w1, v);
+                *s2 = S::mac(*s2, w2, v);
+                *s3 = S::mac(*s3, w3, v);
             }
+        }
+        for acc in &acc {
+            round_into(acc, slots.next());
+        }
+        column += BLOCK;
+    }
+    while column < count {
+        let mut acc = [S::ZERO.to_acc(); L];
+        let tail = weights.get(column..).unwrap_or(&[]);
+        for (row, g) in tail.chunks(count).zip(g) {
+            let Some(&w) = row.first() else {
+                break;
+            };
+            for (s, &v) in acc.iter_mut().zip(g) {
+                *s = S::mac(*s, w, v);
+            }
+        }
+        round_into(&acc, slots.next());
+        column += 1;
+    }
+}
+
+#[inline(always)]
+fn round_into<S: Scalar, const L: usize>(acc: &[S::Acc; L], slot: Option<&mut [S; L]>) {
+    if let Some(slot) = slot {
+        for (out, acc) in slot.iter_mut().zip(acc) {
+            *out = S::from_acc(*acc);
+        }
+    }
+}
+
+/// `δ[j] ← δ[j]·a′(Hⱼ)` lane by lane, with a′ recovered from the layer's outputs a(Hⱼ): the
+/// chain rule through the activation.
+#[inline(always)]
+pub(crate) fn through_activation<S: Scalar, const L: usize>(
+    delta: &mut [[S; L]],
+    outputs: &[[S; L]],
+) {
+    for (delta, output) in delta.iter_mut().zip(outputs) {
+        for (d, &a) in delta.iter_mut().zip(output) {
+            *d = d.mul(S::activation_slope(a));
         }
     }
 }

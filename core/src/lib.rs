@@ -27,9 +27,7 @@ pub mod blob;
 mod dense;
 mod error;
 pub mod implicit;
-mod jet;
 mod math;
 pub mod scalar;
 
 pub use error::{BlobError, LengthMismatch, Quantity};
-pub use jet::Jet;

@@ -16,6 +16,10 @@ use wait_timeout::ChildExt;
 
 use crate::{Firmware, SimError, TARGET_MACHINE, Toolchain, log, plugin};
 
+/// Environment variable naming a file that receives the instruction profile of each run
+/// (the heaviest translation blocks by executed instructions; overwritten per run).
+pub const PROFILE_VARIABLE: &str = "NEUROSURF_SIM_PROFILE";
+
 /// What to run on the target.
 #[derive(Copy, Clone, Debug)]
 pub struct Job<'a> {
@@ -209,16 +213,24 @@ impl Simulator {
         write(REQUEST_FILE, &request)?;
 
         let plugin_log = dir.path().join("plugin.log");
+        // A development aid: with NEUROSURF_SIM_PROFILE=FILE the plugin also lists the
+        // heaviest translation blocks, and its log is copied to FILE.
+        let profile_copy = std::env::var_os(PROFILE_VARIABLE).map(PathBuf::from);
         let mut child = Command::new(&self.toolchain.qemu)
             .args(["-M", TARGET_MACHINE, "-cpu", "cortex-m4"])
             .args(["-display", "none", "-serial", "null", "-monitor", "none"])
             .args(["-semihosting-config", "enable=on,target=native"])
             .arg("-plugin")
             .arg(format!(
-                "{},start={:#x},stop={:#x}",
+                "{},start={:#x},stop={:#x}{}",
                 self.plugin.display(),
                 self.firmware.region_start,
-                self.firmware.region_stop
+                self.firmware.region_stop,
+                if profile_copy.is_some() {
+                    ",profile=1"
+                } else {
+                    ""
+                }
             ))
             .args(["-d", "plugin", "-D"])
             .arg(&plugin_log)
@@ -314,6 +326,9 @@ impl Simulator {
             .collect();
         let plugin_text =
             std::fs::read_to_string(&plugin_log).map_err(SimError::io(&plugin_log))?;
+        if let Some(copy) = profile_copy {
+            std::fs::write(&copy, &plugin_text).map_err(SimError::io(&copy))?;
+        }
         Ok(Run {
             scalar: job.scalar,
             op: job.op,

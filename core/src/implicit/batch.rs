@@ -49,8 +49,8 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
     pub fn field_batch(&self, points: &[[S; 3]], out: &mut [S]) -> Result<(), LengthMismatch> {
         check_lengths(points.len(), out.len())?;
         for (chunk, out) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let jet = self.eval::<LANES, 0>(&pad(chunk));
-            for (slot, &value) in out.iter_mut().zip(&jet.value) {
+            let values = self.field_lanes(&pad(chunk));
+            for (slot, &value) in out.iter_mut().zip(&values) {
                 *slot = value;
             }
         }
@@ -68,14 +68,9 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
     ) -> Result<(), LengthMismatch> {
         check_lengths(points.len(), out.len())?;
         for (chunk, out) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let jet = self.eval::<LANES, 3>(&pad(chunk));
-            let [g0, g1, g2] = &jet.tangent;
-            for (lane, slot) in out.iter_mut().enumerate() {
-                let at = |values: &[S; LANES]| values.get(lane).copied().unwrap_or(S::ZERO);
-                *slot = FieldGradient {
-                    value: at(&jet.value),
-                    gradient: [at(g0), at(g1), at(g2)],
-                };
+            let results = self.field_gradient_lanes(&pad(chunk));
+            for (slot, result) in out.iter_mut().zip(results) {
+                *slot = result;
             }
         }
         Ok(())

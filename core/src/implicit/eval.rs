@@ -2,8 +2,7 @@
 
 use super::layout::{MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
-use crate::dense::{Layer, dense};
-use crate::jet::Jet;
+use crate::dense::{Layer, forward};
 use crate::scalar::{Scalar, normalize3};
 
 /// Φ and ∇Φ at one point.
@@ -57,7 +56,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         self.view().field(point)
     }
 
-    /// Φ and ∇Φ at `point` (forward-mode, Carcenac §4).
+    /// Φ and ∇Φ at `point` (reverse mode: one forward pass, one transposed pass).
     pub fn field_gradient(&self, point: [S; 3]) -> FieldGradient<S> {
         self.view().field_gradient(point)
     }
@@ -76,19 +75,14 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
 
     /// Φ at `point`.
     pub fn field(&self, point: [S; 3]) -> S {
-        let [value] = self.eval::<1, 0>(&[point]).value;
+        let [value] = self.field_lanes(&[point]);
         value
     }
 
     /// Φ and ∇Φ at `point`.
     pub fn field_gradient(&self, point: [S; 3]) -> FieldGradient<S> {
-        let jet = self.eval::<1, 3>(&[point]);
-        let [value] = jet.value;
-        let [[g0], [g1], [g2]] = jet.tangent;
-        FieldGradient {
-            value,
-            gradient: [g0, g1, g2],
-        }
+        let [result] = self.field_gradient_lanes(&[point]);
+        result
     }
 
     /// The outward unit normal at `point`.
@@ -96,23 +90,20 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         self.field_gradient(point).normal()
     }
 
-    /// Evaluates `L` points at once with `D` (0 or 3) derivative directions.
+    /// Φ at `L` points at once.
     #[inline]
-    pub(crate) fn eval<const L: usize, const D: usize>(
-        &self,
-        points: &[[S; 3]; L],
-    ) -> Jet<S, L, D> {
+    pub(crate) fn field_lanes<const L: usize>(&self, points: &[[S; 3]; L]) -> [S; L] {
         let model = self.model;
         let Some(entry) = model.modules.get(self.module) else {
-            return Jet::ZERO;
+            return [S::ZERO; L];
         };
         let layout = ModuleLayout::new(entry.kind, model.width);
         let params = model.module_parameters(entry.offset, layout.len);
-        let mut last = [Jet::ZERO; MAX_WIDTH];
+        let mut last = [[S::ZERO; L]; MAX_WIDTH];
         model.last_hidden(self.module, points, MAX_HEIGHT, &mut last);
         let hidden = last.get(..model.width).unwrap_or(&[]);
-        let mut out = [Jet::ZERO; 1];
-        dense(params, &layout.output, hidden, &[], &mut out);
+        let mut out = [[S::ZERO; L]; 1];
+        forward(params, &layout.output, (hidden, &[]), &mut out);
         let [out] = out;
         out
     }
@@ -121,18 +112,18 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     /// The parameters of the module starting at `offset` (empty if out of bounds, which
     /// validation rules out).
-    fn module_parameters(&self, offset: usize, len: usize) -> &[S] {
+    pub(crate) fn module_parameters(&self, offset: usize, len: usize) -> &[S] {
         self.parameters.get(offset..offset + len).unwrap_or(&[])
     }
 
     /// The last hidden layer (b) of module `index` into `out`, recursing into children.
     /// `budget` bounds the recursion (validated tree heights never exhaust it).
-    fn last_hidden<const L: usize, const D: usize>(
+    fn last_hidden<const L: usize>(
         &self,
         index: usize,
         points: &[[S; 3]; L],
         budget: usize,
-        out: &mut Layer<S, L, D>,
+        out: &mut Layer<S, L>,
     ) {
         let (Some(entry), Some(budget)) = (self.modules.get(index), budget.checked_sub(1)) else {
             return;
@@ -140,58 +131,45 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         let width = self.width;
         let layout = ModuleLayout::new(entry.kind, width);
         let params = self.module_parameters(entry.offset, layout.len);
-        let mut hidden_a = [Jet::ZERO; MAX_WIDTH];
+        let mut hidden_a = [[S::ZERO; L]; MAX_WIDTH];
         match entry.kind {
             ModuleKind::Leaf => {
                 let input = normalized_input(params, points);
-                dense(params, &layout.hidden_a, &input, &[], &mut hidden_a);
+                forward(params, &layout.hidden_a, (&input, &[]), &mut hidden_a);
             }
             ModuleKind::Node => {
                 // The children's last hidden layers; `out` holds the left one meanwhile.
-                let mut right = [Jet::ZERO; MAX_WIDTH];
+                let mut right = [[S::ZERO; L]; MAX_WIDTH];
                 self.last_hidden(entry.left, points, budget, out);
                 self.last_hidden(index.saturating_sub(1), points, budget, &mut right);
                 let (left, right) = (out.get(..width), right.get(..width));
-                dense(
-                    params,
-                    &layout.hidden_a,
-                    left.unwrap_or(&[]),
-                    right.unwrap_or(&[]),
-                    &mut hidden_a,
-                );
+                let inputs = (left.unwrap_or(&[]), right.unwrap_or(&[]));
+                forward(params, &layout.hidden_a, inputs, &mut hidden_a);
             }
         }
-        dense(
-            params,
-            &layout.hidden_b,
-            hidden_a.get(..width).unwrap_or(&[]),
-            &[],
-            out,
-        );
+        let hidden_a = hidden_a.get(..width).unwrap_or(&[]);
+        forward(params, &layout.hidden_b, (hidden_a, &[]), out);
     }
 }
 
-/// A leaf's input x′ = A·(x − c) as jets: values per lane, tangent k = column k of A.
+/// A leaf's input x′ = A·(x − c), lane by lane.
 #[inline]
-fn normalized_input<S: Scalar, const L: usize, const D: usize>(
+pub(crate) fn normalized_input<S: Scalar, const L: usize>(
     params: &[S],
     points: &[[S; 3]; L],
-) -> [Jet<S, L, D>; 3] {
-    let mut input = [Jet::ZERO; 3];
+) -> [[S; L]; 3] {
+    let mut input = [[S::ZERO; L]; 3];
     let Some(normalization) = params.get(..NORMALIZATION_LEN) else {
         return input;
     };
     let (center, axes) = normalization.split_at(3);
-    for (row, jet) in axes.chunks_exact(3).zip(input.iter_mut()) {
-        for (slot, point) in jet.value.iter_mut().zip(points) {
+    for (row, lanes) in axes.chunks_exact(3).zip(input.iter_mut()) {
+        for (slot, point) in lanes.iter_mut().zip(points) {
             let mut acc = S::ZERO.to_acc();
             for ((&a, &x), &c) in row.iter().zip(point).zip(center) {
                 acc = S::mac(acc, a, x.sub(c));
             }
             *slot = S::from_acc(acc);
-        }
-        for (tangent, &a) in jet.tangent.iter_mut().zip(row) {
-            *tangent = [a; L];
         }
     }
     input

@@ -134,18 +134,42 @@ impl ModuleLayout {
     }
 
     /// Multiply–accumulates to evaluate the field (`gradient = false`) or the field and its
-    /// gradient of this module alone (the normalization of a leaf counts 9).
+    /// gradient of this module alone, as the core does it (the normalization of a leaf counts 9).
+    ///
+    /// The gradient runs in reverse mode: the transposed pass costs one more MAC per weight of the
+    /// hidden layers, plus 9 for a leaf's normalization and N for the output (counted here for
+    /// every module, although only the root's output is used). Carcenac's forward recurrence
+    /// (§4) would cost [`ModuleLayout::forward_mode_mac_count`].
+    ///
+    /// ```
+    /// use neurosurf_core::implicit::{ModuleKind, ModuleLayout};
+    /// let leaf = ModuleLayout::new(ModuleKind::Leaf, 9);
+    /// assert_eq!(leaf.mac_count(false), 126);
+    /// assert_eq!(leaf.mac_count(true), 252);
+    /// assert_eq!(leaf.forward_mode_mac_count(), 477);
+    /// ```
     pub const fn mac_count(&self, gradient: bool) -> usize {
+        let hidden = self.hidden_a.inputs * self.width + self.width * self.width;
+        let normalization = match self.kind {
+            ModuleKind::Leaf => 9,
+            ModuleKind::Node => 0,
+        };
+        let field = hidden + self.width + normalization;
+        if gradient {
+            field + hidden + self.width + normalization
+        } else {
+            field
+        }
+    }
+
+    /// Multiply–accumulates of Φ and ∇Φ by forward-mode tangents (Carcenac §4): three tangents
+    /// per MAC of the dense layers, a leaf's first-layer tangents being the columns of W·A.
+    pub const fn forward_mode_mac_count(&self) -> usize {
         let dense = self.hidden_a.inputs * self.width + self.width * self.width + self.width;
         let normalization = match self.kind {
             ModuleKind::Leaf => 9,
             ModuleKind::Node => 0,
         };
-        if !gradient {
-            return dense + normalization;
-        }
-        // A leaf's first-layer tangents are the columns of W·A (computed as W times A's
-        // columns: 3 more MACs per weight); later layers carry 3 tangents per MAC.
         dense * 4 + normalization
     }
 }

@@ -3,13 +3,14 @@
 //!
 //! - [`layout`](ModuleLayout): where each module's weights lie (shared with the trainer);
 //! - [`ImplicitModel`]: decoding and validation of a blob;
-//! - evaluation of Φ, ∇Φ (forward mode) and the unit normal, for one point or in batches of
+//! - evaluation of Φ, ∇Φ (reverse mode) and the unit normal, for one point or in batches of
 //!   [`LANES`], for the whole tree or any module's subtree ([`ModuleView`]).
 
 mod batch;
 mod eval;
 mod layout;
 mod model;
+mod reverse;
 
 pub use batch::LANES;
 pub use eval::{FieldGradient, ModuleView};

@@ -286,8 +286,9 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         self.stored_as
     }
 
-    /// Multiply–accumulates of one field (or field and gradient) evaluation of the whole model:
-    /// the lower bound of its instruction count.
+    /// Multiply–accumulates of one field (or field and gradient) evaluation of the whole model,
+    /// as the core evaluates it (see [`ModuleLayout::mac_count`]): the lower bound of its
+    /// instruction count.
     pub fn mac_count(&self, gradient: bool) -> usize {
         self.modules
             .iter()
