@@ -19,6 +19,12 @@ pub enum Quantity {
     Parameters,
     /// Evaluation stack depth the tree needs.
     StackDepth,
+    /// Spatial dimension of a curve (2 or 3).
+    Dimension,
+    /// Control points of a spline (in total, or along one parametric direction).
+    ControlPoints,
+    /// Polynomial segments of a spline along one parametric direction.
+    Segments,
 }
 
 impl fmt::Display for Quantity {
@@ -28,6 +34,9 @@ impl fmt::Display for Quantity {
             Quantity::Modules => "module count",
             Quantity::Parameters => "parameter count",
             Quantity::StackDepth => "evaluation stack depth",
+            Quantity::Dimension => "dimension",
+            Quantity::ControlPoints => "control point count",
+            Quantity::Segments => "segment count",
         })
     }
 }

@@ -6,7 +6,9 @@
 //! - [`scalar`]: the one sealed number abstraction, implemented for `f32` and Q16.16
 //!   ([`scalar::Q16`]) side by side;
 //! - [`blob`]: the checked container format trained models travel in;
-//! - [`implicit`]: Carcenac's modular implicit surfaces Φ(x) = 0 — field, gradient, normal.
+//! - [`implicit`]: Carcenac's modular implicit surfaces Φ(x) = 0 — field, gradient, normal;
+//! - [`curve`]: uniform cubic B-spline curves and surfaces (Hoffmann & Várady) — position,
+//!   tangent, partials, normal.
 //!
 //! Load a blob once (that validates everything), then evaluate without failure:
 //!
@@ -24,6 +26,7 @@
 #![warn(missing_debug_implementations)]
 
 pub mod blob;
+pub mod curve;
 mod dense;
 mod error;
 pub mod implicit;

@@ -60,6 +60,10 @@ pub enum ModelKind {
     Implicit,
     /// The multiquadric RBF baseline (Carcenac §9); evaluated by the host trainer only.
     Rbf,
+    /// A uniform cubic B-spline curve (Hoffmann & Várady), see [`crate::curve::BSplineCurve`].
+    Curve,
+    /// A uniform cubic B-spline tensor-product surface, see [`crate::curve::BSplineSurface`].
+    SplineSurface,
 }
 
 impl ModelKind {
@@ -68,6 +72,8 @@ impl ModelKind {
         match self {
             ModelKind::Implicit => 1,
             ModelKind::Rbf => 2,
+            ModelKind::Curve => 3,
+            ModelKind::SplineSurface => 4,
         }
     }
 
@@ -76,6 +82,8 @@ impl ModelKind {
         match code {
             1 => Some(ModelKind::Implicit),
             2 => Some(ModelKind::Rbf),
+            3 => Some(ModelKind::Curve),
+            4 => Some(ModelKind::SplineSurface),
             _ => None,
         }
     }
@@ -85,6 +93,8 @@ impl ModelKind {
         match self {
             ModelKind::Implicit => "implicit",
             ModelKind::Rbf => "rbf",
+            ModelKind::Curve => "curve",
+            ModelKind::SplineSurface => "spline-surface",
         }
     }
 }

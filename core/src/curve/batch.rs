@@ -1,0 +1,121 @@
+//! Batch evaluation: [`LANES`] parameters at a time. Each batch computes every lane's segment
+//! and basis weights together (structure of arrays), then gathers each lane's control points;
+//! the single-point calls run the same code with one lane, so results are bit-identical.
+
+use super::bspline_curve::{BSplineCurve, CurvePoint};
+use super::bspline_surface::{BSplineSurface, SurfacePoint};
+use crate::error::LengthMismatch;
+use crate::implicit::LANES;
+use crate::scalar::Scalar;
+
+impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
+    /// C(t) for every t of `t` into `out` (same length).
+    ///
+    /// ```
+    /// # use neurosurf_core::curve::BSplineCurve;
+    /// # fn demo(curve: &BSplineCurve<f32>) -> Result<(), neurosurf_core::LengthMismatch> {
+    /// let t: Vec<f32> = (0..=100).map(|i| i as f32 / 100.0).collect();
+    /// let mut points = vec![[0.0; 3]; t.len()];
+    /// curve.position_batch(&t, &mut points)?;
+    /// assert_eq!(points[37], curve.position(t[37]));
+    /// # Ok(()) }
+    /// # demo(&BSplineCurve::new()).unwrap();
+    /// ```
+    ///
+    /// # Errors
+    /// [`LengthMismatch`] when the slices differ in length (nothing is written).
+    pub fn position_batch(&self, t: &[S], out: &mut [[S; 3]]) -> Result<(), LengthMismatch> {
+        check_lengths(t.len(), out.len())?;
+        for (chunk, out) in t.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let points = self.lanes::<LANES, false>(&pad(chunk, S::ZERO));
+            for (slot, point) in out.iter_mut().zip(&points) {
+                *slot = point.position;
+            }
+        }
+        Ok(())
+    }
+
+    /// C(t) and dC/dt for every t of `t` into `out` (same length).
+    ///
+    /// # Errors
+    /// [`LengthMismatch`] when the slices differ in length (nothing is written).
+    pub fn eval_batch(&self, t: &[S], out: &mut [CurvePoint<S>]) -> Result<(), LengthMismatch> {
+        check_lengths(t.len(), out.len())?;
+        for (chunk, out) in t.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let points = self.lanes::<LANES, true>(&pad(chunk, S::ZERO));
+            for (slot, point) in out.iter_mut().zip(points) {
+                *slot = point;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
+    /// S(u, v) for every `[u, v]` of `uv` into `out` (same length).
+    ///
+    /// # Errors
+    /// [`LengthMismatch`] when the slices differ in length (nothing is written).
+    pub fn position_batch(&self, uv: &[[S; 2]], out: &mut [[S; 3]]) -> Result<(), LengthMismatch> {
+        check_lengths(uv.len(), out.len())?;
+        for (chunk, out) in uv.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let points = self.lanes::<LANES, false>(&pad(chunk, [S::ZERO; 2]));
+            for (slot, point) in out.iter_mut().zip(&points) {
+                *slot = point.position;
+            }
+        }
+        Ok(())
+    }
+
+    /// S(u, v), ∂S/∂u and ∂S/∂v for every `[u, v]` of `uv` into `out` (same length).
+    ///
+    /// # Errors
+    /// [`LengthMismatch`] when the slices differ in length (nothing is written).
+    pub fn eval_batch(
+        &self,
+        uv: &[[S; 2]],
+        out: &mut [SurfacePoint<S>],
+    ) -> Result<(), LengthMismatch> {
+        check_lengths(uv.len(), out.len())?;
+        for (chunk, out) in uv.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let points = self.lanes::<LANES, true>(&pad(chunk, [S::ZERO; 2]));
+            for (slot, point) in out.iter_mut().zip(points) {
+                *slot = point;
+            }
+        }
+        Ok(())
+    }
+
+    /// The unit normal for every `[u, v]` of `uv` into `out` (same length).
+    ///
+    /// # Errors
+    /// [`LengthMismatch`] when the slices differ in length (nothing is written).
+    pub fn normal_batch(
+        &self,
+        uv: &[[S; 2]],
+        out: &mut [Option<[S; 3]>],
+    ) -> Result<(), LengthMismatch> {
+        check_lengths(uv.len(), out.len())?;
+        for (chunk, out) in uv.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let normals = self.normal_lanes::<LANES>(&pad(chunk, [S::ZERO; 2]));
+            for (slot, normal) in out.iter_mut().zip(normals) {
+                *slot = normal;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_lengths(inputs: usize, outputs: usize) -> Result<(), LengthMismatch> {
+    if inputs == outputs {
+        Ok(())
+    } else {
+        Err(LengthMismatch { inputs, outputs })
+    }
+}
+
+/// A full set of lanes: the chunk's parameters, the last one repeated into unused lanes.
+fn pad<T: Copy>(chunk: &[T], empty: T) -> [T; LANES] {
+    let last = chunk.last().copied().unwrap_or(empty);
+    core::array::from_fn(|lane| chunk.get(lane).copied().unwrap_or(last))
+}

@@ -1,0 +1,407 @@
+//! The validated B-spline tensor-product surface: loading and evaluation of position,
+//! partial derivatives and unit normal.
+
+use heapless::Vec;
+
+use super::bspline_curve::at;
+use super::control::{self, POINT_BYTES};
+use super::direction::Direction;
+use super::payload::SurfacePayload;
+use crate::blob::ModelKind;
+use crate::error::BlobError;
+use crate::scalar::{Scalar, ScalarKind, normalize3};
+
+/// Default control-point capacity of [`BSplineSurface`]: 1024 points (a 32 × 32 net, 12 KiB
+/// in `f32`).
+pub const DEFAULT_SURFACE_POINTS: usize = 1024;
+
+/// Position and partial derivatives of a surface at one parameter pair.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SurfacePoint<S> {
+    /// S(u, v).
+    pub position: [S; 3],
+    /// ∂S/∂u (including the factor `segments_u`; saturated in Q16.16).
+    pub du: [S; 3],
+    /// ∂S/∂v (including the factor `segments_v`; saturated in Q16.16).
+    pub dv: [S; 3],
+}
+
+/// The 4 × 4 control points of one patch, as differences from its anchor P₁₁: `[j][k]` is
+/// row v + j, column u + k.
+type Patch<S> = [[[S; 3]; 4]; 4];
+
+/// A uniform cubic B-spline tensor-product surface, loaded from a blob and validated (see
+/// [`crate::curve`] for the contract and the payload).
+///
+/// `C` is the control-point capacity (count_u·count_v) reserved inline. Evaluation after a
+/// successful load cannot fail. Parameters are `[u, v]`, each clamped to [0, 1] (NaN counts
+/// as 0).
+///
+/// # Accuracy
+///
+/// Against an `f64` evaluation at the same parameters, with Δ the largest coordinate
+/// difference between the patch's 16 control points and its anchor P₁₁, M their largest
+/// coordinate magnitude, g the segment count of the direction, ε = 2⁻²⁴, LSB = 2⁻¹⁶, and for
+/// normals κ = (Δ/|S_u| + Δ/|S_v| + 1)/sin θ (S_u, S_v the partials of the local parameters, θ
+/// the angle between them). Bounds asserted by `core/tests/curve_surface.rs` on random nets of
+/// 4 to 12 points per direction, open and closed, coordinates up to ±300; the largest measured
+/// error over 5 × 600 nets in parentheses:
+///
+/// - `f32`: position within 3·ε·(M + Δ) (2.3), partials within 5·ε·g·Δ (3.1), normal within
+///   4·ε·κ radians (1.2; at most 6·10⁻⁷ rad where κ < 10).
+/// - Q16.16: position within 6 LSB·Δ + ½ LSB (3.5); partials within 5 LSB·g·Δ + ½ LSB (3.6),
+///   saturating at ±32 768 (unlike a curve's tangent their error grows with g: the tensor
+///   weights g·Bⱼ′(v)·Bₖ(u) carry Bₖ's rounding times g); normal within 5 LSB·κ radians (3.0;
+///   at most 2.8·10⁻⁴ rad where κ < 10).
+///
+/// A constant net gives its constant, zero partials and no normal, exactly; a net in the plane
+/// z = 0 gives the normal (0, 0, ±1) (exactly, at every point the tests try).
+///
+/// ```
+/// # use neurosurf_core::curve::{BSplineSurface, SurfacePayload};
+/// # use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+/// # fn main() -> Result<(), neurosurf_core::BlobError> {
+/// # let blob = example_blob();
+/// let surface = BSplineSurface::<f32>::from_blob(&blob)?;
+/// let fixed = BSplineSurface::<Q16>::from_blob(&blob)?;
+/// let n = surface.normal([0.5, 0.5]).unwrap();
+/// assert!((n[2] - 1.0).abs() < 1e-6); // a plane z = 0 facing +z
+/// let q = fixed.normal([Q16::from_num(0.5); 2]).unwrap();
+/// assert!((q[2].to_f32() - 1.0).abs() < 1e-3);
+/// assert_eq!(surface.segments(), [1, 2]);
+/// # Ok(())
+/// # }
+/// # fn example_blob() -> Vec<u8> {
+/// #     let mut control = Vec::new();
+/// #     for v in 0..5 { for u in 0..4 { for c in [f64::from(u), f64::from(v), 0.0] {
+/// #         control.extend_from_slice(&ScalarKind::Q16_16.encode(c).unwrap());
+/// #     } } }
+/// #     let payload = SurfacePayload { closed_u: false, closed_v: false, count_u: 4, count_v: 5, control: &control, metadata: &[] };
+/// #     let mut out = vec![0_u8; 512];
+/// #     let n = payload.write(ScalarKind::Q16_16, &mut out).unwrap();
+/// #     out.truncate(n);
+/// #     out
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct BSplineSurface<S: Scalar, const C: usize = DEFAULT_SURFACE_POINTS> {
+    pub(crate) u: Direction<S>,
+    pub(crate) v: Direction<S>,
+    pub(crate) control: Vec<[S; 3], C>,
+    pub(crate) stored_as: ScalarKind,
+}
+
+impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
+    /// An empty surface (no control points: every evaluation gives 0 and no normal), to be
+    /// filled by [`BSplineSurface::load`]. `const`, so firmware can keep it in a `static`.
+    pub const fn new() -> Self {
+        BSplineSurface {
+            u: Direction::EMPTY,
+            v: Direction::EMPTY,
+            control: Vec::new(),
+            stored_as: S::KIND,
+        }
+    }
+
+    /// Decodes and validates a surface blob, converting its control points to `S`.
+    ///
+    /// # Errors
+    /// Framing errors ([`crate::blob::parse`]); [`BlobError::WrongModelKind`];
+    /// [`BlobError::MalformedPayload`]; [`BlobError::UnsupportedStorage`] for `f64` storage;
+    /// [`BlobError::ShapeMismatch`] for fewer than 4 points along a direction
+    /// (`ControlPoints`, u checked first) or a control byte string that does not hold exactly
+    /// count_u·count_v points (`Parameters`, in words); [`BlobError::CapacityExceeded`] beyond
+    /// [`MAX_SEGMENTS`](super::MAX_SEGMENTS) segments along a direction (`Segments`) or `C`
+    /// points in total (`ControlPoints`); [`BlobError::NonFiniteParameter`] /
+    /// [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16) naming the first bad
+    /// coordinate word.
+    pub fn from_blob(bytes: &[u8]) -> Result<Self, BlobError> {
+        let mut surface = Self::new();
+        surface.load(bytes)?;
+        Ok(surface)
+    }
+
+    /// Replaces this surface by the one in `bytes`, in place. On error it is left empty.
+    ///
+    /// # Errors
+    /// As [`BSplineSurface::from_blob`].
+    pub fn load(&mut self, bytes: &[u8]) -> Result<(), BlobError> {
+        self.clear();
+        let result = SurfacePayload::from_blob(bytes)
+            .and_then(|(header, payload)| self.load_payload(&payload, header.scalar));
+        #[cfg(feature = "defmt")]
+        if let Err(e) = &result {
+            defmt::warn!("spline surface blob rejected: {}", e);
+        }
+        result
+    }
+
+    /// Validates a decoded payload whose control points are stored as `stored`.
+    ///
+    /// # Errors
+    /// As [`BSplineSurface::from_blob`], minus framing.
+    pub fn from_payload(
+        payload: &SurfacePayload<'_>,
+        stored: ScalarKind,
+    ) -> Result<Self, BlobError> {
+        let mut surface = Self::new();
+        surface.load_payload(payload, stored)?;
+        Ok(surface)
+    }
+
+    /// Replaces this surface by a decoded payload, in place. On error it is left empty.
+    ///
+    /// # Errors
+    /// As [`BSplineSurface::from_payload`].
+    pub fn load_payload(
+        &mut self,
+        payload: &SurfacePayload<'_>,
+        stored: ScalarKind,
+    ) -> Result<(), BlobError> {
+        let result = self.fill(payload, stored);
+        if result.is_err() {
+            self.clear();
+        }
+        result
+    }
+
+    fn clear(&mut self) {
+        *self = Self::new();
+    }
+
+    fn fill(&mut self, payload: &SurfacePayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
+        self.clear();
+        control::check_storage(ModelKind::SplineSurface, stored)?;
+        let u = Direction::new(usize::from(payload.count_u), payload.closed_u)?;
+        let v = Direction::new(usize::from(payload.count_v), payload.closed_v)?;
+        // At most 65 535² points: checked anyway, for 16-bit `usize`.
+        let count = u
+            .count
+            .checked_mul(v.count)
+            .ok_or(control::over_capacity(usize::MAX, C))?;
+        if count > C {
+            return Err(control::over_capacity(count, C));
+        }
+        if count.checked_mul(POINT_BYTES) != Some(payload.control.len()) {
+            return Err(control::length_mismatch(count, payload.control.len()));
+        }
+        control::decode(&mut self.control, payload.control, stored, false)?;
+        self.u = u;
+        self.v = v;
+        self.stored_as = stored;
+        Ok(())
+    }
+
+    /// Control points per row and rows: `[count_u, count_v]` (zeros when empty).
+    pub fn counts(&self) -> [usize; 2] {
+        [self.u.count, self.v.count]
+    }
+
+    /// Whether the u and v directions wrap around.
+    pub fn is_closed(&self) -> [bool; 2] {
+        [self.u.closed, self.v.closed]
+    }
+
+    /// Segments along u and v.
+    pub fn segments(&self) -> [usize; 2] {
+        [self.u.segments, self.v.segments]
+    }
+
+    /// Control point (u index, v index), if it exists.
+    pub fn control_point(&self, u: usize, v: usize) -> Option<[S; 3]> {
+        if u >= self.u.count {
+            return None;
+        }
+        let index = v.checked_mul(self.u.count)?.checked_add(u)?;
+        self.control.get(index).copied()
+    }
+
+    /// The scalar kind the blob stored its control points in.
+    pub fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    /// Multiplications (scalar products and accumulator multiply–adds) of one evaluation:
+    /// 82 for [`BSplineSurface::position`], 212 for [`BSplineSurface::eval`] (position and
+    /// both partials). Independent of the number of control points.
+    pub fn mac_count(&self, derivatives: bool) -> usize {
+        // Per output: 15 tensor weights, then 15 multiply–adds per coordinate.
+        const OUTPUT: usize = 15 + 3 * 15;
+        let basis = 2 * Direction::<S>::VALUE_MULS;
+        if derivatives {
+            basis + 2 * Direction::<S>::SLOPE_MULS + 3 * OUTPUT
+        } else {
+            basis + OUTPUT
+        }
+    }
+
+    /// Multiplications of one [`BSplineSurface::normal`]: 185 (two unscaled partials, their
+    /// cross product and three normalizations, each of which also takes a square root and a
+    /// reciprocal).
+    pub fn normal_mac_count(&self) -> usize {
+        2 * (Direction::<S>::VALUE_MULS + Direction::<S>::SLOPE_MULS) + 2 * (15 + 3 * 15) + 6 + 27
+    }
+
+    /// S(u, v).
+    pub fn position(&self, uv: [S; 2]) -> [S; 3] {
+        let [point] = self.lanes::<1, false>(&[uv]);
+        point.position
+    }
+
+    /// S(u, v), ∂S/∂u and ∂S/∂v (including the segment factors).
+    pub fn eval(&self, uv: [S; 2]) -> SurfacePoint<S> {
+        let [point] = self.lanes::<1, true>(&[uv]);
+        point
+    }
+
+    /// The unit normal (∂S/∂u × ∂S/∂v)/|…|, `None` where the cross product vanishes.
+    ///
+    /// Computed from dS/du and dS/dv of the local parameters (the same direction, without the
+    /// segment factors), so it never saturates in Q16.16; there it is reliable where the
+    /// partials are not nearly parallel and not within a few LSB of zero.
+    pub fn normal(&self, uv: [S; 2]) -> Option<[S; 3]> {
+        let [normal] = self.normal_lanes::<1>(&[uv]);
+        normal
+    }
+
+    /// Segment indices and local parameters of `L` parameter pairs.
+    #[inline]
+    fn locate_lanes<const L: usize>(&self, uv: &[[S; 2]; L]) -> ([[usize; 2]; L], [[S; 2]; L]) {
+        let mut first = [[0; 2]; L];
+        let mut local = [[S::ZERO; 2]; L];
+        for ((&[u, v], first), local) in uv.iter().zip(&mut first).zip(&mut local) {
+            let (iu, u) = self.u.locate(u);
+            let (iv, v) = self.v.locate(v);
+            *first = [iu, iv];
+            *local = [u, v];
+        }
+        (first, local)
+    }
+
+    /// `L` parameter pairs at once: segments and bases of every lane, then every lane's
+    /// patch. The single-point calls are `L = 1`, so batches give the same bits.
+    #[inline]
+    pub(crate) fn lanes<const L: usize, const DERIVATIVES: bool>(
+        &self,
+        uv: &[[S; 2]; L],
+    ) -> [SurfacePoint<S>; L] {
+        let (first, local) = self.locate_lanes(uv);
+        let mut bases = [[[S::ZERO; 4]; 2]; L];
+        let mut slopes = [[[S::ZERO; 4]; 2]; L];
+        for ((&[u, v], bases), slopes) in local.iter().zip(&mut bases).zip(&mut slopes) {
+            *bases = [self.u.values(u), self.v.values(v)];
+            if DERIVATIVES {
+                *slopes = [self.u.slopes(u), self.v.slopes(v)];
+            }
+        }
+        let mut out = [SurfacePoint::default(); L];
+        for (((out, &first), &[bu, bv]), &[su, sv]) in
+            out.iter_mut().zip(&first).zip(&bases).zip(&slopes)
+        {
+            let (anchor, patch) = self.patch(first);
+            out.position = tensor(anchor, bv, bu, &patch);
+            if DERIVATIVES {
+                out.du = tensor([S::ZERO; 3], bv, su, &patch);
+                out.dv = tensor([S::ZERO; 3], sv, bu, &patch);
+            }
+        }
+        out
+    }
+
+    /// Unit normals of `L` parameter pairs (see [`BSplineSurface::normal`]).
+    #[inline]
+    pub(crate) fn normal_lanes<const L: usize>(&self, uv: &[[S; 2]; L]) -> [Option<[S; 3]>; L] {
+        let (first, local) = self.locate_lanes(uv);
+        let mut bases = [[[S::ZERO; 4]; 4]; L];
+        for (&[u, v], bases) in local.iter().zip(&mut bases) {
+            *bases = [
+                self.u.values(u),
+                self.v.values(v),
+                self.u.unit_slopes(u),
+                self.v.unit_slopes(v),
+            ];
+        }
+        let mut out = [None; L];
+        for ((out, &first), &[bu, bv, su, sv]) in out.iter_mut().zip(&first).zip(&bases) {
+            let (_, patch) = self.patch(first);
+            let du = tensor([S::ZERO; 3], bv, su, &patch);
+            let dv = tensor([S::ZERO; 3], sv, bu, &patch);
+            *out = unit_cross(du, dv);
+        }
+        out
+    }
+
+    /// The anchor P₁₁ of the patch whose first control point is `first` = [u index, v index],
+    /// and every point's difference from it.
+    #[inline]
+    fn patch(&self, [iu, iv]: [usize; 2]) -> ([S; 3], Patch<S>) {
+        let columns = [0, 1, 2, 3].map(|k| self.u.index(iu, k));
+        let point = |j: usize, column: usize| {
+            let row = self.v.index(iv, j);
+            self.control
+                .get(row * self.u.count + column)
+                .copied()
+                .unwrap_or([S::ZERO; 3])
+        };
+        let anchor = point(1, at_index(&columns, 1));
+        let patch = [0, 1, 2, 3].map(|j| {
+            columns.map(|column| {
+                let p = point(j, column);
+                [0, 1, 2].map(|axis| at(&p, axis).sub(at(&anchor, axis)))
+            })
+        });
+        (anchor, patch)
+    }
+}
+
+impl<S: Scalar, const C: usize> Default for BSplineSurface<S, C> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// `start + Σ_{(j,k) ≠ (1,1)} (wv[j]·wu[k])·patch[j][k]`, per coordinate with one rounding.
+/// (The anchor's own difference is zero, so leaving it out changes nothing.)
+#[inline]
+fn tensor<S: Scalar>(start: [S; 3], wv: [S; 4], wu: [S; 4], patch: &Patch<S>) -> [S; 3] {
+    let mut weights = [[S::ZERO; 4]; 4];
+    for (j, (row, &a)) in weights.iter_mut().zip(&wv).enumerate() {
+        for (k, (weight, &b)) in row.iter_mut().zip(&wu).enumerate() {
+            if (j, k) != (1, 1) {
+                *weight = a.mul(b);
+            }
+        }
+    }
+    [0, 1, 2].map(|axis| {
+        let mut acc = at(&start, axis).to_acc();
+        for (j, (weights, points)) in weights.iter().zip(patch).enumerate() {
+            for (k, (&w, p)) in weights.iter().zip(points).enumerate() {
+                if (j, k) != (1, 1) {
+                    acc = S::mac(acc, w, at(p, axis));
+                }
+            }
+        }
+        S::from_acc(acc)
+    })
+}
+
+/// (a × b)/|a × b| from a/|a| and b/|b| (so that no product saturates in fixed point).
+#[inline]
+fn unit_cross<S: Scalar>(a: [S; 3], b: [S; 3]) -> Option<[S; 3]> {
+    let [ax, ay, az] = normalize3(a)?;
+    let [bx, by, bz] = normalize3(b)?;
+    let det =
+        |p: S, q: S, r: S, s: S| S::from_acc(S::mac(S::mac(S::ZERO.to_acc(), p, q), r.neg(), s));
+    normalize3([
+        det(ay, bz, az, by),
+        det(az, bx, ax, bz),
+        det(ax, by, ay, bx),
+    ])
+}
+
+#[inline(always)]
+fn at_index(v: &[usize; 4], k: usize) -> usize {
+    v.get(k).copied().unwrap_or(0)
+}
