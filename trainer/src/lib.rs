@@ -5,6 +5,7 @@
 //! the `f64` reference. The `neurosurf` binary is a thin command-line layer over this library.
 
 pub mod compare;
+pub mod curve;
 pub mod demo;
 pub mod error;
 pub mod evaluate;

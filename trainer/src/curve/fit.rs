@@ -1,0 +1,262 @@
+//! B-spline curves through ordered points Q₀ … Q_{n−1}: a least-squares approximation and
+//! an interpolation.
+//!
+//! Open curves carry phantom end control points, P₀ = 2P₁ − P₂ and P_{K−1} = 2P_{K−2} −
+//! P_{K−3}: then C(0) = P₁ and C(1) = P_{K−2} (and C″ = 0 there, the natural end
+//! condition), and both fits pin P₁ = Q₀ and P_{K−2} = Q_{n−1}, so the curve starts and ends
+//! at the data ends.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+use super::basis::{cubic_basis, locate};
+use super::least_squares::{Affine, NormalEquations};
+use super::points::MIN_POINTS;
+use super::spline::{BSplineCurve, MIN_CONTROL_POINTS};
+use super::tridiagonal::{solve_cyclic, solve_tridiagonal};
+use super::vector::distance;
+
+/// Settings of [`approximate`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ApproximationOptions {
+    /// K, the number of control points including an open curve's two phantoms; `None`:
+    /// max(n/5, 8), at most n (closed) or n + 2 (open).
+    pub control_points: Option<usize>,
+    /// Weight λ of the second-difference penalty λ · Σ |P_{k−1} − 2P_k + P_{k+1}|², relative
+    /// to the mean diagonal of the data term (1e-6: only keeps spans without data
+    /// well-posed; raise it to smooth).
+    pub smoothing: f64,
+}
+
+impl Default for ApproximationOptions {
+    fn default() -> Self {
+        ApproximationOptions {
+            control_points: None,
+            smoothing: 1e-6,
+        }
+    }
+}
+
+/// A least-squares fit and how well it matches the data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Approximation {
+    /// The curve.
+    pub curve: BSplineCurve,
+    /// The chord-length parameter tⱼ ∈ [0, 1] of every data point.
+    pub parameters: Vec<f64>,
+    /// √(mean |C(tⱼ) − Qⱼ|²).
+    pub rms_residual: f64,
+    /// max |C(tⱼ) − Qⱼ|.
+    pub max_residual: f64,
+}
+
+/// Chord-length parameters: t₀ = 0, tⱼ = Σ_{i<j} |Q_{i+1} − Q_i| / L with L the polygon's
+/// length (closed: including the closing chord, so tⱼ < 1).
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the polygon has zero length.
+pub fn chord_length_parameters(ordered: &[[f64; 3]], closed: bool) -> Result<Vec<f64>> {
+    let mut t = Vec::with_capacity(ordered.len());
+    let mut length = 0.0;
+    for (j, &q) in ordered.iter().enumerate() {
+        if j > 0 {
+            length += distance(ordered[j - 1], q);
+        }
+        t.push(length);
+    }
+    if closed && let (Some(&first), Some(&last)) = (ordered.first(), ordered.last()) {
+        length += distance(last, first);
+    }
+    if !(length > 0.0 && length.is_finite()) {
+        return Err(Error::invalid(format!(
+            "the ordered points' polygon has length {length}: no chord-length parameters"
+        )));
+    }
+    Ok(t.into_iter().map(|l| l / length).collect())
+}
+
+/// Least-squares approximation of `ordered` (dimension 2 or 3) by a uniform cubic B-spline
+/// with K control points, at chord-length parameters ([`chord_length_parameters`]).
+/// Open: the ends are interpolated exactly (phantoms, see the module docs), the remaining
+/// K − 4 control points minimize Σ |C(tⱼ) − Qⱼ|² + penalty. Closed: all K are free.
+/// Cost O(n + K³).
+///
+/// # Errors
+/// [`Error::InvalidInput`] for fewer than 4 or non-finite points, a bad dimension, K out of
+/// range (open: 4 ≤ K ≤ n + 2; closed: 4 ≤ K ≤ n), a negative or non-finite smoothing, or
+/// data that leaves the system singular.
+pub fn approximate(
+    ordered: &[[f64; 3]],
+    dimension: usize,
+    closed: bool,
+    options: &ApproximationOptions,
+) -> Result<Approximation> {
+    check_ordered(ordered, dimension)?;
+    let n = ordered.len();
+    let most = if closed { n } else { n + 2 };
+    let k = options
+        .control_points
+        .unwrap_or_else(|| (n / 5).max(8).min(most));
+    if !(MIN_CONTROL_POINTS..=most).contains(&k) {
+        return Err(Error::invalid(format!(
+            "{k} control points requested for {n} {} points: use {MIN_CONTROL_POINTS}..={most}",
+            if closed { "closed" } else { "open" }
+        )));
+    }
+    if !(options.smoothing.is_finite() && options.smoothing >= 0.0) {
+        return Err(Error::invalid(format!(
+            "the smoothing weight must be finite and ≥ 0, got {}",
+            options.smoothing
+        )));
+    }
+    let parameters = chord_length_parameters(ordered, closed)?;
+    let controls = control_layout(k, closed, ordered);
+    let unknowns = if closed { k } else { k - 4 };
+    let segments = if closed { k } else { k - 3 };
+    let mut equations = NormalEquations::new(unknowns);
+    for (&t, &q) in parameters.iter().zip(ordered) {
+        let (i, u) = locate(t, segments);
+        let b = cubic_basis(u);
+        let row: Vec<(f64, &Affine)> = (0..4).map(|a| (b[a], &controls[(i + a) % k])).collect();
+        equations.add_row(&row, q, 1.0);
+    }
+    let weight = options.smoothing * equations.mean_diagonal();
+    let differences = if closed { 0..k } else { 1..k - 1 };
+    for c in differences {
+        let row = [
+            (1.0, &controls[(c + k - 1) % k]),
+            (-2.0, &controls[c]),
+            (1.0, &controls[(c + 1) % k]),
+        ];
+        equations.add_row(&row, [0.0; 3], weight);
+    }
+    let solution = equations.solve().ok_or_else(|| {
+        Error::invalid(format!(
+            "the least-squares system for {k} control points over {n} points is singular: \
+             use fewer control points or more smoothing"
+        ))
+    })?;
+    let control: Vec<[f64; 3]> = controls.iter().map(|a| a.evaluate(&solution)).collect();
+    let curve = BSplineCurve {
+        dimension,
+        closed,
+        control,
+    };
+    let residuals: Vec<f64> = parameters
+        .iter()
+        .zip(ordered)
+        .map(|(&t, &q)| distance(curve.point(t), q))
+        .collect();
+    let rms_residual = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
+    let max_residual = residuals.iter().copied().fold(0.0, f64::max);
+    Ok(Approximation {
+        curve,
+        parameters,
+        rms_residual,
+        max_residual,
+    })
+}
+
+/// The K control points as affine functions of the unknowns (see [`approximate`]).
+fn control_layout(k: usize, closed: bool, ordered: &[[f64; 3]]) -> Vec<Affine> {
+    if closed {
+        return (0..k).map(Affine::unknown).collect();
+    }
+    let first = Affine::fixed(ordered[0]);
+    let last = Affine::fixed(ordered[ordered.len() - 1]);
+    // P₁ = Q₀, P₂ … P_{K−3} unknowns 0 … K−5, P_{K−2} = Q_{n−1}.
+    let mut inner = vec![first];
+    inner.extend((0..k - 4).map(Affine::unknown));
+    inner.push(last);
+    let start = inner[0].combine(2.0, &inner[1], -1.0);
+    let end = inner[k - 3].combine(2.0, &inner[k - 4], -1.0);
+    let mut controls = vec![start];
+    controls.extend(inner);
+    controls.push(end);
+    controls
+}
+
+/// The parameter at which [`interpolate`] passes through Qⱼ: j/(n − 1) open, j/n closed.
+pub fn interpolation_parameter(j: usize, n: usize, closed: bool) -> f64 {
+    let segments = if closed {
+        n
+    } else {
+        n.saturating_sub(1).max(1)
+    };
+    j as f64 / segments as f64
+}
+
+/// The uniform cubic B-spline through every ordered point, Qⱼ = C(tⱼ) at the segment joints
+/// tⱼ = [`interpolation_parameter`]: (P_j + 4P_{j+1} + P_{j+2})/6 = Qⱼ. Open: n + 2
+/// control points with phantoms (natural ends), a tridiagonal system in P₂ … P_{n−1};
+/// closed: n control points, a cyclic tridiagonal system. O(n). The curve passes through
+/// every point to within a few ulp of the coordinates' magnitude (≤ 1e-12 for unit-sized
+/// data).
+///
+/// # Errors
+/// [`Error::InvalidInput`] for fewer than 4 or non-finite points or a bad dimension.
+pub fn interpolate(ordered: &[[f64; 3]], dimension: usize, closed: bool) -> Result<BSplineCurve> {
+    check_ordered(ordered, dimension)?;
+    let n = ordered.len();
+    let control = if closed {
+        // R_j = P_{j+1}: R_{j−1} + 4R_j + R_{j+1} = 6Q_j, cyclic; then P_k = R_{k−1}.
+        let rhs: Vec<[f64; 3]> = ordered.iter().map(|q| q.map(|c| 6.0 * c)).collect();
+        let r = solve_cyclic(1.0, 4.0, 1.0, &rhs);
+        (0..n).map(|k| r[(k + n - 1) % n]).collect()
+    } else {
+        // Unknowns P₂ … P_{n−1}; P₁ = Q₀, P_n = Q_{n−1}.
+        let (first, last) = (ordered[0], ordered[n - 1]);
+        let mut rhs: Vec<[f64; 3]> = ordered[1..n - 1]
+            .iter()
+            .map(|q| q.map(|c| 6.0 * c))
+            .collect();
+        let inner = rhs.len();
+        for k in 0..3 {
+            rhs[0][k] -= first[k];
+            rhs[inner - 1][k] -= last[k];
+        }
+        let middle = solve_tridiagonal(1.0, 4.0, 1.0, &rhs);
+        let mut control = Vec::with_capacity(n + 2);
+        control.push([0, 1, 2].map(|k| 2.0 * first[k] - middle[0][k]));
+        control.push(first);
+        control.extend(middle.iter().copied());
+        control.push(last);
+        control.push([0, 1, 2].map(|k| 2.0 * last[k] - middle[inner - 1][k]));
+        control
+    };
+    Ok(BSplineCurve {
+        dimension,
+        closed,
+        control,
+    })
+}
+
+/// Checks ordered fit input: ≥ 4 finite points of dimension 2 (z = 0) or 3.
+fn check_ordered(ordered: &[[f64; 3]], dimension: usize) -> Result<()> {
+    if dimension != 2 && dimension != 3 {
+        return Err(Error::invalid(format!(
+            "curve points must be 2-D or 3-D, got dimension {dimension}"
+        )));
+    }
+    if ordered.len() < MIN_POINTS {
+        return Err(Error::invalid(format!(
+            "a B-spline fit needs at least {MIN_POINTS} points, got {}",
+            ordered.len()
+        )));
+    }
+    for (i, p) in ordered.iter().enumerate() {
+        if p.iter().any(|c| !c.is_finite()) {
+            return Err(Error::invalid(format!(
+                "ordered point {i} has a non-finite coordinate {p:?}"
+            )));
+        }
+        if dimension == 2 && p[2] != 0.0 {
+            return Err(Error::invalid(format!(
+                "ordered point {i} is 2-D but has z = {}",
+                p[2]
+            )));
+        }
+    }
+    Ok(())
+}

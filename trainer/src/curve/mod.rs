@@ -1,0 +1,86 @@
+//! Free-form curves through scattered points (Hoffmann & Várady): a Kohonen chain orders the
+//! points, then standard B-spline approximation and interpolation apply.
+//!
+//! The pipeline, one file per step:
+//!
+//! 1. [`CurvePoints`] (`points`): validated 2-D or 3-D scattered points.
+//! 2. [`train_chain`] (`kohonen`): a 1-D Kohonen chain of m = 4n neurons, open or a ring,
+//!    with the paper's two convergence tests ([`Convergence`], `convergence`).
+//! 3. [`order_points`] (`ordering`): each point to its winner neuron, sorted along the chain;
+//!    then, an addition to the paper, [`refine_order`] (`refine`, `tour`) repairs the few
+//!    arm-to-arm jumps a chain can keep on a spiral by 2-opt and stretch insertion.
+//! 4. [`approximate`] / [`interpolate`] (`fit`): uniform cubic [`BSplineCurve`]s (`spline`,
+//!    the representation the core evaluates) through the ordered points.
+//! 5. [`fit_surface`] (`surface`): the paper's planned extension — a 2-D Kohonen map over
+//!    3-D points parametrizes them for a [`BSplineSurface`], meshed by [`surface_mesh`].
+//!
+//! [`reconstruct_curve`] (`pipeline`) runs steps 1–4; [`sample_curve`] makes scored test data,
+//! [`adjacency_fraction`] and [`hausdorff_distance`] score a result, `plot` draws it as SVG,
+//! and [`benchmark`] times the pipeline.
+//!
+//! ```
+//! use neurosurf_trainer::curve::{
+//!     CurveOptions, SampleCurve, SampleOptions, adjacency_fraction, reconstruct_curve,
+//!     sample_curve,
+//! };
+//! let options = SampleOptions { count: 40, ..SampleOptions::default() };
+//! let sample = sample_curve(SampleCurve::Ellipse, &options)?;
+//! let points = sample.curve_points()?;
+//! let topology = SampleCurve::Ellipse.topology();
+//! let result = reconstruct_curve(&points, &CurveOptions::new(topology, 7))?;
+//! let adjacency = adjacency_fraction(&result.ordering.order, &sample.parameters, true)?;
+//! assert!(adjacency >= 0.95);
+//! # Ok::<(), neurosurf_trainer::Error>(())
+//! ```
+
+mod basis;
+mod bench;
+mod convergence;
+mod fit;
+mod grid;
+mod grid_map;
+mod kohonen;
+mod least_squares;
+mod metrics;
+mod ordering;
+mod pipeline;
+mod plot;
+mod points;
+mod refine;
+mod samples;
+mod schedule;
+mod spline;
+mod surface;
+mod surface_fit;
+mod surface_mesh;
+mod tour;
+mod tridiagonal;
+mod vector;
+
+pub use basis::{cubic_basis, cubic_basis_derivative, locate};
+pub use bench::{BENCHMARK_SIZES, BenchmarkRow, benchmark};
+pub use convergence::Convergence;
+pub use fit::{
+    Approximation, ApproximationOptions, approximate, chord_length_parameters, interpolate,
+    interpolation_parameter,
+};
+pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
+pub use kohonen::{
+    KohonenChain, KohonenOptions, MAX_NEURONS, Topology, TrainingReport, train_chain,
+};
+pub use metrics::{
+    adjacency_fraction, directed_distance, distance_to_polyline, hausdorff_distance,
+};
+pub use ordering::{Ordering, order_points};
+pub use pipeline::{CurveOptions, CurveReconstruction, reconstruct_curve};
+pub use plot::{PlotLayers, PlotOptions, Projection, render_svg, write_svg};
+pub use points::{CurvePoints, DUPLICATE_TOLERANCE, MAX_POINTS, MIN_POINTS};
+pub use refine::{RefineOptions, RefineReport, refine_order};
+pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sample_curve};
+pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS};
+pub use surface::{SurfaceFit, SurfaceOptions, control_grid_surface, fit_surface, map_parameters};
+pub use surface_fit::{MAX_SURFACE_CONTROL_POINTS, fit_surface_to_parameters};
+pub use surface_mesh::{MAX_MESH_VERTICES, SurfaceMesh, surface_mesh};
+
+#[cfg(test)]
+mod tests;

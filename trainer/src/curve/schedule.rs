@@ -1,0 +1,43 @@
+//! The training schedule shared by the chain and the grid map: the paper's linearly
+//! decreasing learning rate and a Gaussian neighbourhood whose radius shrinks geometrically.
+
+/// Learning rate and neighbourhood radius as functions of the presentation counter t ∈ [0, T).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Schedule {
+    /// T: presentations in total.
+    pub total: usize,
+    /// η₀.
+    pub initial_rate: f64,
+    /// σ₀ in neurons (distance along the chain or grid).
+    pub initial_radius: f64,
+    /// σ at t = T, in neurons.
+    pub final_radius: f64,
+}
+
+impl Schedule {
+    /// The paper's learning rate η(t) = η₀ (1 − t/T).
+    pub(crate) fn rate(&self, t: usize) -> f64 {
+        self.initial_rate * (1.0 - t as f64 / self.total as f64)
+    }
+
+    /// σ(t) = σ₀ (σ_T / σ₀)^{t/T}: from the initial to the final radius geometrically.
+    pub(crate) fn radius(&self, t: usize) -> f64 {
+        let x = t as f64 / self.total as f64;
+        self.initial_radius * (self.final_radius / self.initial_radius).powf(x)
+    }
+}
+
+/// Gaussian neighbourhood weights h(d) = exp(−d² / 2σ²) for d = 0..=⌈3σ⌉ (beyond 3σ the
+/// weight is below 1.2 %, and is dropped), at most `limit + 1` entries.
+pub(crate) fn gaussian_table(radius: f64, limit: usize, table: &mut Vec<f64>) {
+    let reach = ((3.0 * radius).ceil() as usize).min(limit);
+    let scale = -0.5 / (radius * radius);
+    table.clear();
+    table.extend((0..=reach).map(|d| ((d * d) as f64 * scale).exp()));
+}
+
+/// How many presentations share one neighbourhood table: the radius is recomputed this
+/// often (at most ~1000 times per training run).
+pub(crate) fn radius_block(total: usize) -> usize {
+    (total / 1000).max(1)
+}

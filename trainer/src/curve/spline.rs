@@ -1,0 +1,248 @@
+//! The B-spline curve the core evaluates (a fixed contract), and its f64 reference
+//! evaluation.
+//!
+//! The global parameter t ∈ [0, 1] covers the whole curve: s = t · segments,
+//! i = min(⌊s⌋, segments − 1), u = s − i, and C(t) = Σₖ Bₖ(u) · P_{i+k} (k = 0..3, indices
+//! mod n when closed) with the uniform cubic basis of [`cubic_basis`]. Closed curves have
+//! `segments = n`, open ones `n − 3`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+use super::basis::{cubic_basis, cubic_basis_derivative, locate};
+
+/// Fewest control points of a curve (open or closed) or of an open surface direction.
+pub const MIN_CONTROL_POINTS: usize = 4;
+
+/// A uniform cubic B-spline curve. Closed: control points wrap (segments = n). Open:
+/// segments = n − 3, and the fitter adds phantom end points (P₋₁ = 2P₀ − P₁ style) so the
+/// curve starts/ends at the data ends.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BSplineCurve {
+    /// 2 or 3 (2-D control points have z = 0).
+    pub dimension: usize,
+    /// Whether the control points wrap around.
+    pub closed: bool,
+    /// The control points P₀ … P_{n−1}.
+    pub control: Vec<[f64; 3]>,
+}
+
+impl BSplineCurve {
+    /// Checks the curve: dimension 2 or 3, at least [`MIN_CONTROL_POINTS`] control points,
+    /// all finite, z = 0 in 2-D.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the problem.
+    pub fn validate(&self) -> Result<()> {
+        if self.dimension != 2 && self.dimension != 3 {
+            return Err(Error::invalid(format!(
+                "a B-spline curve is 2-D or 3-D, got dimension {}",
+                self.dimension
+            )));
+        }
+        if self.control.len() < MIN_CONTROL_POINTS {
+            return Err(Error::invalid(format!(
+                "a cubic B-spline curve needs at least {MIN_CONTROL_POINTS} control points, \
+                 got {}",
+                self.control.len()
+            )));
+        }
+        check_control(&self.control, self.dimension == 2)
+    }
+
+    /// Number of polynomial segments: n when closed, n − 3 when open (0 if too few points).
+    pub fn segments(&self) -> usize {
+        if self.closed {
+            self.control.len()
+        } else {
+            self.control.len().saturating_sub(3)
+        }
+    }
+
+    /// C(t), t clamped to [0, 1]. Exact to a few ulp of the control points' magnitude.
+    /// Returns NaN coordinates when the curve has fewer than [`MIN_CONTROL_POINTS`] points.
+    pub fn point(&self, t: f64) -> [f64; 3] {
+        self.combine(t, cubic_basis, 1.0)
+    }
+
+    /// dC/dt (includes the factor `segments` of s = t · segments), t clamped to [0, 1];
+    /// NaN like [`BSplineCurve::point`].
+    pub fn tangent(&self, t: f64) -> [f64; 3] {
+        self.combine(t, cubic_basis_derivative, self.segments() as f64)
+    }
+
+    /// Σ weights(u)ₖ · P_{i+k} · factor.
+    fn combine(&self, t: f64, weights: fn(f64) -> [f64; 4], factor: f64) -> [f64; 3] {
+        let n = self.control.len();
+        if n < MIN_CONTROL_POINTS {
+            return [f64::NAN; 3];
+        }
+        let (i, u) = locate(t, self.segments());
+        let w = weights(u);
+        let mut c = [0.0; 3];
+        for (k, &wk) in w.iter().enumerate() {
+            let p = self.control[(i + k) % n];
+            for axis in 0..3 {
+                c[axis] += wk * p[axis];
+            }
+        }
+        c.map(|v| v * factor)
+    }
+
+    /// `samples + 1` points C(k / samples), k = 0..=samples (for a closed curve the last
+    /// equals the first): a polyline for plots and distances.
+    pub fn polyline(&self, samples: usize) -> Vec<[f64; 3]> {
+        let samples = samples.max(1);
+        (0..=samples)
+            .map(|k| self.point(k as f64 / samples as f64))
+            .collect()
+    }
+}
+
+/// Tensor-product uniform cubic B-spline surface; control[v * count_u + u]; open directions
+/// have count ≥ 4.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BSplineSurface {
+    /// Whether the u direction wraps around.
+    pub closed_u: bool,
+    /// Whether the v direction wraps around.
+    pub closed_v: bool,
+    /// Control points per row (along u).
+    pub count_u: usize,
+    /// Rows (along v).
+    pub count_v: usize,
+    /// The control grid, row by row: `control[v * count_u + u]`.
+    pub control: Vec<[f64; 3]>,
+}
+
+impl BSplineSurface {
+    /// Checks the surface: at least [`MIN_CONTROL_POINTS`] per direction, a control grid of
+    /// `count_u · count_v` finite points.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the problem.
+    pub fn validate(&self) -> Result<()> {
+        if self.count_u < MIN_CONTROL_POINTS || self.count_v < MIN_CONTROL_POINTS {
+            return Err(Error::invalid(format!(
+                "a cubic B-spline surface needs at least {MIN_CONTROL_POINTS} control points \
+                 per direction, got {} × {}",
+                self.count_u, self.count_v
+            )));
+        }
+        if Some(self.control.len()) != self.count_u.checked_mul(self.count_v) {
+            return Err(Error::invalid(format!(
+                "a {} × {} B-spline surface needs {} control points, got {}",
+                self.count_u,
+                self.count_v,
+                self.count_u.saturating_mul(self.count_v),
+                self.control.len()
+            )));
+        }
+        check_control(&self.control, false)
+    }
+
+    /// Segments along u: `count_u` when closed, `count_u − 3` when open.
+    pub fn segments_u(&self) -> usize {
+        segments(self.count_u, self.closed_u)
+    }
+
+    /// Segments along v: `count_v` when closed, `count_v − 3` when open.
+    pub fn segments_v(&self) -> usize {
+        segments(self.count_v, self.closed_v)
+    }
+
+    /// S(u, v), both clamped to [0, 1]; NaN for a surface that fails
+    /// [`BSplineSurface::validate`]'s counts. Exact to a few ulp.
+    pub fn point(&self, u: f64, v: f64) -> [f64; 3] {
+        self.combine(u, v, cubic_basis, cubic_basis, 1.0)
+    }
+
+    /// (∂S/∂u, ∂S/∂v), including the factors `segments_u` and `segments_v`.
+    pub fn partials(&self, u: f64, v: f64) -> ([f64; 3], [f64; 3]) {
+        let du = self.combine(
+            u,
+            v,
+            cubic_basis_derivative,
+            cubic_basis,
+            self.segments_u() as f64,
+        );
+        let dv = self.combine(
+            u,
+            v,
+            cubic_basis,
+            cubic_basis_derivative,
+            self.segments_v() as f64,
+        );
+        (du, dv)
+    }
+
+    /// The unit normal ∂S/∂u × ∂S/∂v / |…|; `None` where the cross product vanishes or is
+    /// not finite (a degenerate point).
+    pub fn normal(&self, u: f64, v: f64) -> Option<[f64; 3]> {
+        let (a, b) = self.partials(u, v);
+        let n = super::vector::cross(a, b);
+        let length = super::vector::norm(n);
+        (length > 0.0 && length.is_finite()).then(|| n.map(|c| c / length))
+    }
+
+    fn combine(
+        &self,
+        u: f64,
+        v: f64,
+        weights_u: fn(f64) -> [f64; 4],
+        weights_v: fn(f64) -> [f64; 4],
+        factor: f64,
+    ) -> [f64; 3] {
+        let (nu, nv) = (self.count_u, self.count_v);
+        if nu < MIN_CONTROL_POINTS
+            || nv < MIN_CONTROL_POINTS
+            || Some(self.control.len()) != nu.checked_mul(nv)
+        {
+            return [f64::NAN; 3];
+        }
+        let (i, lu) = locate(u, self.segments_u());
+        let (j, lv) = locate(v, self.segments_v());
+        let (wu, wv) = (weights_u(lu), weights_v(lv));
+        let mut c = [0.0; 3];
+        for (b, &wb) in wv.iter().enumerate() {
+            let row = (j + b) % nv;
+            let mut r = [0.0; 3];
+            for (a, &wa) in wu.iter().enumerate() {
+                let p = self.control[row * nu + (i + a) % nu];
+                for axis in 0..3 {
+                    r[axis] += wa * p[axis];
+                }
+            }
+            for axis in 0..3 {
+                c[axis] += wb * r[axis];
+            }
+        }
+        c.map(|x| x * factor)
+    }
+}
+
+fn segments(count: usize, closed: bool) -> usize {
+    if closed {
+        count
+    } else {
+        count.saturating_sub(3)
+    }
+}
+
+fn check_control(control: &[[f64; 3]], planar: bool) -> Result<()> {
+    for (i, p) in control.iter().enumerate() {
+        if p.iter().any(|c| !c.is_finite()) {
+            return Err(Error::invalid(format!(
+                "control point {i} has a non-finite coordinate {p:?}"
+            )));
+        }
+        if planar && p[2] != 0.0 {
+            return Err(Error::invalid(format!(
+                "control point {i} of a 2-D curve has z = {}",
+                p[2]
+            )));
+        }
+    }
+    Ok(())
+}

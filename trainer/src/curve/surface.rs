@@ -1,0 +1,229 @@
+//! Surfaces from scattered 3-D points, the paper's planned extension: a 2-D Kohonen map
+//! ([`train_map`]) orders the points in two directions, each point gets map coordinates
+//! (u, v), and a uniform cubic [`BSplineSurface`] is fitted to them in least squares.
+//!
+//! The converged grid itself can also serve directly as a control grid
+//! ([`control_grid_surface`]), as the paper suggests; it sits inside the point cloud (the
+//! map's border neurons are pulled inwards) and the uniform B-spline shrinks it further, so
+//! the fitted surface is the default.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+use super::grid::NeuronGrid;
+use super::grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
+use super::points::CurvePoints;
+use super::spline::BSplineSurface;
+use super::surface_fit::fit_surface_to_parameters;
+use super::vector::{distance, dot, sub};
+
+/// Settings of [`fit_surface`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SurfaceOptions {
+    /// The map.
+    pub map: KohonenMapOptions,
+    /// Control points along u of the fitted surface (8).
+    pub control_u: usize,
+    /// Control points along v (8).
+    pub control_v: usize,
+    /// Weight of the second-difference penalty, relative to the data term (1e-4).
+    pub smoothing: f64,
+    /// Parameter corrections: after a fit, move every (uⱼ, vⱼ) to the nearest surface
+    /// point (Gauss–Newton, clamped to [0, 1]²) and fit again; this many times (3).
+    pub parameter_corrections: usize,
+}
+
+impl Default for SurfaceOptions {
+    fn default() -> Self {
+        SurfaceOptions {
+            map: KohonenMapOptions::default(),
+            control_u: 8,
+            control_v: 8,
+            smoothing: 1e-4,
+            parameter_corrections: 3,
+        }
+    }
+}
+
+/// What [`fit_surface`] computed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceFit {
+    /// The trained map.
+    pub map: KohonenMap,
+    /// How its training went.
+    pub map_report: MapReport,
+    /// The fitted surface (open in u and v).
+    pub surface: BSplineSurface,
+    /// Each point's (u, v) ∈ [0, 1]²: from the map, then corrected by projection.
+    pub parameters: Vec<[f64; 2]>,
+    /// √(mean |S(uⱼ, vⱼ) − Qⱼ|²).
+    pub rms_residual: f64,
+    /// max |S(uⱼ, vⱼ) − Qⱼ|.
+    pub max_residual: f64,
+}
+
+/// Trains a map on `points`, parametrizes them with [`map_parameters`], fits the surface,
+/// and refines the parameters by projection (`parameter_corrections` times).
+///
+/// # Errors
+/// As [`train_map`] and the least-squares fit (bad control counts or smoothing, a singular
+/// system).
+pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<SurfaceFit> {
+    let (map, map_report) = train_map(points, &options.map)?;
+    let mut parameters = map_parameters(points, &map)?;
+    let fit = |parameters: &[[f64; 2]]| {
+        fit_surface_to_parameters(
+            points.points(),
+            parameters,
+            options.control_u,
+            options.control_v,
+            options.smoothing,
+        )
+    };
+    let mut surface = fit(&parameters)?;
+    for _ in 0..options.parameter_corrections {
+        for (p, &q) in parameters.iter_mut().zip(points.points()) {
+            *p = project(&surface, q, *p);
+        }
+        surface = fit(&parameters)?;
+    }
+    let residuals: Vec<f64> = points
+        .points()
+        .iter()
+        .zip(&parameters)
+        .map(|(&q, p)| distance(surface.point(p[0], p[1]), q))
+        .collect();
+    let rms_residual =
+        (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt();
+    let max_residual = residuals.iter().copied().fold(0.0, f64::max);
+    Ok(SurfaceFit {
+        map,
+        map_report,
+        surface,
+        parameters,
+        rms_residual,
+        max_residual,
+    })
+}
+
+/// The parameters of the surface point nearest to `q`, starting from `start`: up to 8
+/// Gauss–Newton steps on |S(u, v) − q|², clamped to [0, 1]².
+pub(crate) fn project(surface: &BSplineSurface, q: [f64; 3], start: [f64; 2]) -> [f64; 2] {
+    let mut p = start;
+    for _ in 0..8 {
+        let r = sub(q, surface.point(p[0], p[1]));
+        let (su, sv) = surface.partials(p[0], p[1]);
+        let (a, b, e) = (dot(su, su), dot(su, sv), dot(sv, sv));
+        let determinant = a * e - b * b;
+        if !(determinant > 0.0 && determinant.is_finite()) {
+            break;
+        }
+        let (x, y) = (dot(r, su), dot(r, sv));
+        let step = [(e * x - b * y) / determinant, (a * y - b * x) / determinant];
+        let next = [
+            (p[0] + step[0]).clamp(0.0, 1.0),
+            (p[1] + step[1]).clamp(0.0, 1.0),
+        ];
+        let moved = (next[0] - p[0]).abs() + (next[1] - p[1]).abs();
+        p = next;
+        if moved < 1e-12 {
+            break;
+        }
+    }
+    p
+}
+
+/// Map coordinates of every point, scaled to [0, 1]²: the winner (i, j) plus the offset
+/// (δᵢ, δⱼ) that best explains x − w in the map's local frame (the central differences of
+/// the neighbours, one-sided at the border), clamped to ±½ inside and up to 1 outwards at
+/// the border; then each coordinate is mapped affinely onto [0, 1] over all points.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the map's shape does not match its neurons or all points
+/// share one coordinate.
+pub fn map_parameters(points: &CurvePoints, map: &KohonenMap) -> Result<Vec<[f64; 2]>> {
+    let (columns, rows) = (map.columns, map.rows);
+    if columns < 2 || rows < 2 || Some(map.neurons.len()) != columns.checked_mul(rows) {
+        return Err(Error::invalid(format!(
+            "a {columns} × {rows} Kohonen map cannot have {} neurons",
+            map.neurons.len()
+        )));
+    }
+    let (lower, upper) = points.bounds();
+    let grid = NeuronGrid::new(lower, upper, &map.neurons);
+    let raw: Vec<[f64; 2]> = points
+        .points()
+        .iter()
+        .map(|&x| {
+            let (c, _) = grid.nearest(x, &map.neurons, None).unwrap_or((0, 0.0));
+            let (i, j) = (c % columns, c / columns);
+            let along = |before: usize, after: usize, steps: f64, column: bool| {
+                let at = |column: usize, row: usize| map.neurons[row * columns + column];
+                let (a, b) = if column {
+                    (at(before, j), at(after, j))
+                } else {
+                    (at(i, before), at(i, after))
+                };
+                sub(b, a).map(|v| v / steps)
+            };
+            let frame = |k: usize, count: usize, column: bool| {
+                let before = k.saturating_sub(1);
+                let after = (k + 1).min(count - 1);
+                along(before, after, (after - before) as f64, column)
+            };
+            let tu = frame(i, columns, true);
+            let tv = frame(j, rows, false);
+            let d = sub(x, map.neurons[c]);
+            let (a, b, e) = (dot(tu, tu), dot(tu, tv), dot(tv, tv));
+            let determinant = a * e - b * b;
+            let (mut du, mut dv) = if determinant > 1e-12 * (a * e) && determinant > 0.0 {
+                let (r, s) = (dot(d, tu), dot(d, tv));
+                ((e * r - b * s) / determinant, (a * s - b * r) / determinant)
+            } else {
+                (0.0, 0.0)
+            };
+            let limits = |k: usize, count: usize| {
+                (
+                    if k == 0 { -1.0 } else { -0.5 },
+                    if k + 1 == count { 1.0 } else { 0.5 },
+                )
+            };
+            let (lo, hi) = limits(i, columns);
+            du = du.clamp(lo, hi);
+            let (lo, hi) = limits(j, rows);
+            dv = dv.clamp(lo, hi);
+            [i as f64 + du, j as f64 + dv]
+        })
+        .collect();
+    let mut scaled = raw.clone();
+    for k in 0..2 {
+        let low = raw.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+        let high = raw.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+        if high.partial_cmp(&low) != Some(std::cmp::Ordering::Greater) {
+            return Err(Error::invalid(
+                "every point got the same map coordinate: the map did not spread",
+            ));
+        }
+        for (s, r) in scaled.iter_mut().zip(&raw) {
+            s[k] = (r[k] - low) / (high - low);
+        }
+    }
+    Ok(scaled)
+}
+
+/// The converged grid used directly as the control grid of an open surface.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the map has fewer than 4 neurons per direction.
+pub fn control_grid_surface(map: &KohonenMap) -> Result<BSplineSurface> {
+    let surface = BSplineSurface {
+        closed_u: false,
+        closed_v: false,
+        count_u: map.columns,
+        count_v: map.rows,
+        control: map.neurons.clone(),
+    };
+    surface.validate()?;
+    Ok(surface)
+}

@@ -1,0 +1,102 @@
+//! Least-squares fit of an open uniform cubic B-spline surface to parametrized points.
+
+use crate::error::{Error, Result};
+
+use super::basis::{cubic_basis, locate};
+use super::least_squares::{Affine, NormalEquations};
+use super::spline::{BSplineSurface, MIN_CONTROL_POINTS};
+
+/// Most control points of a fitted surface (the normal equations are dense: F² memory,
+/// F³/3 work).
+pub const MAX_SURFACE_CONTROL_POINTS: usize = 4_096;
+
+/// Fits `count_u × count_v` control points (open in both directions) so that
+/// S(uⱼ, vⱼ) ≈ Qⱼ in least squares, plus λ · Σ (second differences of the control grid
+/// along u and along v)², λ = `smoothing` × the mean diagonal of the data term.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for counts below [`MIN_CONTROL_POINTS`] or a grid above
+/// [`MAX_SURFACE_CONTROL_POINTS`], mismatched lengths, non-finite parameters or a negative
+/// smoothing, or a singular system.
+pub fn fit_surface_to_parameters(
+    points: &[[f64; 3]],
+    parameters: &[[f64; 2]],
+    count_u: usize,
+    count_v: usize,
+    smoothing: f64,
+) -> Result<BSplineSurface> {
+    if count_u < MIN_CONTROL_POINTS
+        || count_v < MIN_CONTROL_POINTS
+        || count_u.saturating_mul(count_v) > MAX_SURFACE_CONTROL_POINTS
+    {
+        return Err(Error::invalid(format!(
+            "a fitted surface needs {MIN_CONTROL_POINTS} or more control points per direction \
+             and at most {MAX_SURFACE_CONTROL_POINTS} in all, got {count_u} × {count_v}"
+        )));
+    }
+    if points.len() != parameters.len() {
+        return Err(Error::invalid(format!(
+            "{} points but {} parameter pairs",
+            points.len(),
+            parameters.len()
+        )));
+    }
+    if let Some(i) = parameters
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        return Err(Error::invalid(format!(
+            "the parameters {:?} of point {i} are not finite",
+            parameters[i]
+        )));
+    }
+    if !(smoothing.is_finite() && smoothing >= 0.0) {
+        return Err(Error::invalid(format!(
+            "the smoothing weight must be finite and ≥ 0, got {smoothing}"
+        )));
+    }
+    let controls: Vec<Affine> = (0..count_u * count_v).map(Affine::unknown).collect();
+    let mut equations = NormalEquations::new(controls.len());
+    let (segments_u, segments_v) = (count_u - 3, count_v - 3);
+    let mut row: Vec<(f64, &Affine)> = Vec::with_capacity(16);
+    for (q, p) in points.iter().zip(parameters) {
+        let (i, lu) = locate(p[0], segments_u);
+        let (j, lv) = locate(p[1], segments_v);
+        let (bu, bv) = (cubic_basis(lu), cubic_basis(lv));
+        row.clear();
+        for b in 0..4 {
+            for a in 0..4 {
+                row.push((bu[a] * bv[b], &controls[(j + b) * count_u + i + a]));
+            }
+        }
+        equations.add_row(&row, *q, 1.0);
+    }
+    let weight = smoothing * equations.mean_diagonal();
+    for j in 0..count_v {
+        for i in 0..count_u {
+            let at = |i: usize, j: usize| &controls[j * count_u + i];
+            if i > 0 && i + 1 < count_u {
+                let r = [(1.0, at(i - 1, j)), (-2.0, at(i, j)), (1.0, at(i + 1, j))];
+                equations.add_row(&r, [0.0; 3], weight);
+            }
+            if j > 0 && j + 1 < count_v {
+                let r = [(1.0, at(i, j - 1)), (-2.0, at(i, j)), (1.0, at(i, j + 1))];
+                equations.add_row(&r, [0.0; 3], weight);
+            }
+        }
+    }
+    let control = equations.solve().ok_or_else(|| {
+        Error::invalid(format!(
+            "the surface least-squares system for {count_u} × {count_v} control points over \
+             {} points is singular: use fewer control points or more smoothing",
+            points.len()
+        ))
+    })?;
+    Ok(BSplineSurface {
+        closed_u: false,
+        closed_v: false,
+        count_u,
+        count_v,
+        control,
+    })
+}

@@ -1,0 +1,528 @@
+//! Tests of the curve pipeline, with the thresholds they enforce.
+//!
+//! Scores: adjacency as defined by [`adjacency_fraction`] (neighbours in true-parameter
+//! order, cyclic for closed curves); Hausdorff distances relative to the true curve's
+//! bounding-box diagonal (`CurveSample::size`).
+
+use std::path::Path;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::samples::gaussian;
+use super::vector::distance;
+use super::*;
+use crate::error::Error;
+
+/// Points per test curve.
+const COUNT: usize = 200;
+/// The pipeline's order (chain + refinement) must have at least this adjacency.
+const MIN_ADJACENCY: f64 = 0.95;
+/// The chain's own order (the paper's method, no refinement) on the closed curves.
+const MIN_CHAIN_ADJACENCY_CLOSED: f64 = 0.95;
+/// … and on the open spiral, whose chain keeps a few arm-to-arm defects (measured
+/// 0.955–0.97 at 200 points).
+const MIN_CHAIN_ADJACENCY_SPIRAL: f64 = 0.93;
+/// Hausdorff distance between the approximating spline and the true curve, × the curve's
+/// size (measured 0.001–0.005 at 200 points with noise 0.1 × spacing).
+const MAX_HAUSDORFF: f64 = 0.01;
+/// Largest |C(tⱼ) − Qⱼ| of the interpolating spline.
+const INTERPOLATION_TOLERANCE: f64 = 1e-9;
+
+fn sample(curve: SampleCurve, count: usize, seed: u64) -> CurveSample {
+    sample_curve(
+        curve,
+        &SampleOptions {
+            count,
+            seed,
+            ..SampleOptions::default()
+        },
+    )
+    .unwrap()
+}
+
+fn run(sample: &CurveSample, seed: u64) -> CurveReconstruction {
+    let points = sample.curve_points().unwrap();
+    reconstruct_curve(&points, &CurveOptions::new(sample.curve.topology(), seed)).unwrap()
+}
+
+/// Scores one reconstruction: (pipeline adjacency, chain adjacency, relative Hausdorff,
+/// worst interpolation residual).
+fn score(sample: &CurveSample, result: &CurveReconstruction) -> (f64, f64, f64, f64) {
+    let closed = sample.curve.closed();
+    let adjacency = adjacency_fraction(&result.ordering.order, &sample.parameters, closed).unwrap();
+    let chain =
+        adjacency_fraction(&result.chain_ordering.order, &sample.parameters, closed).unwrap();
+    let truth: Vec<[f64; 3]> = sample.truth.iter().step_by(4).copied().collect();
+    let spline = result.approximation.curve.polyline(2000);
+    let hausdorff = hausdorff_distance(&spline, &truth) / sample.size;
+    let ordered: Vec<[f64; 3]> = result
+        .ordering
+        .order
+        .iter()
+        .map(|&i| sample.points[i])
+        .collect();
+    let n = ordered.len();
+    let interpolation = ordered
+        .iter()
+        .enumerate()
+        .map(|(j, &q)| {
+            let t = interpolation_parameter(j, n, closed);
+            distance(result.interpolation.point(t), q)
+        })
+        .fold(0.0, f64::max);
+    (adjacency, chain, hausdorff, interpolation)
+}
+
+fn check_curve(curve: SampleCurve, seed: u64) {
+    let sample = sample(curve, COUNT, seed);
+    let result = run(&sample, seed);
+    let (adjacency, chain, hausdorff, interpolation) = score(&sample, &result);
+    println!(
+        "{curve:?} seed {seed}: adjacency {adjacency:.4} (chain {chain:.4}), Hausdorff \
+         {hausdorff:.5} × size, interpolation {interpolation:.1e}, {} presentations, \
+         converged {} / {}",
+        result.training.iterations,
+        result.training.convergence.within_epsilon,
+        result.training.convergence.on_neighbour_lines
+    );
+    assert!(
+        adjacency >= MIN_ADJACENCY,
+        "{curve:?}: adjacency {adjacency}"
+    );
+    let chain_minimum = if curve.closed() {
+        MIN_CHAIN_ADJACENCY_CLOSED
+    } else {
+        MIN_CHAIN_ADJACENCY_SPIRAL
+    };
+    assert!(chain >= chain_minimum, "{curve:?}: chain adjacency {chain}");
+    assert!(
+        hausdorff <= MAX_HAUSDORFF,
+        "{curve:?}: Hausdorff {hausdorff}"
+    );
+    assert!(
+        interpolation <= INTERPOLATION_TOLERANCE,
+        "{curve:?}: interpolation residual {interpolation}"
+    );
+}
+
+#[test]
+fn ellipse_is_recovered() {
+    check_curve(SampleCurve::Ellipse, 1);
+}
+
+#[test]
+fn spiral_is_recovered() {
+    check_curve(SampleCurve::Spiral, 1);
+}
+
+#[test]
+fn peanut_is_recovered() {
+    check_curve(SampleCurve::Peanut, 1);
+}
+
+#[test]
+fn trefoil_in_space_is_recovered() {
+    check_curve(SampleCurve::Trefoil, 1);
+}
+
+#[test]
+fn other_seeds_pass_too() {
+    for curve in [
+        SampleCurve::Ellipse,
+        SampleCurve::Spiral,
+        SampleCurve::Peanut,
+    ] {
+        for seed in [2, 3] {
+            check_curve(curve, seed);
+        }
+    }
+}
+
+#[test]
+fn the_papers_twenty_points_converge_with_eighty_neurons() {
+    let sample = sample(SampleCurve::Ellipse, 20, 0);
+    let result = run(&sample, 0);
+    assert_eq!(result.training.neurons, 80);
+    let convergence = &result.training.convergence;
+    assert!(convergence.within_epsilon, "{convergence:?}");
+    assert!(convergence.on_neighbour_lines, "{convergence:?}");
+    assert!(convergence.worst_input_distance <= convergence.epsilon);
+    let adjacency =
+        adjacency_fraction(&result.chain_ordering.order, &sample.parameters, true).unwrap();
+    assert_eq!(adjacency, 1.0);
+}
+
+#[test]
+fn same_seed_same_result_different_seed_different_chain() {
+    let sample = sample(SampleCurve::Peanut, COUNT, 5);
+    let a = run(&sample, 11);
+    let b = run(&sample, 11);
+    assert_eq!(a, b);
+    let c = run(&sample, 12);
+    assert_ne!(a.chain.neurons, c.chain.neurons);
+    let (adjacency, _, hausdorff, _) = score(&sample, &c);
+    assert!(adjacency >= MIN_ADJACENCY && hausdorff <= MAX_HAUSDORFF);
+    // The samples are deterministic too.
+    assert_eq!(sample, self::sample(SampleCurve::Peanut, COUNT, 5));
+}
+
+#[test]
+fn two_thousand_points_order_correctly() {
+    let sample = sample(SampleCurve::Spiral, 2000, 0);
+    let result = run(&sample, 0);
+    let (adjacency, chain, hausdorff, interpolation) = score(&sample, &result);
+    println!("spiral 2000: adjacency {adjacency} (chain {chain}), Hausdorff {hausdorff}");
+    assert!(adjacency >= 0.99 && chain >= 0.98, "{adjacency} {chain}");
+    assert!(hausdorff <= 0.002, "{hausdorff}");
+    assert!(interpolation <= INTERPOLATION_TOLERANCE, "{interpolation}");
+}
+
+#[test]
+fn benchmark_reports_every_size() {
+    let rows = benchmark(&[20, 200], 0).unwrap();
+    assert_eq!(rows.len(), 2);
+    for (row, n) in rows.iter().zip([20, 200]) {
+        assert_eq!((row.points, row.neurons), (n, 4 * n));
+        assert!(
+            row.iterations > 0 && row.seconds > 0.0 && row.seconds < 5.0,
+            "{row:?}"
+        );
+    }
+    assert!(benchmark(&[3], 0).is_err());
+}
+
+fn message(error: Error) -> String {
+    assert!(matches!(error, Error::InvalidInput(_)), "{error:?}");
+    error.to_string()
+}
+
+#[test]
+fn bad_points_are_clear_errors() {
+    let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    assert!(CurvePoints::from_2d(&square).is_ok());
+    let e = message(CurvePoints::from_2d(&square[..3]).unwrap_err());
+    assert!(e.contains("at least 4 points, got 3"), "{e}");
+    let e = message(CurvePoints::from_2d(&[]).unwrap_err());
+    assert!(e.contains("got 0"), "{e}");
+    let mut nan = square;
+    nan[2][1] = f64::NAN;
+    let e = message(CurvePoints::from_2d(&nan).unwrap_err());
+    assert!(e.contains("point 2") && e.contains("non-finite"), "{e}");
+    let mut infinite = square;
+    infinite[1][0] = f64::INFINITY;
+    assert!(message(CurvePoints::from_2d(&infinite).unwrap_err()).contains("point 1"));
+    let mut duplicate = square.to_vec();
+    duplicate.push([1.0, 1.0]);
+    let e = message(CurvePoints::from_2d(&duplicate).unwrap_err());
+    assert!(e.contains("2 and 4 are duplicates"), "{e}");
+    let e = message(CurvePoints::from_2d(&[[3.0, 4.0]; 5]).unwrap_err());
+    assert!(e.contains("zero extent"), "{e}");
+    let e = message(CurvePoints::new(2, vec![[0.0, 0.0, 1.0]; 4]).unwrap_err());
+    assert!(e.contains("z = 1"), "{e}");
+    let e = message(CurvePoints::new(4, vec![[0.0; 3]; 4]).unwrap_err());
+    assert!(e.contains("dimension 4"), "{e}");
+    // A huge but finite extent overflows the diagonal.
+    let huge = [[-1e308, 0.0], [1e308, 0.0], [0.0, 1e308], [0.0, -1e308]];
+    assert!(message(CurvePoints::from_2d(&huge).unwrap_err()).contains("extent"));
+}
+
+#[test]
+fn bad_options_and_fit_inputs_are_clear_errors() {
+    let points = sample(SampleCurve::Ellipse, 20, 0).curve_points().unwrap();
+    for (options, expected) in [
+        (
+            KohonenOptions {
+                neurons_per_point: 0,
+                ..Default::default()
+            },
+            "neurons_per_point",
+        ),
+        (
+            KohonenOptions {
+                initial_rate: 1.5,
+                ..Default::default()
+            },
+            "initial_rate",
+        ),
+        (
+            KohonenOptions {
+                final_radius: f64::NAN,
+                ..Default::default()
+            },
+            "final_radius",
+        ),
+        (
+            KohonenOptions {
+                neurons_per_point: usize::MAX,
+                ..Default::default()
+            },
+            "exceeds",
+        ),
+    ] {
+        let e = message(train_chain(&points, &options).unwrap_err());
+        assert!(e.contains(expected), "{e}");
+    }
+    let ordered = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 1.0, 0.0]];
+    let e = message(interpolate(&ordered, 2, false).unwrap_err());
+    assert!(e.contains("at least 4 points"), "{e}");
+    let mut with_nan = ordered.clone();
+    with_nan.push([f64::NAN, 0.0, 0.0]);
+    assert!(message(interpolate(&with_nan, 2, true).unwrap_err()).contains("point 3"));
+    let four = vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let too_many = ApproximationOptions {
+        control_points: Some(5),
+        ..Default::default()
+    };
+    assert!(message(approximate(&four, 2, true, &too_many).unwrap_err()).contains("4..=4"));
+    let e = message(approximate(&[[1.0, 2.0, 0.0]; 4], 2, false, &Default::default()).unwrap_err());
+    assert!(e.contains("length 0"), "{e}");
+    let e = message(adjacency_fraction(&[0, 0, 1], &[0.0, 0.5, 1.0], false).unwrap_err());
+    assert!(e.contains("permutation"), "{e}");
+}
+
+#[test]
+fn interpolation_hits_joints_and_approximation_pins_open_ends() {
+    let ordered: Vec<[f64; 3]> = (0..9)
+        .map(|j| {
+            let t = j as f64 * 0.7;
+            [t.cos() * (1.0 + 0.1 * t), t.sin(), 0.3 * t]
+        })
+        .collect();
+    for closed in [false, true] {
+        let curve = interpolate(&ordered, 3, closed).unwrap();
+        curve.validate().unwrap();
+        assert_eq!(curve.control.len(), if closed { 9 } else { 11 });
+        for (j, &q) in ordered.iter().enumerate() {
+            let p = curve.point(interpolation_parameter(j, 9, closed));
+            assert!(distance(p, q) <= 1e-12, "closed {closed}, point {j}");
+        }
+        let fit = approximate(&ordered, 3, closed, &ApproximationOptions::default()).unwrap();
+        assert_eq!(fit.curve.control.len(), 8);
+        if !closed {
+            assert!(distance(fit.curve.point(0.0), ordered[0]) <= 1e-12);
+            assert!(distance(fit.curve.point(1.0), ordered[8]) <= 1e-12);
+            // The phantoms make the second derivative vanish at the ends.
+            let c = &fit.curve.control;
+            let second = [0, 1, 2].map(|k| c[0][k] - 2.0 * c[1][k] + c[2][k]);
+            assert!(second.iter().all(|v| v.abs() <= 1e-12), "{second:?}");
+        }
+        // A smoke check: 8 control points through 9 points spread over ~3 units.
+        assert!(fit.max_residual < 0.1, "{}", fit.max_residual);
+    }
+}
+
+#[test]
+fn basis_and_evaluation_follow_the_definition() {
+    for k in 0..=100 {
+        let u = k as f64 / 100.0;
+        let b = cubic_basis(u);
+        assert!((b.iter().sum::<f64>() - 1.0).abs() <= 1e-15, "{u}");
+        assert!(cubic_basis_derivative(u).iter().sum::<f64>().abs() <= 1e-15);
+    }
+    assert_eq!(cubic_basis(0.0), [1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0, 0.0]);
+    assert_eq!(locate(1.0, 5), (4, 1.0));
+    assert_eq!(locate(-3.0, 5), (0, 0.0));
+    assert_eq!(locate(0.5, 4), (2, 0.0));
+    let curve = BSplineCurve {
+        dimension: 2,
+        closed: false,
+        control: vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 2.0, 0.0],
+            [3.0, 3.0, 0.0],
+            [4.0, 0.0, 0.0],
+            [6.0, 1.0, 0.0],
+        ],
+    };
+    assert_eq!(curve.segments(), 2);
+    // t = 0.75: segment 1, u = 0.5 → (1/48, 23/48, 23/48, 1/48).
+    let expected = [0, 1, 2].map(|k| {
+        (curve.control[1][k]
+            + 23.0 * curve.control[2][k]
+            + 23.0 * curve.control[3][k]
+            + curve.control[4][k])
+            / 48.0
+    });
+    assert!(distance(curve.point(0.75), expected) <= 1e-15);
+    // Tangent against central differences (includes the factor `segments`).
+    for t in [0.1, 0.3, 0.62, 0.9] {
+        let h = 1e-6;
+        let numeric =
+            [0, 1, 2].map(|k| (curve.point(t + h)[k] - curve.point(t - h)[k]) / (2.0 * h));
+        assert!(distance(curve.tangent(t), numeric) <= 1e-7, "{t}");
+    }
+    // Closed curves wrap: C(0) = C(1).
+    let ring = BSplineCurve {
+        closed: true,
+        ..curve.clone()
+    };
+    assert!(distance(ring.point(0.0), ring.point(1.0)) <= 1e-15);
+    // Too few control points or a NaN parameter give NaN, not a panic.
+    let short = BSplineCurve {
+        control: vec![[0.0; 3]; 3],
+        ..curve.clone()
+    };
+    assert!(short.point(0.5)[0].is_nan() && short.validate().is_err());
+    assert!(curve.point(f64::NAN)[0].is_nan());
+}
+
+#[test]
+fn surface_partials_and_normals_match_differences() {
+    let (count_u, count_v) = (6, 5);
+    let control: Vec<[f64; 3]> = (0..count_v)
+        .flat_map(|j| {
+            (0..count_u).map(move |i| {
+                let (x, y) = (i as f64, j as f64);
+                [x, y, (0.7 * x).sin() + 0.2 * y * y]
+            })
+        })
+        .collect();
+    for (closed_u, closed_v) in [(false, false), (true, false), (false, true), (true, true)] {
+        let surface = BSplineSurface {
+            closed_u,
+            closed_v,
+            count_u,
+            count_v,
+            control: control.clone(),
+        };
+        surface.validate().unwrap();
+        for (u, v) in [(0.2, 0.3), (0.55, 0.8), (0.91, 0.12)] {
+            let h = 1e-6;
+            let du = [0, 1, 2]
+                .map(|k| (surface.point(u + h, v)[k] - surface.point(u - h, v)[k]) / (2.0 * h));
+            let dv = [0, 1, 2]
+                .map(|k| (surface.point(u, v + h)[k] - surface.point(u, v - h)[k]) / (2.0 * h));
+            let (pu, pv) = surface.partials(u, v);
+            assert!(distance(pu, du) <= 1e-6 && distance(pv, dv) <= 1e-6);
+            let n = surface.normal(u, v).unwrap();
+            assert!((super::vector::norm(n) - 1.0).abs() <= 1e-12);
+            assert!(
+                super::vector::dot(n, pu).abs() <= 1e-9 && super::vector::dot(n, pv).abs() <= 1e-9
+            );
+        }
+    }
+    let flat = BSplineSurface {
+        closed_u: false,
+        closed_v: false,
+        count_u: 4,
+        count_v: 4,
+        control: vec![[1.0, 2.0, 3.0]; 16],
+    };
+    assert_eq!(flat.normal(0.5, 0.5), None);
+    let broken = BSplineSurface { count_u: 5, ..flat };
+    assert!(broken.point(0.5, 0.5)[0].is_nan());
+    assert!(broken.validate().is_err());
+}
+
+/// `n` points on the paraboloid z = (x² + y²)/2 over [−1, 1]², uniformly in (x, y): clean and
+/// with Gaussian noise of standard deviation `noise` per coordinate.
+fn paraboloid(n: usize, noise: f64, seed: u64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut clean = Vec::with_capacity(n);
+    let mut noisy = Vec::with_capacity(n);
+    for _ in 0..n {
+        let x: f64 = rng.random_range(-1.0..1.0);
+        let y: f64 = rng.random_range(-1.0..1.0);
+        let p = [x, y, 0.5 * (x * x + y * y)];
+        clean.push(p);
+        noisy.push(p.map(|c| c + noise * gaussian(&mut rng)));
+    }
+    (clean, noisy)
+}
+
+#[test]
+fn paraboloid_patch_is_meshed_within_tolerance() {
+    // The patch is 2 × 2 (diagonal 2.8); noise 0.005 per coordinate.
+    let (clean, noisy) = paraboloid(1500, 0.005, 3);
+    let points = CurvePoints::from_3d(&noisy).unwrap();
+    let fit = fit_surface(&points, &SurfaceOptions::default()).unwrap();
+    let mesh = surface_mesh(&fit.surface, 40, 40).unwrap();
+    let mesh = SurfaceMesh {
+        mesh: mesh.mesh.validated().unwrap(),
+        ..mesh
+    };
+    assert_eq!(mesh.mesh.vertex_count(), 41 * 41);
+    assert_eq!(mesh.mesh.triangle_count(), 2 * 40 * 40);
+    // Every mesh vertex over the patch lies within 0.03 (1 % of the diagonal) of the
+    // paraboloid, measured vertically (which bounds the true distance).
+    let mut worst_vertex: f64 = 0.0;
+    for p in &mesh.mesh.positions {
+        if p[0].abs() <= 1.0 && p[1].abs() <= 1.0 {
+            worst_vertex = worst_vertex.max((p[2] - 0.5 * (p[0] * p[0] + p[1] * p[1])).abs());
+        }
+    }
+    // Every clean sample lies within 0.03 of the fitted surface (projected from its fitted
+    // parameters).
+    let worst_sample = clean
+        .iter()
+        .zip(&fit.parameters)
+        .map(|(&q, &p)| {
+            let p = super::surface::project(&fit.surface, q, p);
+            distance(fit.surface.point(p[0], p[1]), q)
+        })
+        .fold(0.0, f64::max);
+    // The mesh does not fold: every normal points to the same side of the xy-plane.
+    let side = mesh.normals[0][2].signum();
+    let folded = mesh.normals.iter().filter(|n| n[2] * side <= 0.0).count();
+    println!(
+        "paraboloid: rms residual {:.4}, worst vertex {worst_vertex:.4}, worst sample \
+         {worst_sample:.4}, folded normals {folded}",
+        fit.rms_residual
+    );
+    assert!(worst_vertex <= 0.03, "{worst_vertex}");
+    assert!(worst_sample <= 0.03, "{worst_sample}");
+    assert!(fit.rms_residual <= 0.01, "{}", fit.rms_residual);
+    assert_eq!(folded, 0);
+    // The converged grid as a control grid is a valid surface too.
+    control_grid_surface(&fit.map).unwrap().validate().unwrap();
+}
+
+#[test]
+fn svg_plots_are_written_atomically() {
+    let sample = sample(SampleCurve::Trefoil, 60, 0);
+    let result = run(&sample, 0);
+    let layers = PlotLayers {
+        points: &sample.points,
+        order: Some(&result.ordering.order),
+        closed: true,
+        chain: Some(&result.chain),
+        curve: Some(&result.approximation.curve),
+        control_polygon: true,
+        truth: Some(&sample.truth),
+    };
+    let options = PlotOptions {
+        title: Some("trefoil <3-D>".into()),
+        ..PlotOptions::default()
+    };
+    let svg = render_svg(&layers, &options).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<circle").count(), 60);
+    assert!(svg.contains("trefoil &lt;3-D&gt;"));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("trefoil.svg");
+    write_svg(&path, &layers, &options).unwrap();
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), svg);
+    let bad = PlotLayers {
+        order: Some(&[0, 99]),
+        ..layers
+    };
+    assert!(message(render_svg(&bad, &options).unwrap_err()).contains("99"));
+    let empty = PlotLayers::default();
+    assert!(render_svg(&empty, &options).is_err());
+    assert!(write_svg(Path::new("/nonexistent-dir/x.svg"), &layers, &options).is_err());
+}
+
+/// The standard benchmark; run with `cargo test --release -p neurosurf-trainer --lib
+/// curve::tests::standard_benchmark -- --ignored --nocapture`.
+#[test]
+#[ignore = "timing, run on demand in release"]
+fn standard_benchmark() {
+    for row in benchmark(&BENCHMARK_SIZES, 0).unwrap() {
+        println!(
+            "n = {:5}, m = {:5}, {:7} presentations, {:.3} s",
+            row.points, row.neurons, row.iterations, row.seconds
+        );
+        assert!(row.seconds < 3.0, "{row:?}");
+    }
+}
