@@ -12,7 +12,8 @@
 mod curve_support;
 
 use curve_support::{
-    F32_EPS, LSB, RefCurve, Rng, curve_blob, f64s_f32, f64s_q16, max_abs_diff, q16, span_scales,
+    CurveDraws, F32_EPS, LSB, RefCurve, Rng, curve_blob, f64s_f32, f64s_q16, max_abs_diff, q16,
+    span_scales,
 };
 use neurosurf_core::curve::{BSplineCurve, CurvePoint, LANES};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};

@@ -13,8 +13,8 @@
 mod curve_support;
 
 use curve_support::{
-    RefSurface, Rng, curve_blob, curve_blob_raw, encode_points, fix_crc, frame, q16, surface_blob,
-    surface_blob_raw,
+    CurveDraws, RefSurface, Rng, curve_blob, curve_blob_raw, encode_points, fix_crc, frame, q16,
+    surface_blob, surface_blob_raw,
 };
 use neurosurf_core::Quantity;
 use neurosurf_core::blob::{self, BlobError, HEADER_LEN, ModelKind, TRAILER_LEN};

@@ -35,7 +35,7 @@ mod curve_support;
 use std::path::PathBuf;
 use std::sync::Once;
 
-use curve_support::{LSB, RefCurve, RefSurface, Rng, angle, curve_blob, surface_blob};
+use curve_support::{CurveDraws, LSB, RefCurve, RefSurface, Rng, angle, curve_blob, surface_blob};
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 

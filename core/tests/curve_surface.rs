@@ -12,8 +12,8 @@
 mod curve_support;
 
 use curve_support::{
-    F32_EPS, LSB, RefSurface, Rng, angle, cross, f64s_f32, f64s_q16, max_abs_diff, norm, q16,
-    span_scales, surface_blob,
+    CurveDraws, F32_EPS, LSB, RefSurface, Rng, angle, cross, f64s_f32, f64s_q16, max_abs_diff,
+    norm, q16, span_scales, surface_blob,
 };
 use neurosurf_core::curve::{BSplineSurface, LANES, SurfacePoint};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};

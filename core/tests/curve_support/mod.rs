@@ -13,54 +13,30 @@ use neurosurf_core::blob;
 use neurosurf_core::curve::{CurvePayload, SurfacePayload};
 use neurosurf_core::scalar::{Q16, ScalarKind};
 
-/// One Q16.16 unit in the last place.
-pub const LSB: f64 = 1.0 / 65536.0;
+#[allow(unused_imports)]
+pub use common::{LSB, Rng, to_grid};
+
+/// The PRNG, test constants and grid rounding shared with the implicit-model tests.
+#[path = "../common/mod.rs"]
+mod common;
+
 /// The unit roundoff of `f32` (half an ulp of 1).
 pub const F32_EPS: f64 = 1.0 / 16_777_216.0;
 
-/// SplitMix64.
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, n) (n > 0).
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-
-    pub fn byte(&mut self) -> u8 {
-        self.next_u64() as u8
-    }
-
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1_u64 << 53) as f64
-    }
-
-    /// Uniform in [lo, hi), rounded to the Q16.16 grid (so exact in f32, Q16.16 and f64).
-    pub fn grid(&mut self, lo: f64, hi: f64) -> f64 {
-        to_grid(lo + (hi - lo) * self.unit())
-    }
-
+/// Curve-test draws on top of the shared PRNG.
+pub trait CurveDraws {
     /// A parameter in [0, 1] on the Q16.16 grid.
-    pub fn parameter(&mut self) -> f64 {
+    fn parameter(&mut self) -> f64;
+    /// `n` points with coordinates in [−scale, scale] on the grid (z = 0 when `flat`).
+    fn points(&mut self, n: usize, scale: f64, flat: bool) -> Vec<[f64; 3]>;
+}
+
+impl CurveDraws for Rng {
+    fn parameter(&mut self) -> f64 {
         self.grid(0.0, 1.0 + LSB)
     }
 
-    /// `n` points with coordinates in [−scale, scale] on the grid (z = 0 when `flat`).
-    pub fn points(&mut self, n: usize, scale: f64, flat: bool) -> Vec<[f64; 3]> {
+    fn points(&mut self, n: usize, scale: f64, flat: bool) -> Vec<[f64; 3]> {
         (0..n)
             .map(|_| {
                 let mut p = [(); 3].map(|()| self.grid(-scale, scale));
@@ -71,11 +47,6 @@ impl Rng {
             })
             .collect()
     }
-}
-
-/// Rounds to the nearest multiple of 2⁻¹⁶.
-pub fn to_grid(x: f64) -> f64 {
-    (x * 65536.0).round() / 65536.0
 }
 
 // ---------------------------------------------------------------------------------------------
