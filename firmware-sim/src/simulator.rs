@@ -49,6 +49,19 @@ impl<'a> Job<'a> {
             time_limit: None,
         }
     }
+
+    /// Position and tangent (curves) or unit normal (spline surfaces) at `parameters` in lane
+    /// batches: t in the first coordinate of each point, (u, v) in the first two.
+    pub fn position_direction(
+        blob: &'a [u8],
+        scalar: ScalarKind,
+        parameters: &'a [[f32; 3]],
+    ) -> Self {
+        Job {
+            op: Op::PositionDirection,
+            ..Self::field_gradient(blob, scalar, parameters)
+        }
+    }
 }
 
 /// A finished run.
@@ -96,6 +109,18 @@ impl Run {
         self.values()
             .chunks_exact(4)
             .map(|c| (c[0], [c[1], c[2], c[3]]))
+            .collect()
+    }
+
+    /// (position, tangent or normal) per point of a curve or spline surface; empty unless the
+    /// op was [`Op::PositionDirection`].
+    pub fn geometry(&self) -> Vec<([f64; 3], [f64; 3])> {
+        if self.op != Op::PositionDirection {
+            return Vec::new();
+        }
+        self.values()
+            .chunks_exact(6)
+            .map(|c| ([c[0], c[1], c[2]], [c[3], c[4], c[5]]))
             .collect()
     }
 

@@ -12,6 +12,7 @@ pub mod evaluate;
 pub mod fidelity;
 pub mod implicit;
 pub mod io;
+pub mod plot;
 pub mod points;
 pub mod rbf;
 pub mod sample;

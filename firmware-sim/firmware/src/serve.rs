@@ -4,6 +4,7 @@ use core::mem::MaybeUninit;
 
 use neurosurf_core::BlobError;
 use neurosurf_core::blob::{self, ModelKind};
+use neurosurf_core::curve::{BSplineCurve, BSplineSurface, CurvePoint};
 use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use neurosurf_sim_protocol::{
@@ -135,28 +136,52 @@ fn serve(out: &mut HostFile) -> Answer {
         header.scalar,
         blob.len()
     );
-    match (model, ScalarKind::from_code(header.scalar)) {
-        (ModelKind::Implicit, Some(ScalarKind::F32)) => {
-            serve_implicit(&IMPLICIT_F32, blob, &header, &mut request, out)
-        }
-        (ModelKind::Implicit, Some(ScalarKind::Q16_16)) => {
-            serve_implicit(&IMPLICIT_Q16, blob, &header, &mut request, out)
-        }
-        (ModelKind::Implicit, _) => {
-            defmt::error!(
-                "scalar code {=u8} is not evaluated on the target",
-                header.scalar
-            );
-            Answer::failed(Status::BadRequest)
-        }
+    let scalar = ScalarKind::from_code(header.scalar);
+    if !matches!(scalar, Some(ScalarKind::F32 | ScalarKind::Q16_16)) {
+        defmt::error!(
+            "scalar code {=u8} is not evaluated on the target",
+            header.scalar
+        );
+        return Answer::failed(Status::BadRequest);
+    }
+    let q16 = scalar == Some(ScalarKind::Q16_16);
+    let parametric = matches!(model, ModelKind::Curve | ModelKind::SplineSurface);
+    let served = parametric || model == ModelKind::Implicit;
+    if served && header.op.is_parametric() != parametric {
+        defmt::error!(
+            "op {=u8} does not apply to {=str} models",
+            header.op as u8,
+            model.name()
+        );
+        return Answer::failed(Status::BadRequest);
+    }
+    let io = Io {
+        header: &header,
+        request: &mut request,
+        out,
+    };
+    match (model, q16) {
+        (ModelKind::Implicit, false) => serve_implicit(&IMPLICIT_F32, blob, io),
+        (ModelKind::Implicit, true) => serve_implicit(&IMPLICIT_Q16, blob, io),
+        (ModelKind::Curve, false) => serve_curve::<f32>(blob, io),
+        (ModelKind::Curve, true) => serve_curve::<Q16>(blob, io),
+        (ModelKind::SplineSurface, false) => serve_surface::<f32>(blob, io),
+        (ModelKind::SplineSurface, true) => serve_surface::<Q16>(blob, io),
         (other, _) => reject(
-            out,
+            io.out,
             BlobError::WrongModelKind {
                 expected: ModelKind::Implicit,
                 found: other,
             },
         ),
     }
+}
+
+/// The request being served: its header, the rest of its file, and the result file.
+struct Io<'a> {
+    header: &'a RequestHeader,
+    request: &'a mut HostFile,
+    out: &'a mut HostFile,
 }
 
 /// Reads the whole blob file into `buffer`.
@@ -198,20 +223,18 @@ fn reject(out: &mut HostFile, error: BlobError) -> Answer {
 }
 
 /// Loads an implicit model in place (in its static slot: no stack copy of the 32 KiB
-/// parameters) and streams the points through it, chunk by chunk.
+/// parameters) and streams the points through it.
 fn serve_implicit<S: Scalar>(
     slot: &'static Slot<MaybeUninit<ImplicitModel<S>>>,
     blob: &[u8],
-    header: &RequestHeader,
-    request: &mut HostFile,
-    out: &mut HostFile,
+    io: Io<'_>,
 ) -> Answer {
     let Some(slot) = slot.take() else {
         return Answer::failed(Status::HostIo);
     };
     let model = slot.write(ImplicitModel::new());
     if let Err(e) = model.load(blob) {
-        return reject(out, e);
+        return reject(io.out, e);
     }
     defmt::info!(
         "implicit model: {=usize} modules, width {=usize}, {=usize} parameters, {=usize} MACs per field+gradient",
@@ -220,64 +243,209 @@ fn serve_implicit<S: Scalar>(
         model.parameter_count(),
         model.mac_count(true)
     );
-    let words = header.op.words();
+    let model = &*model;
+    let point = |p: [S; 3]| p;
+    match (io.header.op, io.header.mode) {
+        (Op::Field, Mode::Batch) => stream(
+            io,
+            point,
+            |p, out| model.field_batch(p, out).is_ok(),
+            |v: &S| [*v],
+        ),
+        (Op::Field, _) => stream(
+            io,
+            point,
+            |p, out| each(p, out, |&p| model.field(p)),
+            |v: &S| [*v],
+        ),
+        (_, Mode::Batch) => stream(
+            io,
+            point,
+            |p, out| model.field_gradient_batch(p, out).is_ok(),
+            field_gradient_words,
+        ),
+        _ => stream(
+            io,
+            point,
+            |p, out| each(p, out, |&p| model.field_gradient(p)),
+            field_gradient_words,
+        ),
+    }
+}
+
+/// Loads a curve (on the stack: at most 6 KiB) and streams the parameters t through it.
+#[inline(never)]
+fn serve_curve<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
+    let mut curve = BSplineCurve::<S>::new();
+    if let Err(e) = curve.load(blob) {
+        return reject(io.out, e);
+    }
+    defmt::info!(
+        "curve: dimension {=usize}, {=usize} control points, {=usize} segments",
+        curve.dimension(),
+        curve.control_count(),
+        curve.segments()
+    );
+    let curve = &curve;
+    let t = |p: [S; 3]| p[0];
+    match (io.header.op, io.header.mode) {
+        (Op::Position, Mode::Batch) => stream(
+            io,
+            t,
+            |t, out| curve.position_batch(t, out).is_ok(),
+            |p: &[S; 3]| *p,
+        ),
+        (Op::Position, _) => stream(
+            io,
+            t,
+            |t, out| each(t, out, |&t| curve.position(t)),
+            |p: &[S; 3]| *p,
+        ),
+        (_, Mode::Batch) => stream(
+            io,
+            t,
+            |t, out| curve.eval_batch(t, out).is_ok(),
+            curve_words,
+        ),
+        _ => stream(
+            io,
+            t,
+            |t, out| each(t, out, |&t| curve.eval(t)),
+            curve_words,
+        ),
+    }
+}
+
+/// Loads a spline surface (on the stack: at most 12 KiB) and streams the parameters (u, v)
+/// through it.
+#[inline(never)]
+fn serve_surface<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
+    let mut surface = BSplineSurface::<S>::new();
+    if let Err(e) = surface.load(blob) {
+        return reject(io.out, e);
+    }
+    let [count_u, count_v] = surface.counts();
+    defmt::info!(
+        "spline surface: {=usize} × {=usize} control points",
+        count_u,
+        count_v
+    );
+    let surface = &surface;
+    let uv = |p: [S; 3]| [p[0], p[1]];
+    match (io.header.op, io.header.mode) {
+        (Op::Position, Mode::Batch) => stream(
+            io,
+            uv,
+            |uv, out| surface.position_batch(uv, out).is_ok(),
+            |p: &[S; 3]| *p,
+        ),
+        (Op::Position, _) => stream(
+            io,
+            uv,
+            |uv, out| each(uv, out, |&uv| surface.position(uv)),
+            |p: &[S; 3]| *p,
+        ),
+        (_, Mode::Batch) => stream(
+            io,
+            uv,
+            |uv, out| surface_batch(surface, uv, out),
+            surface_words,
+        ),
+        _ => stream(
+            io,
+            uv,
+            |uv, out| each(uv, out, |&uv| (surface.position(uv), surface.normal(uv))),
+            surface_words,
+        ),
+    }
+}
+
+/// Position and normal of every `uv`, through the surface's batch calls.
+fn surface_batch<S: Scalar>(
+    surface: &BSplineSurface<S>,
+    uv: &[[S; 2]],
+    out: &mut [([S; 3], Option<[S; 3]>)],
+) -> bool {
+    let mut positions = [[S::ZERO; 3]; CHUNK_POINTS];
+    let mut normals = [None; CHUNK_POINTS];
+    let (Some(positions), Some(normals)) =
+        (positions.get_mut(..uv.len()), normals.get_mut(..uv.len()))
+    else {
+        return false;
+    };
+    if surface.position_batch(uv, positions).is_err() || surface.normal_batch(uv, normals).is_err()
+    {
+        return false;
+    }
+    for ((slot, &p), &n) in out.iter_mut().zip(positions.iter()).zip(normals.iter()) {
+        *slot = (p, n);
+    }
+    true
+}
+
+fn field_gradient_words<S: Scalar>(fg: &FieldGradient<S>) -> [S; 4] {
+    [fg.value, fg.gradient[0], fg.gradient[1], fg.gradient[2]]
+}
+
+fn curve_words<S: Scalar>(point: &CurvePoint<S>) -> [S; 6] {
+    let ([x, y, z], [tx, ty, tz]) = (point.position, point.tangent);
+    [x, y, z, tx, ty, tz]
+}
+
+fn surface_words<S: Scalar>(&(position, normal): &([S; 3], Option<[S; 3]>)) -> [S; 6] {
+    let ([x, y, z], [nx, ny, nz]) = (position, normal.unwrap_or([S::ZERO; 3]));
+    [x, y, z, nx, ny, nz]
+}
+
+/// The single-point path: `f` at every input, in order.
+fn each<I, R>(inputs: &[I], out: &mut [R], f: impl Fn(&I) -> R) -> bool {
+    for (slot, input) in out.iter_mut().zip(inputs) {
+        *slot = f(input);
+    }
+    true
+}
+
+/// Streams the request's points through `evaluate`, chunk by chunk: each point is decoded to
+/// `S` and turned into the model's input by `input` (outside the timed region), the chunk is
+/// evaluated inside a timed region, and each result is written as the `W` words of `encode`.
+fn stream<S: Scalar, I: Copy + Default, R: Copy + Default, const W: usize>(
+    io: Io<'_>,
+    input: impl Fn([S; 3]) -> I,
+    mut evaluate: impl FnMut(&[I], &mut [R]) -> bool,
+    encode: impl Fn(&R) -> [S; W],
+) -> Answer {
+    let header = io.header;
     let mut raw = [0_u8; CHUNK_POINTS * RequestHeader::POINT_BYTES];
-    let mut points = [[S::ZERO; 3]; CHUNK_POINTS];
-    let mut results = [FieldGradient::<S>::default(); CHUNK_POINTS];
-    let mut fields = [S::ZERO; CHUNK_POINTS];
-    let mut encoded = [0_u8; CHUNK_POINTS * 16];
+    let mut inputs = [I::default(); CHUNK_POINTS];
+    let mut results = [R::default(); CHUNK_POINTS];
+    let mut encoded = [0_u8; CHUNK_POINTS * 4 * 6];
     let mut remaining = header.count as usize;
     let mut written = 0_u32;
     while remaining > 0 {
         let n = remaining.min(CHUNK_POINTS);
-        let (raw, points) = (&mut raw[..n * RequestHeader::POINT_BYTES], &mut points[..n]);
-        if request.read_exact(raw).is_err() {
+        let (raw, inputs) = (&mut raw[..n * RequestHeader::POINT_BYTES], &mut inputs[..n]);
+        if io.request.read_exact(raw).is_err() {
             return Answer::failed(Status::HostIo);
         }
-        for (point, bytes) in points.iter_mut().zip(raw.chunks_exact(4 * 3)) {
+        for (slot, bytes) in inputs.iter_mut().zip(raw.chunks_exact(4 * 3)) {
+            let mut point = [S::ZERO; 3];
             for (c, b) in point.iter_mut().zip(bytes.chunks_exact(4)) {
-                let word = [b[0], b[1], b[2], b[3]];
-                *c = S::from_f32_saturating(f32::from_le_bytes(word));
+                *c = S::from_f32_saturating(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
             }
+            *slot = input(point);
         }
-        let (results, fields) = (&mut results[..n], &mut fields[..n]);
-        let evaluated = match (header.op, header.mode) {
-            (Op::Field, Mode::Batch) => timed(|| model.field_batch(points, fields)).is_ok(),
-            (Op::Field, _) => {
-                timed(|| {
-                    for (slot, &p) in fields.iter_mut().zip(points.iter()) {
-                        *slot = model.field(p);
-                    }
-                });
-                true
-            }
-            (_, Mode::Batch) => timed(|| model.field_gradient_batch(points, results)).is_ok(),
-            _ => {
-                timed(|| {
-                    for (slot, &p) in results.iter_mut().zip(points.iter()) {
-                        *slot = model.field_gradient(p);
-                    }
-                });
-                true
-            }
-        };
-        if !evaluated {
+        let results = &mut results[..n];
+        if !timed(|| evaluate(inputs, results)) {
             return Answer::failed(Status::BadRequest);
         }
         let mut len = 0;
-        for i in 0..n {
-            let values: &[S] = if words == 1 {
-                core::slice::from_ref(&fields[i])
-            } else {
-                let fg = &results[i];
-                &[fg.value, fg.gradient[0], fg.gradient[1], fg.gradient[2]]
-            };
-            for v in values {
+        for result in results.iter() {
+            for v in encode(result) {
                 encoded[len..len + 4].copy_from_slice(&v.to_le_bytes());
                 len += 4;
             }
         }
-        if out.write_all(&encoded[..len]).is_err() {
+        if io.out.write_all(&encoded[..len]).is_err() {
             return Answer::failed(Status::HostIo);
         }
         written += len as u32;
@@ -286,7 +454,7 @@ fn serve_implicit<S: Scalar>(
     defmt::info!("evaluated {=u32} points", header.count);
     Answer {
         status: Status::Ok,
-        words: words as u8,
+        words: W as u8,
         count: header.count,
         bytes: written,
     }

@@ -10,7 +10,10 @@
 //! | [`RESULT_FILE`] | target | the answer (see [`Status`]), then a [`ResultTrailer`] |
 //!
 //! On success the answer is `count × op.words()` little-endian 32-bit words, the raw bits of
-//! the scalar (`f32` bits, or Q16.16 bits): Φ, then ∇Φ when the op asks for it. When the blob
+//! the scalar (`f32` bits, or Q16.16 bits): for implicit models Φ, then ∇Φ when the op asks for
+//! it; for curves and spline surfaces the position, then the tangent (curves) or the unit
+//! normal (surfaces). A request point is always 3 `f32`: an implicit model reads x, y, z, a
+//! curve reads t from the first and a surface (u, v) from the first two. When the blob
 //! is rejected, the answer is the core's `BlobError` encoded with postcard, so the host can
 //! show exactly what the target saw.
 //!
@@ -101,6 +104,12 @@ pub enum Op {
     Field = 1,
     /// Φ and ∇Φ: four words per point.
     FieldGradient = 2,
+    /// Curves and spline surfaces: the position, three words per point (z = 0 for a 2-D
+    /// curve).
+    Position = 3,
+    /// Curves: position and tangent dC/dt; spline surfaces: position and unit normal (0, 0, 0
+    /// where it does not exist). Six words per point.
+    PositionDirection = 4,
     /// Self-test: panic on purpose (checks the runner's panic reporting).
     SelfTestPanic = 0xF0,
     /// Self-test: never finish (checks the runner's time limit).
@@ -108,11 +117,18 @@ pub enum Op {
 }
 
 impl Op {
+    /// Whether the op evaluates curves and spline surfaces (rather than implicit fields).
+    pub const fn is_parametric(self) -> bool {
+        matches!(self, Op::Position | Op::PositionDirection)
+    }
+
     /// Result words per point.
     pub const fn words(self) -> usize {
         match self {
             Op::Field => 1,
             Op::FieldGradient => 4,
+            Op::Position => 3,
+            Op::PositionDirection => 6,
             Op::SelfTestPanic | Op::SelfTestHang => 0,
         }
     }
@@ -121,6 +137,8 @@ impl Op {
         Some(match code {
             1 => Op::Field,
             2 => Op::FieldGradient,
+            3 => Op::Position,
+            4 => Op::PositionDirection,
             0xF0 => Op::SelfTestPanic,
             0xF1 => Op::SelfTestHang,
             _ => return None,

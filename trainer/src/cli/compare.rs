@@ -5,25 +5,28 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use neurosurf_core::scalar::ScalarKind;
-use neurosurf_firmware_sim::Job;
+use neurosurf_firmware_sim::{Job, Simulator};
 use serde::Serialize;
 
 use neurosurf_trainer::compare::{
-    CompareRow, EvaluationPoints, PointSource, SURFACE_SAMPLES, comparison_table,
+    CompareRow, EvaluationPoints, Measured, PointSource, Quantities, SURFACE_SAMPLES,
+    comparison_table, comparison_table_of,
 };
-use neurosurf_trainer::evaluate::{LoadedModel, Precision};
+use neurosurf_trainer::evaluate::{LoadedModel, Precision, geometry_columns};
 use neurosurf_trainer::implicit::ImplicitOptions;
-use neurosurf_trainer::io::{read_query_points, write_atomic};
+use neurosurf_trainer::io::{read_parameters, read_query_points, write_atomic};
+use neurosurf_trainer::table::Table;
 
 use super::output;
 use super::target;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The model blob (modular implicit).
+    /// The model blob: modular implicit, curve or spline surface.
     model: PathBuf,
     /// Query points: PLY, or text with 3 (or 6) numbers per line. Default: points on the
-    /// model's own surface (see above).
+    /// model's own surface (see above). For a curve: t per line (default: 1001 uniform
+    /// values); for a spline surface: `u v` per line (default: a 33 × 33 grid).
     #[arg(long)]
     points: Option<PathBuf>,
     /// Print the report as JSON instead of the table.
@@ -49,6 +52,9 @@ struct Report<'a> {
 
 pub fn run(args: &Args) -> Result<()> {
     let model = LoadedModel::read(&args.model)?;
+    if geometry_columns(&model).is_some() {
+        return run_parametric(args, &model);
+    }
     let LoadedModel::Implicit { bytes, decoded } = &model else {
         bail!(
             "{}: the RBF baseline is a host-only model; compare needs a modular implicit model",
@@ -74,20 +80,11 @@ pub fn run(args: &Args) -> Result<()> {
             .evaluate(&points.points, precision)
             .with_context(|| format!("cannot evaluate {} in {precision}", args.model.display()))
     };
-    let reference = evaluate(Precision::F64)?;
     let inputs: Vec<[f32; 3]> = points.points.iter().map(|p| p.map(|c| c as f32)).collect();
-    let simulator = target::simulator()?;
-    let mut rows = Vec::new();
-    for (precision, scalar) in [
-        (Precision::F32, ScalarKind::F32),
-        (Precision::Q16, ScalarKind::Q16_16),
-    ] {
-        let host = evaluate(precision)?;
+    let rows = measure_rows(args, evaluate, |simulator, scalar| {
         let job = Job::field_gradient(bytes, scalar, &inputs);
-        let on_target = target::run(&simulator, &job, &args.model)?.samples();
-        rows.push(CompareRow::host(scalar, &reference, &host)?);
-        rows.push(CompareRow::target(scalar, &reference, &on_target, &host)?);
-    }
+        Ok(target::run(simulator, &job, &args.model)?.samples())
+    })?;
     let report = Report {
         model: &args.model,
         stored_as: decoded.stored_as.name(),
@@ -100,32 +97,150 @@ pub fn run(args: &Args) -> Result<()> {
         markdown: args.markdown.as_deref(),
     };
     let table = comparison_table(&report.rows);
-    if let Some(path) = &args.markdown {
-        let text = format!(
-            "Fixed point against float: `{}` (stored as {}), {}, against the f64 reference.\n\n{}\n{}\n",
-            args.model.display(),
-            report.stored_as,
-            describe_points(&points, args.points.as_deref()),
-            table.to_markdown(),
-            LEGEND
-        );
-        write_atomic(path, text.as_bytes())?;
-    }
-    if args.json {
-        return output::json(&report);
-    }
-    println!(
-        "{} (stored as {}): {}, against the f64 reference\n",
+    let heading = format!(
+        "{} (stored as {}): {}",
         args.model.display(),
         report.stored_as,
         describe_points(&points, args.points.as_deref())
     );
+    publish(args, &heading, &table, LEGEND, &report)
+}
+
+/// The f32 and Q16.16 rows, host and target, against the f64 reference: `evaluate` runs the
+/// host (and the reference), `on_target` the simulated Cortex-M4F.
+fn measure_rows<T: Measured>(
+    args: &Args,
+    evaluate: impl Fn(Precision) -> Result<Vec<T>>,
+    on_target: impl Fn(&Simulator, ScalarKind) -> Result<Vec<T>>,
+) -> Result<Vec<CompareRow>> {
+    let reference = evaluate(Precision::F64)?;
+    let simulator = target::simulator()?;
+    let mut rows = Vec::new();
+    for (precision, scalar) in [
+        (Precision::F32, ScalarKind::F32),
+        (Precision::Q16, ScalarKind::Q16_16),
+    ] {
+        let host = evaluate(precision)?;
+        let target = on_target(&simulator, scalar)
+            .with_context(|| format!("{} on the target", args.model.display()))?;
+        rows.push(CompareRow::host(scalar, &reference, &host)?);
+        rows.push(CompareRow::target(scalar, &reference, &target, &host)?);
+    }
+    Ok(rows)
+}
+
+/// Writes the Markdown file when asked, then prints the JSON report or the table and its
+/// legend. `heading` names the model and the points.
+fn publish(
+    args: &Args,
+    heading: &str,
+    table: &Table,
+    legend: &str,
+    report: &impl Serialize,
+) -> Result<()> {
+    if let Some(path) = &args.markdown {
+        let text = format!(
+            "Fixed point against float: {heading}, against the f64 reference.\n\n{}\n{legend}\n",
+            table.to_markdown(),
+        );
+        write_atomic(path, text.as_bytes())?;
+    }
+    if args.json {
+        return output::json(report);
+    }
+    println!("{heading}, against the f64 reference\n");
     print!("{table}");
-    println!("\n{LEGEND}");
+    println!("\n{legend}");
     if let Some(path) = &args.markdown {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// Parameters spread over a curve (t on a uniform grid of [0, 1]) or a surface ((u, v) on a
+/// uniform grid of [0, 1]²) when the user gives none.
+pub const CURVE_PARAMETERS: usize = 1001;
+/// Grid points per side for a surface.
+pub const SURFACE_GRID: usize = 33;
+
+#[derive(Serialize)]
+struct ParametricReport<'a> {
+    model: &'a Path,
+    kind: &'static str,
+    stored_as: &'static str,
+    reference: &'static str,
+    points: usize,
+    rows: Vec<CompareRow>,
+    markdown: Option<&'a Path>,
+}
+
+/// `compare` for curves and spline surfaces: positions and tangents or normals.
+fn run_parametric(args: &Args, model: &LoadedModel) -> Result<()> {
+    let (quantities, stored_as) = match model {
+        LoadedModel::Curve { decoded, .. } => (Quantities::CURVE, decoded.stored_as),
+        LoadedModel::SplineSurface { decoded, .. } => (Quantities::SURFACE, decoded.stored_as),
+        _ => bail!("not a curve or spline surface"),
+    };
+    let bytes = model.bytes().unwrap_or_default();
+    let parameters = match &args.points {
+        Some(path) => read_parameters(path, model.query_arity())?,
+        None if model.query_arity() == 1 => (0..CURVE_PARAMETERS)
+            .map(|i| [i as f64 / (CURVE_PARAMETERS - 1) as f64, 0.0, 0.0])
+            .collect(),
+        None => {
+            let step = 1.0 / (SURFACE_GRID - 1) as f64;
+            (0..SURFACE_GRID * SURFACE_GRID)
+                .map(|i| {
+                    [
+                        (i % SURFACE_GRID) as f64 * step,
+                        (i / SURFACE_GRID) as f64 * step,
+                        0.0,
+                    ]
+                })
+                .collect()
+        }
+    };
+    if parameters.is_empty() {
+        bail!("no parameters to compare at");
+    }
+    let evaluate = |precision: Precision| {
+        model
+            .evaluate_geometry(&parameters, precision)
+            .with_context(|| format!("cannot evaluate {} in {precision}", args.model.display()))
+    };
+    let inputs: Vec<[f32; 3]> = parameters.iter().map(|p| p.map(|c| c as f32)).collect();
+    let rows = measure_rows(args, evaluate, |simulator, scalar| {
+        let job = Job::position_direction(bytes, scalar, &inputs);
+        Ok(target::run(simulator, &job, &args.model)?.geometry())
+    })?;
+    let report = ParametricReport {
+        model: &args.model,
+        kind: model.kind().name(),
+        stored_as: stored_as.name(),
+        reference: Precision::F64.name(),
+        points: parameters.len(),
+        rows,
+        markdown: args.markdown.as_deref(),
+    };
+    let table = comparison_table_of(&report.rows, quantities);
+    let source = match &args.points {
+        Some(path) => format!("{} parameters from {}", parameters.len(), path.display()),
+        None if model.query_arity() == 1 => format!("{} uniform parameters t", parameters.len()),
+        None => format!("a {SURFACE_GRID} × {SURFACE_GRID} grid of (u, v)"),
+    };
+    let legend = format!(
+        "Δp = distance from the f64 position; angle = between the {dir}s and the f64 {dir}s; \
+         no {dir} = points skipped because a {dir} is zero; = host bits, max ulp: the target \
+         against the host in the same scalar (ulp = one f32 ulp, or 2⁻¹⁶ in Q16.16).",
+        dir = quantities.direction
+    );
+    let heading = format!(
+        "{} ({}, stored as {}): {source}",
+        args.model.display(),
+        report.kind,
+        report.stored_as
+    );
+    publish(args, &heading, &table, &legend, &report)
 }
 
 const LEGEND: &str = "ΔΦ = Φ − Φ_f64; angle = between the normals −∇Φ/|∇Φ|; no normal = points \

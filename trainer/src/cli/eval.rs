@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use neurosurf_trainer::evaluate::{LoadedModel, Precision};
-use neurosurf_trainer::io::read_query_points;
+use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision, geometry_columns};
+use neurosurf_trainer::io::{read_parameters, read_query_points};
 
 use super::output;
 
@@ -15,7 +15,8 @@ use super::output;
 pub struct Args {
     /// The model blob.
     model: PathBuf,
-    /// Query points: PLY, or text with 3 (or 6) numbers per line.
+    /// Query points: PLY, or text with 3 (or 6) numbers per line. For a curve, text with one
+    /// parameter t ∈ [0, 1] per line; for a spline surface, two (u v).
     #[arg(long)]
     points: PathBuf,
     /// `f64` (the trainer's reference), `f32` or `q16.16` (through neurosurf-core).
@@ -39,6 +40,13 @@ struct Row {
 
 pub fn run(args: &Args) -> Result<()> {
     let model = LoadedModel::read(&args.model)?;
+    if let Some(columns) = geometry_columns(&model) {
+        let parameters = read_parameters(&args.points, model.query_arity())?;
+        let rows = model
+            .evaluate_geometry(&parameters, args.scalar)
+            .with_context(|| format!("cannot evaluate {}", args.model.display()))?;
+        return write_geometry(columns, &parameters, &rows, args.json);
+    }
     let points = read_query_points(&args.points)?;
     let samples = model
         .evaluate(&points, args.scalar)
@@ -63,6 +71,48 @@ pub fn run(args: &Args) -> Result<()> {
     let mut out = BufWriter::new(stdout.lock());
     write_csv(&mut out, &points, &samples).context("cannot write to stdout")?;
     Ok(())
+}
+
+/// Prints curve or surface rows: the parameters (1 or 2 columns), position and direction, as
+/// CSV under `columns`, or as JSON objects keyed by them.
+pub fn write_geometry(
+    columns: &[&str],
+    parameters: &[[f64; 3]],
+    rows: &[Geometry],
+    json: bool,
+) -> Result<()> {
+    let arity = columns.len() - 6;
+    let values = |p: &[f64; 3], (position, direction): &Geometry| {
+        let mut row = p[..arity].to_vec();
+        row.extend(position);
+        row.extend(direction);
+        row
+    };
+    if json {
+        let objects: Vec<serde_json::Map<String, serde_json::Value>> = parameters
+            .iter()
+            .zip(rows)
+            .map(|(p, g)| {
+                columns
+                    .iter()
+                    .zip(values(p, g))
+                    .map(|(c, v)| ((*c).to_string(), serde_json::Value::from(v)))
+                    .collect()
+            })
+            .collect();
+        return output::json(&objects);
+    }
+    let stdout = std::io::stdout();
+    let mut out = BufWriter::new(stdout.lock());
+    let mut write = || -> std::io::Result<()> {
+        writeln!(out, "{}", columns.join(","))?;
+        for (p, g) in parameters.iter().zip(rows) {
+            let line: Vec<String> = values(p, g).iter().map(f64::to_string).collect();
+            writeln!(out, "{}", line.join(","))?;
+        }
+        out.flush()
+    };
+    write().context("cannot write to stdout")
 }
 
 /// Writes the CSV: header `x,y,z,phi,gx,gy,gz`, then one line per point with every number in

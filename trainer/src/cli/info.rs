@@ -3,8 +3,10 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
+use neurosurf_core::blob::ModelKind;
 use serde::Serialize;
 
+use neurosurf_trainer::curve::FitSummary;
 use neurosurf_trainer::evaluate::LoadedModel;
 use neurosurf_trainer::implicit::TrainingSummary;
 use neurosurf_trainer::rbf::RbfModel;
@@ -34,6 +36,9 @@ struct Info<'a> {
     macs: Option<(usize, usize)>,
     centers: Option<usize>,
     training: Option<&'a TrainingSummary>,
+    /// Curves and surfaces: the control net, e.g. `12, closed` or `8 × 6, open × open`.
+    control: Option<String>,
+    fit: Option<&'a FitSummary>,
 }
 
 pub fn run(args: &Args) -> Result<()> {
@@ -56,6 +61,8 @@ pub fn run(args: &Args) -> Result<()> {
                 macs,
                 centers: None,
                 training: decoded.metadata.as_ref().and_then(|m| m.summary.as_ref()),
+                control: None,
+                fit: None,
             }
         }
         LoadedModel::Rbf(rbf) => Info {
@@ -70,7 +77,59 @@ pub fn run(args: &Args) -> Result<()> {
             macs: None,
             centers: Some(RbfModel::centers(rbf).len()),
             training: None,
+            control: None,
+            fit: None,
         },
+        LoadedModel::Curve { bytes, decoded } => {
+            let curve = &decoded.curve;
+            let core = neurosurf_core::curve::BSplineCurve::<f32>::from_blob(bytes).ok();
+            Info {
+                kind: "curve",
+                stored_as: decoded.stored_as.name(),
+                blob_bytes: bytes.len(),
+                parameters: curve.control.len() * 3,
+                width: None,
+                tree: None,
+                modules: None,
+                leaves: None,
+                macs: core.map(|c| (c.mac_count(false), c.mac_count(true))),
+                centers: None,
+                training: None,
+                control: Some(format!(
+                    "{} points, {}-D, {}, {} segments",
+                    curve.control.len(),
+                    curve.dimension,
+                    open_or_closed(curve.closed),
+                    curve.segments()
+                )),
+                fit: decoded.summary.as_ref(),
+            }
+        }
+        LoadedModel::SplineSurface { bytes, decoded } => {
+            let surface = &decoded.surface;
+            let core = neurosurf_core::curve::BSplineSurface::<f32>::from_blob(bytes).ok();
+            Info {
+                kind: "spline surface",
+                stored_as: decoded.stored_as.name(),
+                blob_bytes: bytes.len(),
+                parameters: surface.control.len() * 3,
+                width: None,
+                tree: None,
+                modules: None,
+                leaves: None,
+                macs: core.map(|c| (c.mac_count(false), c.normal_mac_count())),
+                centers: None,
+                training: None,
+                control: Some(format!(
+                    "{} × {} points, {} × {}",
+                    surface.count_u,
+                    surface.count_v,
+                    open_or_closed(surface.closed_u),
+                    open_or_closed(surface.closed_v)
+                )),
+                fit: decoded.summary.as_ref(),
+            }
+        }
     };
     if args.json {
         return output::json(&info);
@@ -86,8 +145,31 @@ pub fn run(args: &Args) -> Result<()> {
             info.leaves.unwrap_or(0)
         );
     }
-    if let Some((field, gradient)) = info.macs {
-        println!("  MACs         {field} per field, {gradient} per field+gradient");
+    if let Some(control) = &info.control {
+        println!("  control      {control}");
+    }
+    if let Some((value, derivative)) = info.macs {
+        match model.kind() {
+            ModelKind::Curve => {
+                println!("  MACs         {value} per position, {derivative} per position+tangent")
+            }
+            ModelKind::SplineSurface => {
+                println!("  MACs         {value} per position, {derivative} per normal")
+            }
+            _ => println!("  MACs         {value} per field, {derivative} per field+gradient"),
+        }
+    }
+    if let Some(fit) = info.fit {
+        println!(
+            "  fit          {} of {} points ({} neurons, seed {}), residual RMS {:.3e} max {:.3e}, {:.3} s",
+            fit.method,
+            fit.points,
+            fit.neurons,
+            fit.seed,
+            fit.rms_residual,
+            fit.max_residual,
+            fit.seconds
+        );
     }
     if let Some(centers) = info.centers {
         println!("  centers      {centers}");
@@ -116,4 +198,8 @@ pub fn run(args: &Args) -> Result<()> {
         }
     }
     Ok(())
+}
+
+fn open_or_closed(closed: bool) -> &'static str {
+    if closed { "closed" } else { "open" }
 }

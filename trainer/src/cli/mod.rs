@@ -1,6 +1,7 @@
 //! The command line: one module per command, each a thin layer over the library.
 
 mod compare;
+mod curve;
 mod demo;
 mod eval;
 mod info;
@@ -31,7 +32,15 @@ enum Command {
     /// Train a model from control points and write its blob.
     #[command(subcommand)]
     Train(train::Command),
+    /// Curves and surfaces from scattered points (Hoffmann & Várady): sample, fit, plot,
+    /// bench.
+    #[command(subcommand)]
+    Curve(curve::Command),
     /// Evaluate a model at query points; CSV `x,y,z,phi,gx,gy,gz` on stdout.
+    ///
+    /// Curves read one parameter t ∈ [0, 1] per line and print `t,x,y,z,tx,ty,tz` (position
+    /// and tangent dC/dt); spline surfaces read `u v` and print `u,v,x,y,z,nx,ny,nz` (position
+    /// and unit normal, 0,0,0 where it does not exist).
     Eval(eval::Args),
     /// Describe a blob: kind, tree, parameters, size, training summary.
     Info(info::Args),
@@ -80,6 +89,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Sample(args) => sample::run(&args),
         Command::Train(command) => train::run(&command),
+        Command::Curve(command) => curve::run(&command),
         Command::Eval(args) => eval::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Demo(args) => demo::run(&args),

@@ -7,18 +7,19 @@ use anyhow::{Context, Result};
 use neurosurf_firmware_sim::{Footprint, Job, Op};
 use serde::Serialize;
 
-use neurosurf_trainer::evaluate::Precision;
-use neurosurf_trainer::io::read_query_points;
+use neurosurf_trainer::evaluate::{LoadedModel, Precision, geometry_columns};
+use neurosurf_trainer::io::{read_parameters, read_query_points};
 
-use super::eval::write_csv;
+use super::eval::{write_csv, write_geometry};
 use super::output;
 use super::target::{self, ModeArg};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The model blob (modular implicit; RBF models are host-only).
+    /// The model blob: modular implicit, curve or spline surface (RBF models are host-only).
     model: PathBuf,
-    /// Query points: PLY, or text with 3 (or 6) numbers per line.
+    /// Query points: PLY, or text with 3 (or 6) numbers per line; t per line for a curve,
+    /// `u v` for a spline surface.
     #[arg(long)]
     points: PathBuf,
     /// `f32` or `q16.16` (the target has no `f64`).
@@ -53,11 +54,24 @@ struct Cost<'a> {
 pub fn run(args: &Args) -> Result<()> {
     let scalar = target::scalar(args.scalar)?;
     let bytes = target::read_blob(&args.model)?;
-    let points = read_query_points(&args.points)?;
+    // Curves and surfaces are recognized here; anything else goes to the target as a field
+    // model, so a corrupt blob is judged by the target's own core.
+    let parametric = LoadedModel::from_bytes(bytes.clone(), &args.model)
+        .ok()
+        .filter(|m| geometry_columns(m).is_some());
+    let points = match &parametric {
+        Some(model) => read_parameters(&args.points, model.query_arity())?,
+        None => read_query_points(&args.points)?,
+    };
     let inputs: Vec<[f32; 3]> = points.iter().map(|p| p.map(|c| c as f32)).collect();
     let simulator = target::simulator()?;
     let job = Job {
         mode: args.mode.mode(),
+        op: if parametric.is_some() {
+            Op::PositionDirection
+        } else {
+            Op::FieldGradient
+        },
         ..Job::field_gradient(&bytes, scalar, &inputs)
     };
     let run = target::run(&simulator, &job, &args.model)?;
@@ -67,7 +81,7 @@ pub fn run(args: &Args) -> Result<()> {
         return output::json(&Cost {
             model: &args.model,
             scalar: scalar.name(),
-            op: target::op_name(Op::FieldGradient),
+            op: target::op_name(job.op),
             mode: target::mode_name(run.mode),
             points: run.count(),
             instructions_per_point: instructions,
@@ -77,6 +91,9 @@ pub fn run(args: &Args) -> Result<()> {
             footprint: simulator.firmware().footprint,
             log: &run.log,
         });
+    }
+    if let Some(columns) = parametric.as_ref().and_then(geometry_columns) {
+        return write_geometry(columns, &points, &run.geometry(), false);
     }
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());

@@ -5,8 +5,9 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use neurosurf_core::blob::{self, ModelKind};
+use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::implicit::ImplicitModel;
-use neurosurf_core::scalar::{Q16, ScalarKind};
+use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use neurosurf_firmware_sim::{Job, Mode, Op, Run, Simulator};
 use neurosurf_trainer::evaluate::Precision;
 
@@ -41,6 +42,8 @@ pub fn op_name(op: Op) -> &'static str {
     match op {
         Op::Field => "field",
         Op::FieldGradient => "field+gradient",
+        Op::Position => "position",
+        Op::PositionDirection => "position+direction",
         _ => "self-test",
     }
 }
@@ -68,11 +71,11 @@ pub fn read_blob(path: &Path) -> Result<Vec<u8>> {
     let bytes =
         std::fs::read(path).with_context(|| format!("cannot read the model {}", path.display()))?;
     if let Ok((header, _)) = blob::parse(&bytes)
-        && header.model != ModelKind::Implicit
+        && header.model == ModelKind::Rbf
     {
         bail!(
-            "{}: {} is a host-only model kind: the target evaluates modular implicit models only \
-             (use `neurosurf eval`)",
+            "{}: {} is a host-only model kind: the target evaluates implicit models, curves and \
+             spline surfaces (use `neurosurf eval`)",
             path.display(),
             header.model.name()
         );
@@ -93,12 +96,33 @@ pub fn run(simulator: &Simulator, job: &Job<'_>, model: &Path) -> Result<Run> {
     })
 }
 
-/// Multiply–accumulates of one evaluation of the blob in `scalar` (with the gradient or not),
-/// as the host's core counts them.
-pub fn mac_count(bytes: &[u8], scalar: ScalarKind, gradient: bool, model: &Path) -> Result<usize> {
-    let count = match scalar {
-        ScalarKind::Q16_16 => ImplicitModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(gradient)),
-        _ => ImplicitModel::<f32>::from_blob(bytes).map(|m| m.mac_count(gradient)),
+/// Multiply–accumulates of one evaluation of the blob in `scalar`, as the host's core counts
+/// them: with the gradient or not (implicit models), with the tangent or not (curves), with
+/// the normal or not (spline surfaces).
+pub fn mac_count(
+    bytes: &[u8],
+    scalar: ScalarKind,
+    derivative: bool,
+    model: &Path,
+) -> Result<usize> {
+    let kind = blob::parse(bytes).map(|(header, _)| header.model);
+    let count = match (kind, scalar) {
+        (Ok(ModelKind::Curve), ScalarKind::Q16_16) => {
+            BSplineCurve::<Q16>::from_blob(bytes).map(|c| c.mac_count(derivative))
+        }
+        (Ok(ModelKind::Curve), _) => {
+            BSplineCurve::<f32>::from_blob(bytes).map(|c| c.mac_count(derivative))
+        }
+        (Ok(ModelKind::SplineSurface), ScalarKind::Q16_16) => {
+            BSplineSurface::<Q16>::from_blob(bytes).map(|s| surface_macs(&s, derivative))
+        }
+        (Ok(ModelKind::SplineSurface), _) => {
+            BSplineSurface::<f32>::from_blob(bytes).map(|s| surface_macs(&s, derivative))
+        }
+        (_, ScalarKind::Q16_16) => {
+            ImplicitModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))
+        }
+        _ => ImplicitModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative)),
     };
     count.with_context(|| {
         format!(
@@ -107,4 +131,15 @@ pub fn mac_count(bytes: &[u8], scalar: ScalarKind, gradient: bool, model: &Path)
             scalar.name()
         )
     })
+}
+
+/// A surface's position, plus its normal when asked (what the target's
+/// position+direction op computes).
+fn surface_macs<S: Scalar>(surface: &BSplineSurface<S>, normal: bool) -> usize {
+    surface.mac_count(false)
+        + if normal {
+            surface.normal_mac_count()
+        } else {
+            0
+        }
 }

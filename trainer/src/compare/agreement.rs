@@ -4,13 +4,13 @@
 use neurosurf_core::scalar::ScalarKind;
 use serde::Serialize;
 
+use super::measured::Measured;
 use crate::error::{Error, Result};
-use crate::evaluate::Sample;
 
 /// The agreement of two evaluations of the same points in the same scalar.
 ///
 /// Values are the `f64` decodings of `f32` or Q16.16 results (exact), compared bit for bit:
-/// Φ and the three gradient components of every point.
+/// every number of every point (Φ and ∇Φ, or position and direction).
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Agreement {
     /// Every value identical.
@@ -27,7 +27,7 @@ impl Agreement {
     ///
     /// # Errors
     /// [`Error::InvalidInput`] when the two lists differ in length.
-    pub fn measure(scalar: ScalarKind, a: &[Sample], b: &[Sample]) -> Result<Self> {
+    pub fn measure<T: Measured>(scalar: ScalarKind, a: &[T], b: &[T]) -> Result<Self> {
         if a.len() != b.len() {
             return Err(Error::invalid(format!(
                 "cannot compare {} samples with {}",
@@ -35,14 +35,13 @@ impl Agreement {
                 b.len()
             )));
         }
-        let values = |s: &Sample| [s.0, s.1[0], s.1[1], s.1[2]];
         let mut agreement = Agreement {
             bit_exact: true,
             differing_values: 0,
             max_ulp: 0,
         };
         for (x, y) in a.iter().zip(b) {
-            for (u, v) in values(x).into_iter().zip(values(y)) {
+            for (u, v) in x.words().zip(y.words()) {
                 if u.to_bits() != v.to_bits() {
                     agreement.bit_exact = false;
                     agreement.differing_values += 1;

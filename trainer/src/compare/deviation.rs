@@ -2,12 +2,13 @@
 
 use serde::Serialize;
 
+use super::measured::Measured;
 use crate::error::{Error, Result};
-use crate::evaluate::Sample;
 
 /// The deviation of candidate samples from reference samples at the same points.
 ///
-/// The field error is |Φ − Φ_ref|. The normal is n = −∇Φ/|∇Φ|; the normal error is the angle
+/// The field error is |Φ − Φ_ref| (for curves and surfaces: the distance between the
+/// positions, see [`Measured`]; their "normal" is the tangent or the surface normal). The normal is n = −∇Φ/|∇Φ|; the normal error is the angle
 /// between the candidate's and the reference's normals. A point where either gradient is zero
 /// (or not finite) has no normal: it is skipped for the angles and counted in
 /// [`Deviation::normals_skipped`]. A statistic over no values is `None`.
@@ -34,7 +35,7 @@ impl Deviation {
     ///
     /// # Errors
     /// [`Error::InvalidInput`] when the two lists differ in length.
-    pub fn measure(reference: &[Sample], candidate: &[Sample]) -> Result<Self> {
+    pub fn measure<T: Measured>(reference: &[T], candidate: &[T]) -> Result<Self> {
         if reference.len() != candidate.len() {
             return Err(Error::invalid(format!(
                 "cannot compare {} samples with {} reference samples",
@@ -46,7 +47,7 @@ impl Deviation {
         let mut square_sum = 0.0;
         let mut angles = Vec::with_capacity(reference.len());
         for (r, c) in reference.iter().zip(candidate) {
-            let error = (c.0 - r.0).abs();
+            let error = c.value_error(r);
             // A NaN error sticks (`f64::max` would drop it).
             field_max = Some(match field_max {
                 None => error,
@@ -54,7 +55,7 @@ impl Deviation {
                 Some(max) => max.max(error),
             });
             square_sum += error * error;
-            if let Some(angle) = normal_angle_degrees(r.1, c.1) {
+            if let Some(angle) = normal_angle_degrees(r.direction(), c.direction()) {
                 angles.push(angle);
             }
         }
@@ -105,6 +106,7 @@ fn median(sorted: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::evaluate::Sample;
 
     fn close(a: f64, b: f64, tolerance: f64) -> bool {
         (a - b).abs() <= tolerance
@@ -189,7 +191,7 @@ mod tests {
 
     #[test]
     fn empty_and_mismatched_inputs() {
-        let d = Deviation::measure(&[], &[]).unwrap();
+        let d = Deviation::measure::<Sample>(&[], &[]).unwrap();
         assert_eq!((d.points, d.field_max, d.field_rms), (0, None, None));
         assert_eq!(d.normal_median_degrees, None);
         assert!(Deviation::measure(&[(0.0, [1.0; 3])], &[]).is_err());

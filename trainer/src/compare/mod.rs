@@ -2,6 +2,8 @@
 //! from the trainer's `f64` reference, on the host and on a (simulated) target, and whether
 //! the target computes exactly what the host computes.
 //!
+//! - [`Measured`]: what is compared at a point — Φ and ∇Φ, or a curve's or surface's
+//!   position and direction;
 //! - [`Deviation`]: field errors |Φ − Φ₆₄| and normal angles of one evaluation;
 //! - [`Agreement`]: bit-exactness and ulp distance of two evaluations in the same scalar;
 //! - [`EvaluationPoints`]: where to evaluate when the user gives no points — the model's own
@@ -10,12 +12,14 @@
 
 mod agreement;
 mod deviation;
+mod measured;
 mod report;
 mod surface;
 
 pub use agreement::{Agreement, ulp_distance};
 pub use deviation::{Deviation, normal_angle_degrees};
-pub use report::{CompareRow, Side, comparison_table};
+pub use measured::Measured;
+pub use report::{CompareRow, Quantities, Side, comparison_table, comparison_table_of};
 pub use surface::{
     EvaluationPoints, MIN_SURFACE_POINTS, NEWTON_STEPS, PointSource, SURFACE_SAMPLES, SURFACE_SEED,
     SURFACE_TOLERANCE, round_to_f32,

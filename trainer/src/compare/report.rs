@@ -5,8 +5,8 @@ use serde::Serialize;
 
 use super::agreement::Agreement;
 use super::deviation::Deviation;
+use super::measured::Measured;
 use crate::error::Result;
-use crate::evaluate::Sample;
 use crate::table::{Align, Table};
 
 /// Where an evaluation ran.
@@ -56,7 +56,7 @@ impl CompareRow {
     ///
     /// # Errors
     /// When the sample lists differ in length.
-    pub fn host(scalar: ScalarKind, reference: &[Sample], host: &[Sample]) -> Result<Self> {
+    pub fn host<T: Measured>(scalar: ScalarKind, reference: &[T], host: &[T]) -> Result<Self> {
         Ok(CompareRow {
             row: format!("{} host", scalar.name()),
             scalar: scalar.name(),
@@ -72,11 +72,11 @@ impl CompareRow {
     ///
     /// # Errors
     /// When the sample lists differ in length.
-    pub fn target(
+    pub fn target<T: Measured>(
         scalar: ScalarKind,
-        reference: &[Sample],
-        target: &[Sample],
-        host: &[Sample],
+        reference: &[T],
+        target: &[T],
+        host: &[T],
     ) -> Result<Self> {
         let agreement = Agreement::measure(scalar, host, target)?;
         Ok(CompareRow {
@@ -91,18 +91,52 @@ impl CompareRow {
     }
 }
 
+/// What the columns of a comparison are called: the value's symbol (`Φ`, or `p` for a
+/// position) and the direction's name (`normal`, `tangent`).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct Quantities {
+    /// Symbol of the value.
+    pub value: &'static str,
+    /// Name of the direction.
+    pub direction: &'static str,
+}
+
+impl Quantities {
+    /// Implicit fields: Φ and the normal −∇Φ/|∇Φ|.
+    pub const FIELD: Quantities = Quantities {
+        value: "Φ",
+        direction: "normal",
+    };
+    /// Curves: the position p and the tangent.
+    pub const CURVE: Quantities = Quantities {
+        value: "p",
+        direction: "tangent",
+    };
+    /// Spline surfaces: the position p and the normal.
+    pub const SURFACE: Quantities = Quantities {
+        value: "p",
+        direction: "normal",
+    };
+}
+
 /// The rows as a table: field errors in scientific notation, angles in degrees, `—` where a
 /// value does not apply.
 pub fn comparison_table(rows: &[CompareRow]) -> Table {
+    comparison_table_of(rows, Quantities::FIELD)
+}
+
+/// [`comparison_table`] with the columns named after `quantities`.
+pub fn comparison_table_of(rows: &[CompareRow], quantities: Quantities) -> Table {
+    let (value, direction) = (quantities.value, quantities.direction);
     let mut table = Table::new([
-        ("evaluation", Align::Left),
-        ("max |ΔΦ|", Align::Right),
-        ("RMS ΔΦ", Align::Right),
-        ("max angle", Align::Right),
-        ("median angle", Align::Right),
-        ("no normal", Align::Right),
-        ("= host bits", Align::Right),
-        ("max ulp", Align::Right),
+        ("evaluation".to_string(), Align::Left),
+        (format!("max |Δ{value}|"), Align::Right),
+        (format!("RMS Δ{value}"), Align::Right),
+        ("max angle".to_string(), Align::Right),
+        ("median angle".to_string(), Align::Right),
+        (format!("no {direction}"), Align::Right),
+        ("= host bits".to_string(), Align::Right),
+        ("max ulp".to_string(), Align::Right),
     ]);
     let none = || "—".to_string();
     let exp = |v: Option<f64>| v.map_or_else(none, |v| format!("{v:.3e}"));

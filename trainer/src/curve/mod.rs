@@ -15,7 +15,7 @@
 //!    3-D points parametrizes them for a [`BSplineSurface`], meshed by [`surface_mesh`].
 //!
 //! [`reconstruct_curve`] (`pipeline`) runs steps 1–4; [`sample_curve`] makes scored test data,
-//! [`adjacency_fraction`] and [`hausdorff_distance`] score a result, `plot` draws it as SVG,
+//! [`adjacency_fraction`] and [`hausdorff_distance`] score a result, `plot` draws it as SVG or PNG,
 //! and [`benchmark`] times the pipeline.
 //!
 //! ```
@@ -35,6 +35,7 @@
 
 mod basis;
 mod bench;
+mod blob;
 mod convergence;
 mod fit;
 mod grid;
@@ -59,6 +60,10 @@ mod vector;
 
 pub use basis::{cubic_basis, cubic_basis_derivative, locate};
 pub use bench::{BENCHMARK_SIZES, BenchmarkRow, benchmark};
+pub use blob::{
+    DecodedCurve, DecodedSurface, FitSummary, curve_from_blob, curve_to_blob, surface_from_blob,
+    surface_to_blob,
+};
 pub use convergence::Convergence;
 pub use fit::{
     Approximation, ApproximationOptions, approximate, chord_length_parameters, interpolate,
@@ -73,7 +78,7 @@ pub use metrics::{
 };
 pub use ordering::{Ordering, order_points};
 pub use pipeline::{CurveOptions, CurveReconstruction, reconstruct_curve};
-pub use plot::{PlotLayers, PlotOptions, Projection, render_svg, write_svg};
+pub use plot::{PlotLayers, PlotOptions, Projection, plot_scene, render_svg, write_plot};
 pub use points::{CurvePoints, DUPLICATE_TOLERANCE, MAX_POINTS, MIN_POINTS};
 pub use refine::{RefineOptions, RefineReport, refine_order};
 pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sample_curve};

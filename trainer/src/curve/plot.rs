@@ -1,17 +1,17 @@
-//! SVG pictures of a reconstruction: the points, the recovered order, the chain, the spline.
+//! Pictures of a reconstruction (SVG or PNG): the points, the recovered order, the chain, the
+//! spline.
 //!
 //! 2-D data is drawn in its own XY plane; 3-D data is projected orthogonally onto its
 //! best-fit plane (spanned by the two largest principal axes of the points), or onto XY on
 //! request. The picture keeps the aspect ratio and puts +y up.
 
-use std::fmt::Write as _;
 use std::path::Path;
 
 use nalgebra::{Matrix3, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::io::write_atomic;
+use crate::plot::{Dot, Rgb, Scene, Stroke, to_svg, write_picture};
 
 use super::kohonen::{KohonenChain, Topology};
 use super::spline::BSplineCurve;
@@ -77,12 +77,12 @@ pub struct PlotLayers<'a> {
     pub truth: Option<&'a [[f64; 3]]>,
 }
 
-/// The SVG document.
+/// The picture as a [`Scene`], for [`crate::plot`] to write as SVG or PNG.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for no points, a non-finite coordinate, an order index out of
 /// range, or a zero width or height.
-pub fn render_svg(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<String> {
+pub fn plot_scene(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<Scene> {
     if layers.points.is_empty() {
         return Err(Error::invalid("nothing to plot: no points"));
     }
@@ -114,89 +114,69 @@ pub fn render_svg(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<Stri
         ));
     }
     let view = View::new(&all, options.width as f64, options.height as f64);
-    let to_pixels = |p: [f64; 3]| view.pixel(frame.flatten(p));
-
-    let mut svg = String::new();
-    let (w, h) = (options.width, options.height);
-    let _ = writeln!(
-        svg,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
-         viewBox=\"0 0 {w} {h}\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>"
-    );
-    if let Some(title) = &options.title {
-        let escaped = title
-            .replace('&', "&amp;")
-            .replace('<', "&lt;")
-            .replace('>', "&gt;");
-        let _ = writeln!(
-            svg,
-            "<text x=\"10\" y=\"20\" font-family=\"sans-serif\" font-size=\"14\">{escaped}</text>"
-        );
-    }
-    let mut polyline = |points: &mut dyn Iterator<Item = [f64; 3]>, closed: bool, style: &str| {
-        let tag = if closed { "polygon" } else { "polyline" };
-        let _ = write!(svg, "<{tag} fill=\"none\" {style} points=\"");
-        for p in points {
-            let [x, y] = to_pixels(p);
-            let _ = write!(svg, "{x:.2},{y:.2} ");
-        }
-        let _ = writeln!(svg, "\"/>");
+    let to_pixels = |p: &[f64; 3]| view.pixel(frame.flatten(*p));
+    let line = |points: &mut dyn Iterator<Item = &[f64; 3]>, color: Rgb, width: f64| {
+        Stroke::new(points.map(to_pixels).collect(), color, width)
     };
+
+    let mut scene = Scene::new(options.width, options.height);
+    scene.title = options.title.clone();
     if let Some(truth) = layers.truth {
-        polyline(
-            &mut truth.iter().copied(),
-            false,
-            "stroke=\"#bbbbbb\" stroke-width=\"3\"",
-        );
+        scene
+            .strokes
+            .push(line(&mut truth.iter(), Rgb(0xbb, 0xbb, 0xbb), 3.0));
     }
     if let Some(chain) = layers.chain {
-        let closed = chain.topology == Topology::Closed;
-        polyline(
-            &mut chain.neurons.iter().copied(),
-            closed,
-            "stroke=\"#88bbee\" stroke-width=\"1\"",
-        );
+        let mut stroke = line(&mut chain.neurons.iter(), Rgb(0x88, 0xbb, 0xee), 1.0);
+        stroke.closed = chain.topology == Topology::Closed;
+        scene.strokes.push(stroke);
     }
     if let Some(order) = layers.order {
         let points = layers.points;
-        polyline(
-            &mut order.iter().map(|&i| points[i]),
-            layers.closed,
-            "stroke=\"#ee8833\" stroke-width=\"1.5\"",
+        let mut stroke = line(
+            &mut order.iter().map(|&i| &points[i]),
+            Rgb(0xee, 0x88, 0x33),
+            1.5,
         );
+        stroke.closed = layers.closed;
+        scene.strokes.push(stroke);
     }
     if let (Some(curve), true) = (layers.curve, layers.control_polygon) {
-        polyline(
-            &mut curve.control.iter().copied(),
-            curve.closed,
-            "stroke=\"#999999\" stroke-width=\"1\" stroke-dasharray=\"4 3\"",
-        );
+        let mut stroke = line(&mut curve.control.iter(), Rgb(0x99, 0x99, 0x99), 1.0);
+        stroke.closed = curve.closed;
+        stroke.dash = Some([4.0, 3.0]);
+        scene.strokes.push(stroke);
     }
-    if let Some(line) = &spline {
-        polyline(
-            &mut line.iter().copied(),
-            false,
-            "stroke=\"#2255cc\" stroke-width=\"2\"",
-        );
+    if let Some(spline) = &spline {
+        scene
+            .strokes
+            .push(line(&mut spline.iter(), Rgb(0x22, 0x55, 0xcc), 2.0));
     }
-    for &p in layers.points {
-        let [x, y] = to_pixels(p);
-        let _ = writeln!(
-            svg,
-            "<circle cx=\"{x:.2}\" cy=\"{y:.2}\" r=\"2.5\" fill=\"black\"/>"
-        );
+    for p in layers.points {
+        scene.dots.push(Dot {
+            center: to_pixels(p),
+            radius: 2.5,
+            color: Rgb(0, 0, 0),
+        });
     }
-    svg.push_str("</svg>\n");
-    Ok(svg)
+    Ok(scene)
 }
 
-/// Renders and writes the SVG to `path` atomically.
+/// The SVG document of [`plot_scene`].
 ///
 /// # Errors
-/// As [`render_svg`], plus [`Error::Io`] when writing fails.
-pub fn write_svg(path: &Path, layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<()> {
-    let svg = render_svg(layers, options)?;
-    write_atomic(path, svg.as_bytes())
+/// As [`plot_scene`].
+pub fn render_svg(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<String> {
+    Ok(to_svg(&plot_scene(layers, options)?))
+}
+
+/// Renders the plot and writes it to `path` atomically: PNG for a `.png` path, SVG for
+/// `.svg` (the PNG has no caption).
+///
+/// # Errors
+/// As [`plot_scene`] and [`write_picture`].
+pub fn write_plot(path: &Path, layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<()> {
+    write_picture(path, &plot_scene(layers, options)?)
 }
 
 /// An orthonormal plane frame: origin and two axes.

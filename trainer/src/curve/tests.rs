@@ -501,7 +501,7 @@ fn svg_plots_are_written_atomically() {
     assert!(svg.contains("trefoil &lt;3-D&gt;"));
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("trefoil.svg");
-    write_svg(&path, &layers, &options).unwrap();
+    write_plot(&path, &layers, &options).unwrap();
     assert_eq!(std::fs::read_to_string(&path).unwrap(), svg);
     let bad = PlotLayers {
         order: Some(&[0, 99]),
@@ -510,7 +510,16 @@ fn svg_plots_are_written_atomically() {
     assert!(message(render_svg(&bad, &options).unwrap_err()).contains("99"));
     let empty = PlotLayers::default();
     assert!(render_svg(&empty, &options).is_err());
-    assert!(write_svg(Path::new("/nonexistent-dir/x.svg"), &layers, &options).is_err());
+    assert!(write_plot(Path::new("/nonexistent-dir/x.svg"), &layers, &options).is_err());
+    let png = dir.path().join("trefoil.png");
+    write_plot(&png, &layers, &options).unwrap();
+    let image = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(image.dimensions(), (800, 800));
+    // Points are black dots: the picture has pure-black pixels, and spline-blue ones.
+    assert!(image.pixels().any(|p| p.0 == [0, 0, 0]));
+    assert!(image.pixels().any(|p| p.0 == [0x22, 0x55, 0xcc]));
+    let error = write_plot(&dir.path().join("trefoil.gif"), &layers, &options).unwrap_err();
+    assert!(message(error).contains(".svg or .png"));
 }
 
 /// The standard benchmark; run with `cargo test --release -p neurosurf-trainer --lib

@@ -16,4 +16,4 @@ mod text;
 pub use atomic::{write_atomic, write_atomic_with};
 pub use mesh::{Mesh, read_mesh, write_mesh};
 pub use ply::{PlyEncoding, read_points, write_mesh_ply, write_points_ply};
-pub use text::read_query_points;
+pub use text::{read_parameters, read_query_points, read_scattered_points};

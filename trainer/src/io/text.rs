@@ -56,7 +56,75 @@ fn has_ply_magic(path: &Path) -> Result<bool> {
 }
 
 fn parse_text_points(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
-    let mut points = Vec::new();
+    let rows = parse_rows(
+        path,
+        bytes,
+        &[3, 6],
+        "3 numbers (x y z) or 6 (x y z nx ny nz)",
+    )?;
+    Ok(rows.into_iter().map(|(values, _)| values).collect())
+}
+
+/// Reads curve or surface parameters, one point per line: `arity` = 1 (t) or 2 (u v) numbers,
+/// in the text format of [`read_query_points`]. The result is padded with zeros to 3
+/// coordinates, the shape the simulator's requests carry.
+///
+/// # Errors
+/// As [`read_query_points`]; [`Error::InvalidInput`] for an arity other than 1 or 2.
+pub fn read_parameters(path: &Path, arity: usize) -> Result<Vec<[f64; 3]>> {
+    let expected = match arity {
+        1 => "1 number (t)",
+        2 => "2 numbers (u v)",
+        _ => {
+            return Err(Error::invalid(format!(
+                "parameters have 1 or 2 coordinates, not {arity}"
+            )));
+        }
+    };
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let rows = parse_rows(path, &bytes, &[arity], expected)?;
+    Ok(rows.into_iter().map(|(values, _)| values).collect())
+}
+
+/// Reads scattered 2-D or 3-D points (a curve's samples): PLY (3-D), or text with 2 (x y) or
+/// 3 (x y z) numbers on every line — the same count on all of them. Returns the dimension and
+/// the points (z = 0 in 2-D).
+///
+/// # Errors
+/// As [`read_query_points`], and [`Error::Format`] when lines mix 2 and 3 numbers.
+pub fn read_scattered_points(path: &Path) -> Result<(usize, Vec<[f64; 3]>)> {
+    if extension(path).as_deref() == Some("ply") || has_ply_magic(path)? {
+        return Ok((3, read_query_points(path)?));
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let rows = parse_rows(path, &bytes, &[2, 3], "2 numbers (x y) or 3 (x y z)")?;
+    let dimension = rows.first().map_or(3, |&(_, count)| count);
+    if let Some(line) = rows.iter().position(|&(_, count)| count != dimension) {
+        return Err(Error::format(
+            path,
+            format!(
+                "point {}: {} numbers where the first point has {dimension}",
+                line + 1,
+                rows[line].1
+            ),
+        ));
+    }
+    Ok((
+        dimension,
+        rows.into_iter().map(|(values, _)| values).collect(),
+    ))
+}
+
+/// Whitespace-separated rows of finite numbers: blank and `#` lines skipped, every other line
+/// holds one of `counts` numbers (`expected` says which, for errors). Returns the first three
+/// numbers of each row (zero-padded) and how many it had.
+fn parse_rows(
+    path: &Path,
+    bytes: &[u8],
+    counts: &[usize],
+    expected: &str,
+) -> Result<Vec<([f64; 3], usize)>> {
+    let mut rows = Vec::new();
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line_no = i + 1;
         let err = |message: String| Error::format(path, format!("line {line_no}: {message}"));
@@ -79,14 +147,12 @@ fn parse_text_points(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
             }
             count += 1;
         }
-        if count != 3 && count != 6 {
-            return Err(err(format!(
-                "expected 3 numbers (x y z) or 6 (x y z nx ny nz), found {count}"
-            )));
+        if !counts.contains(&count) {
+            return Err(err(format!("expected {expected}, found {count}")));
         }
-        points.push(values);
+        rows.push((values, count));
     }
-    Ok(points)
+    Ok(rows)
 }
 
 #[cfg(test)]
@@ -135,6 +201,37 @@ mod tests {
         assert!(e.contains("line 1") && e.contains("'1,2,3'"), "{e}");
         let e = message(parse_text_points(Path::new("q.txt"), b"1 2 3\n\xff 1 2\n").unwrap_err());
         assert!(e.contains("line 2") && e.contains("UTF-8"), "{e}");
+    }
+
+    #[test]
+    fn parameters_and_scattered_points_have_their_own_column_counts() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.txt");
+        std::fs::write(&path, "# t\n0\n0.5\n1\n").unwrap();
+        assert_eq!(
+            read_parameters(&path, 1).unwrap(),
+            vec![[0.0; 3], [0.5, 0.0, 0.0], [1.0, 0.0, 0.0]]
+        );
+        let e = read_parameters(&path, 2).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("2 numbers (u v)"), "{e}");
+        assert!(read_parameters(&path, 3).is_err());
+
+        std::fs::write(&path, "1 2\n3 4\n").unwrap();
+        assert_eq!(
+            read_scattered_points(&path).unwrap(),
+            (2, vec![[1.0, 2.0, 0.0], [3.0, 4.0, 0.0]])
+        );
+        std::fs::write(&path, "1 2 3\n4 5 6\n").unwrap();
+        assert_eq!(read_scattered_points(&path).unwrap().0, 3);
+        std::fs::write(&path, "1 2\n4 5 6\n").unwrap();
+        let e = read_scattered_points(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("point 2") && e.contains("first point has 2"),
+            "{e}"
+        );
+        std::fs::write(&path, "1 2\n4 NaN\n").unwrap();
+        let e = read_scattered_points(&path).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("NaN"), "{e}");
     }
 
     #[test]

@@ -1,64 +1,22 @@
 //! Evaluating a blob at many points in a chosen precision: the trainer's `f64` reference, or
 //! the core in `f32` or Q16.16 — exactly what a microcontroller would compute.
 
-use std::fmt;
+mod parametric;
+mod precision;
+
 use std::path::Path;
-use std::str::FromStr;
 
 use neurosurf_core::blob::{self, ModelKind};
 use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
 use neurosurf_core::scalar::{Q16, Scalar};
-use serde::{Deserialize, Serialize};
 
+use crate::curve::{DecodedCurve, DecodedSurface, curve_from_blob, surface_from_blob};
 use crate::error::{Error, Result};
+
 use crate::implicit::{self, DecodedImplicit};
 use crate::rbf::RbfModel;
-
-/// The arithmetic a model is evaluated in.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum Precision {
-    /// The trainer's reference: parameters widened to `f64`, evaluated in `f64`.
-    F64,
-    /// The core in IEEE binary32.
-    F32,
-    /// The core in Q16.16 fixed point.
-    Q16,
-}
-
-impl Precision {
-    /// Every precision, reference first.
-    pub const ALL: [Precision; 3] = [Precision::F64, Precision::F32, Precision::Q16];
-
-    /// The command-line name: `f64`, `f32`, `q16.16`.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Precision::F64 => "f64",
-            Precision::F32 => "f32",
-            Precision::Q16 => "q16.16",
-        }
-    }
-}
-
-impl fmt::Display for Precision {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Precision {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        match s.to_ascii_lowercase().as_str() {
-            "f64" => Ok(Precision::F64),
-            "f32" => Ok(Precision::F32),
-            "q16.16" | "q16" | "i16f16" => Ok(Precision::Q16),
-            _ => Err(Error::invalid(format!(
-                "unknown scalar {s:?}: expected f64, f32 or q16.16"
-            ))),
-        }
-    }
-}
+pub use parametric::{Geometry, geometry_columns};
+pub use precision::Precision;
 
 /// Φ and ∇Φ at one point, in `f64` whatever the precision it was computed in.
 pub type Sample = (f64, [f64; 3]);
@@ -75,6 +33,20 @@ pub enum LoadedModel {
     },
     /// The RBF baseline (host only).
     Rbf(RbfModel),
+    /// A B-spline curve; `bytes` is the blob, for the core.
+    Curve {
+        /// The blob.
+        bytes: Vec<u8>,
+        /// Its `f64` reading.
+        decoded: Box<DecodedCurve>,
+    },
+    /// A B-spline tensor-product surface; `bytes` is the blob, for the core.
+    SplineSurface {
+        /// The blob.
+        bytes: Vec<u8>,
+        /// Its `f64` reading.
+        decoded: Box<DecodedSurface>,
+    },
 }
 
 impl LoadedModel {
@@ -105,6 +77,14 @@ impl LoadedModel {
                 })
             }
             ModelKind::Rbf => Ok(LoadedModel::Rbf(RbfModel::from_blob(&bytes, path)?)),
+            ModelKind::Curve => {
+                let decoded = Box::new(curve_from_blob(&bytes, path)?);
+                Ok(LoadedModel::Curve { bytes, decoded })
+            }
+            ModelKind::SplineSurface => {
+                let decoded = Box::new(surface_from_blob(&bytes, path)?);
+                Ok(LoadedModel::SplineSurface { bytes, decoded })
+            }
             other => Err(Error::format(
                 path,
                 format!("{} models cannot be evaluated here", other.name()),
@@ -117,6 +97,28 @@ impl LoadedModel {
         match self {
             LoadedModel::Implicit { .. } => ModelKind::Implicit,
             LoadedModel::Rbf(_) => ModelKind::Rbf,
+            LoadedModel::Curve { .. } => ModelKind::Curve,
+            LoadedModel::SplineSurface { .. } => ModelKind::SplineSurface,
+        }
+    }
+
+    /// The blob as read.
+    pub fn bytes(&self) -> Option<&[u8]> {
+        match self {
+            LoadedModel::Implicit { bytes, .. }
+            | LoadedModel::Curve { bytes, .. }
+            | LoadedModel::SplineSurface { bytes, .. } => Some(bytes),
+            LoadedModel::Rbf(_) => None,
+        }
+    }
+
+    /// How many coordinates a query has: 3 (x, y, z) for fields, 1 (t) for curves, 2 (u, v)
+    /// for spline surfaces.
+    pub fn query_arity(&self) -> usize {
+        match self {
+            LoadedModel::Curve { .. } => 1,
+            LoadedModel::SplineSurface { .. } => 2,
+            _ => 3,
         }
     }
 
@@ -143,6 +145,12 @@ impl LoadedModel {
             (LoadedModel::Rbf(_), other) => Err(Error::invalid(format!(
                 "the RBF baseline is a host-only model: it evaluates in f64, not {other}"
             ))),
+            (LoadedModel::Curve { .. } | LoadedModel::SplineSurface { .. }, _) => {
+                Err(Error::invalid(format!(
+                    "a {} has no field: evaluate its geometry",
+                    self.kind().name()
+                )))
+            }
         }
     }
 }

@@ -1,0 +1,496 @@
+//! `neurosurf curve`: Hoffmann & Várady's curves from scattered points — sample test data,
+//! fit a curve or a surface, plot, benchmark.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::{Subcommand, ValueEnum};
+use neurosurf_core::scalar::ScalarKind;
+use serde::Serialize;
+
+use neurosurf_trainer::curve::{
+    BENCHMARK_SIZES, BSplineCurve, CurveOptions, CurvePoints, FitSummary, KohonenMapOptions,
+    PlotLayers, PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, benchmark,
+    curve_to_blob, fit_surface, interpolation_parameter, reconstruct_curve, sample_curve,
+    surface_mesh, surface_to_blob, write_plot,
+};
+use neurosurf_trainer::evaluate::{LoadedModel, Precision};
+use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
+use neurosurf_trainer::table::{Align, Table};
+
+use super::output;
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Scattered, shuffled, noisy points on a known curve (text: `x y` or `x y z` per line).
+    Sample(SampleArgs),
+    /// Order scattered points with a Kohonen chain and fit a uniform cubic B-spline; write its
+    /// blob (and a plot).
+    Fit(FitArgs),
+    /// Parametrize scattered 3-D points with a 2-D Kohonen map and fit a tensor-product cubic
+    /// B-spline surface; write its blob (and a mesh).
+    Surface(SurfaceArgs),
+    /// Plot a curve blob (and, optionally, the points it was fitted to) as SVG or PNG.
+    Plot(PlotArgs),
+    /// Time ordering and fitting on noisy ellipses of 20, 200 and 2 000 points.
+    Bench(BenchArgs),
+}
+
+pub fn run(command: &Command) -> Result<()> {
+    match command {
+        Command::Sample(args) => sample(args),
+        Command::Fit(args) => fit(args),
+        Command::Surface(args) => surface(args),
+        Command::Plot(args) => plot(args),
+        Command::Bench(args) => bench(args),
+    }
+}
+
+/// The built-in test curves.
+#[derive(Copy, Clone, Debug, ValueEnum)]
+pub enum CurveName {
+    /// Closed, 2-D.
+    Ellipse,
+    /// Open, 2-D, two turns.
+    Spiral,
+    /// Closed, 2-D: a figure-eight whose branches come within 0.15 at the waist.
+    Peanut,
+    /// Closed, 3-D: the trefoil knot.
+    Trefoil,
+}
+
+impl CurveName {
+    fn curve(self) -> SampleCurve {
+        match self {
+            CurveName::Ellipse => SampleCurve::Ellipse,
+            CurveName::Spiral => SampleCurve::Spiral,
+            CurveName::Peanut => SampleCurve::Peanut,
+            CurveName::Trefoil => SampleCurve::Trefoil,
+        }
+    }
+}
+
+/// `f32` or `q16.16`: how a blob stores its control points.
+fn stored_scalar(precision: Precision) -> Result<ScalarKind> {
+    match precision {
+        Precision::F32 => Ok(ScalarKind::F32),
+        Precision::Q16 => Ok(ScalarKind::Q16_16),
+        Precision::F64 => anyhow::bail!("blobs store f32 or q16.16 control points, not f64"),
+    }
+}
+
+/// Where and how a fit writes its blob.
+#[derive(Debug, clap::Args)]
+pub struct BlobArgs {
+    /// Random seed of the Kohonen training (same seed, same result).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// How the blob stores the control points: `f32` or `q16.16`.
+    #[arg(long, default_value = "f32")]
+    scalar: Precision,
+    /// Output blob.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct SampleArgs {
+    /// Which curve.
+    #[arg(value_enum)]
+    curve: CurveName,
+    /// Number of points.
+    #[arg(long = "points", short = 'n', default_value_t = 200)]
+    count: usize,
+    /// Gaussian noise, as a fraction of the mean point spacing.
+    #[arg(long, default_value_t = SampleOptions::default().noise)]
+    noise: f64,
+    /// Random seed (same seed, same points).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output text file.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn sample(args: &SampleArgs) -> Result<()> {
+    let options = SampleOptions {
+        count: args.count,
+        noise: args.noise,
+        seed: args.seed,
+        ..SampleOptions::default()
+    };
+    let curve = args.curve.curve();
+    let sample = sample_curve(curve, &options)?;
+    let mut text = format!(
+        "# {:?}: {} shuffled points, noise {} of the spacing, seed {}\n",
+        curve, args.count, args.noise, args.seed
+    );
+    for p in &sample.points {
+        let line = match curve.dimension() {
+            2 => format!("{} {}\n", p[0], p[1]),
+            _ => format!("{} {} {}\n", p[0], p[1], p[2]),
+        };
+        text.push_str(&line);
+    }
+    write_atomic(&args.out, text.as_bytes())?;
+    eprintln!("wrote {} points to {}", args.count, args.out.display());
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct FitArgs {
+    /// Scattered points: text with `x y` or `x y z` per line, or PLY.
+    points: PathBuf,
+    /// The curve closes on itself (a ring of neurons); without it the curve is open.
+    #[arg(long)]
+    closed: bool,
+    /// Fit the spline through every ordered point instead of a least-squares approximation.
+    #[arg(long)]
+    interpolate: bool,
+    /// Control points of the approximation (default: about a third of the points).
+    #[arg(long)]
+    control: Option<usize>,
+    /// Neurons per input point in the chain (the paper: 4).
+    #[arg(long, default_value_t = CurveOptions::default().kohonen.neurons_per_point)]
+    neurons_per_point: usize,
+    /// Keep the paper's order as the chain gives it (no 2-opt repair).
+    #[arg(long)]
+    no_refine: bool,
+    #[command(flatten)]
+    blob: BlobArgs,
+    /// Also draw the points, their order and the curve (`.svg` or `.png`).
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct FitReport<'a> {
+    out: &'a Path,
+    stored_as: &'static str,
+    blob_bytes: usize,
+    dimension: usize,
+    closed: bool,
+    control_points: usize,
+    segments: usize,
+    chain_iterations: usize,
+    chain_converged: bool,
+    refine_reversals: Option<usize>,
+    refine_insertions: Option<usize>,
+    #[serde(flatten)]
+    fit: FitSummary,
+}
+
+fn fit(args: &FitArgs) -> Result<()> {
+    let scalar = stored_scalar(args.blob.scalar)?;
+    let (dimension, raw) = read_scattered_points(&args.points)?;
+    let points = CurvePoints::new(dimension, raw)
+        .with_context(|| format!("cannot fit a curve to {}", args.points.display()))?;
+    let topology = if args.closed {
+        Topology::Closed
+    } else {
+        Topology::Open
+    };
+    let mut options = CurveOptions::new(topology, args.blob.seed);
+    options.kohonen.neurons_per_point = args.neurons_per_point;
+    options.approximation.control_points = args.control;
+    if args.no_refine {
+        options.refine = None;
+    }
+    let start = Instant::now();
+    let result = reconstruct_curve(&points, &options)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let ordered = result.ordering.ordered_points(&points);
+    let (curve, method, rms, max) = if args.interpolate {
+        let (rms, max) = interpolation_residual(&result.interpolation, &ordered);
+        (&result.interpolation, "interpolation", rms, max)
+    } else {
+        let a = &result.approximation;
+        (&a.curve, "approximation", a.rms_residual, a.max_residual)
+    };
+    let summary = FitSummary {
+        method: method.into(),
+        points: points.len(),
+        neurons: result.training.neurons,
+        seed: args.blob.seed,
+        rms_residual: rms,
+        max_residual: max,
+        seconds,
+    };
+    let blob = curve_to_blob(curve, Some(&summary), scalar)?;
+    write_atomic(&args.blob.out, &blob)?;
+    if let Some(path) = &args.plot {
+        let layers = PlotLayers {
+            points: points.points(),
+            order: Some(&result.ordering.order),
+            closed: result.ordering.closed,
+            curve: Some(curve),
+            ..PlotLayers::default()
+        };
+        write_plot(path, &layers, &PlotOptions::default())?;
+    }
+    let report = FitReport {
+        out: &args.blob.out,
+        stored_as: scalar.name(),
+        blob_bytes: blob.len(),
+        dimension,
+        closed: curve.closed,
+        control_points: curve.control.len(),
+        segments: curve.segments(),
+        chain_iterations: result.training.iterations,
+        chain_converged: result.training.convergence.converged(),
+        refine_reversals: result.refinement.as_ref().map(|r| r.reversals),
+        refine_insertions: result.refinement.as_ref().map(|r| r.insertions),
+        fit: summary,
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "{} {}-D points → {} chain of {} neurons ({} iterations, {}) → {} of {} control points",
+        report.fit.points,
+        dimension,
+        if report.closed { "closed" } else { "open" },
+        report.fit.neurons,
+        report.chain_iterations,
+        if report.chain_converged {
+            "converged"
+        } else {
+            "NOT converged"
+        },
+        method,
+        report.control_points
+    );
+    println!(
+        "residual RMS {:.3e}, max {:.3e}; {:.3} s; wrote {} ({} bytes, {})",
+        rms,
+        max,
+        seconds,
+        args.blob.out.display(),
+        blob.len(),
+        scalar.name()
+    );
+    if let Some(path) = &args.plot {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// RMS and largest distance from each ordered point to the interpolating spline at its
+/// parameter (zero up to rounding: the spline passes through every point).
+fn interpolation_residual(curve: &BSplineCurve, ordered: &[[f64; 3]]) -> (f64, f64) {
+    let n = ordered.len();
+    let mut square_sum = 0.0_f64;
+    let mut max = 0.0_f64;
+    for (j, q) in ordered.iter().enumerate() {
+        let p = curve.point(interpolation_parameter(j, n, curve.closed));
+        let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+        square_sum += d * d;
+        max = max.max(d);
+    }
+    ((square_sum / n.max(1) as f64).sqrt(), max)
+}
+
+#[derive(Debug, clap::Args)]
+pub struct SurfaceArgs {
+    /// Scattered 3-D points: text with `x y z` per line, or PLY.
+    points: PathBuf,
+    /// Map neurons along u and v, `COLUMNS,ROWS`.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [KohonenMapOptions::default().columns, KohonenMapOptions::default().rows])]
+    map: Vec<usize>,
+    /// Control points of the surface along u and v, `U,V`.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [8, 8])]
+    control: Vec<usize>,
+    #[command(flatten)]
+    blob: BlobArgs,
+    /// Also write a triangle mesh of the surface (`.obj`, `.ply` or `.stl`).
+    #[arg(long, value_name = "FILE")]
+    mesh: Option<PathBuf>,
+    /// Grid cells per direction of the mesh.
+    #[arg(long, default_value_t = 32)]
+    resolution: usize,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct SurfaceReport<'a> {
+    out: &'a Path,
+    stored_as: &'static str,
+    blob_bytes: usize,
+    control: [usize; 2],
+    map_iterations: usize,
+    mesh: Option<&'a Path>,
+    #[serde(flatten)]
+    fit: FitSummary,
+}
+
+fn surface(args: &SurfaceArgs) -> Result<()> {
+    let scalar = stored_scalar(args.blob.scalar)?;
+    let (dimension, raw) = read_scattered_points(&args.points)?;
+    if dimension != 3 {
+        anyhow::bail!(
+            "{}: a surface is fitted to 3-D points, these are {dimension}-D",
+            args.points.display()
+        );
+    }
+    let points = CurvePoints::new(3, raw)
+        .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
+    let mut options = SurfaceOptions::default();
+    options.map.columns = args.map[0];
+    options.map.rows = args.map[1];
+    options.map.seed = args.blob.seed;
+    options.control_u = args.control[0];
+    options.control_v = args.control[1];
+    let start = Instant::now();
+    let fit = fit_surface(&points, &options)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let summary = FitSummary {
+        method: "surface".into(),
+        points: points.len(),
+        neurons: fit.map.columns * fit.map.rows,
+        seed: args.blob.seed,
+        rms_residual: fit.rms_residual,
+        max_residual: fit.max_residual,
+        seconds,
+    };
+    let blob = surface_to_blob(&fit.surface, Some(&summary), scalar)?;
+    write_atomic(&args.blob.out, &blob)?;
+    if let Some(path) = &args.mesh {
+        let mesh = surface_mesh(&fit.surface, args.resolution, args.resolution)?;
+        write_mesh(path, &mesh.mesh, Some(&mesh.normals))?;
+    }
+    let report = SurfaceReport {
+        out: &args.blob.out,
+        stored_as: scalar.name(),
+        blob_bytes: blob.len(),
+        control: [fit.surface.count_u, fit.surface.count_v],
+        map_iterations: fit.map_report.iterations,
+        mesh: args.mesh.as_deref(),
+        fit: summary,
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "{} points → {} × {} map ({} iterations) → {} × {} control points; residual RMS {:.3e}, \
+         max {:.3e}; {:.3} s",
+        report.fit.points,
+        fit.map.columns,
+        fit.map.rows,
+        report.map_iterations,
+        report.control[0],
+        report.control[1],
+        fit.rms_residual,
+        fit.max_residual,
+        seconds
+    );
+    println!(
+        "wrote {} ({} bytes, {})",
+        args.blob.out.display(),
+        blob.len(),
+        scalar.name()
+    );
+    if let Some(path) = &args.mesh {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct PlotArgs {
+    /// A curve blob.
+    model: PathBuf,
+    /// The scattered points to draw with it (text or PLY).
+    #[arg(long)]
+    points: Option<PathBuf>,
+    /// Also draw the control polygon.
+    #[arg(long)]
+    control_polygon: bool,
+    /// Picture size in pixels, `WIDTH,HEIGHT`.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [800, 800])]
+    size: Vec<u32>,
+    /// Output picture (`.svg` or `.png`).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn plot(args: &PlotArgs) -> Result<()> {
+    let model = LoadedModel::read(&args.model)?;
+    let LoadedModel::Curve { decoded, .. } = &model else {
+        anyhow::bail!(
+            "{}: a {} model; `curve plot` draws curves (mesh surfaces with `curve surface \
+             --mesh`)",
+            args.model.display(),
+            model.kind().name()
+        );
+    };
+    let points = match &args.points {
+        Some(path) => read_scattered_points(path)?.1,
+        None => Vec::new(),
+    };
+    // Without points, the spline's own control points frame the picture.
+    let anchor = if points.is_empty() {
+        &decoded.curve.control
+    } else {
+        &points
+    };
+    let layers = PlotLayers {
+        points: anchor,
+        curve: Some(&decoded.curve),
+        control_polygon: args.control_polygon,
+        ..PlotLayers::default()
+    };
+    let options = PlotOptions {
+        width: args.size[0],
+        height: args.size[1],
+        title: Some(args.model.display().to_string()),
+        ..PlotOptions::default()
+    };
+    write_plot(&args.out, &layers, &options)?;
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    /// Point counts to time.
+    #[arg(long, value_delimiter = ',', default_values_t = BENCHMARK_SIZES.to_vec())]
+    sizes: Vec<usize>,
+    /// Random seed of the samples and chains.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Print JSON rows instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+fn bench(args: &BenchArgs) -> Result<()> {
+    let rows = benchmark(&args.sizes, args.seed)?;
+    if args.json {
+        return output::json(&rows);
+    }
+    let mut table = Table::new([
+        ("points", Align::Right),
+        ("neurons", Align::Right),
+        ("iterations", Align::Right),
+        ("seconds", Align::Right),
+        ("µs per point·iteration", Align::Right),
+    ]);
+    for row in &rows {
+        let per = row.seconds * 1e6 / (row.points * row.iterations).max(1) as f64;
+        table.push([
+            row.points.to_string(),
+            row.neurons.to_string(),
+            row.iterations.to_string(),
+            format!("{:.4}", row.seconds),
+            format!("{per:.3}"),
+        ]);
+    }
+    print!("{table}");
+    Ok(())
+}

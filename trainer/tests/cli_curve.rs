@@ -1,0 +1,247 @@
+//! `neurosurf curve …` run as a user would: sample scattered points, fit a curve and a
+//! surface, plot them, evaluate the blobs on the host (f64, f32, Q16.16) and on the simulated
+//! Cortex-M4F — which must print exactly what the host prints — and compare fixed against
+//! float. Bad point sets fail with a message naming the problem.
+
+mod common;
+
+use common::{fails, ok};
+use std::fs;
+use std::path::{Path, PathBuf};
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+/// Parameters t: the ends, the interior, and out-of-range values the core clamps.
+fn t_file(dir: &Path) -> PathBuf {
+    let mut text = String::from("# t\n");
+    for i in 0..=40 {
+        text.push_str(&format!("{}\n", f64::from(i) / 40.0));
+    }
+    text.push_str("-0.5\n1.5\n0.123456789\n");
+    let path = dir.join("t.txt");
+    fs::write(&path, text).unwrap();
+    path
+}
+
+/// Scattered points on a wavy sheet over [−1, 1]², shuffled by construction.
+fn sheet_file(dir: &Path) -> PathBuf {
+    let mut text = String::new();
+    let mut state = 12345_u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for _ in 0..300 {
+        let (x, y) = (next(), next());
+        text.push_str(&format!(
+            "{x} {y} {}\n",
+            0.3 * (2.0 * x).sin() * (1.5 * y).cos()
+        ));
+    }
+    let path = dir.join("sheet.txt");
+    fs::write(&path, text).unwrap();
+    path
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
+}
+
+#[test]
+fn a_fitted_curve_evaluates_identically_on_the_host_and_the_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("spiral.txt");
+    ok(&[
+        "curve",
+        "sample",
+        "spiral",
+        "-n",
+        "120",
+        "--seed",
+        "5",
+        "--out",
+        s(&points),
+    ]);
+    let model = dir.path().join("spiral.nsb");
+    let plot = dir.path().join("spiral.png");
+    let fit = json(&ok(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--out",
+        s(&model),
+        "--plot",
+        s(&plot),
+        "--scalar",
+        "q16.16",
+        "--json",
+    ]));
+    assert_eq!(fit["points"], 120);
+    assert_eq!(fit["closed"], false);
+    assert_eq!(fit["stored_as"], "q16.16");
+    assert!(fit["rms_residual"].as_f64().unwrap() < 0.01, "{fit}");
+    let image = image::open(&plot).unwrap();
+    assert_eq!((image.width(), image.height()), (800, 800));
+
+    let info = ok(&["info", s(&model)]);
+    assert!(
+        info.contains("curve model") && info.contains("open"),
+        "{info}"
+    );
+
+    let t = t_file(dir.path());
+    let f64_rows = ok(&["eval", s(&model), "--points", s(&t)]);
+    assert!(f64_rows.starts_with("t,x,y,z,tx,ty,tz\n"), "{f64_rows}");
+    assert_eq!(f64_rows.lines().count(), 45);
+    for scalar in ["q16.16", "f32"] {
+        let common = [s(&model), "--points", s(&t), "--scalar", scalar];
+        let host = ok(&[&["eval"], &common[..]].concat());
+        for mode in ["batch", "single"] {
+            let target = ok(&[&["sim"], &common[..], &["--mode", mode]].concat());
+            assert!(host == target, "{scalar} {mode}\n{host}\n---\n{target}");
+        }
+    }
+    let cost = json(&ok(&[
+        "sim",
+        s(&model),
+        "--points",
+        s(&t),
+        "--scalar",
+        "f32",
+        "--json",
+    ]));
+    assert_eq!(cost["op"], "position+direction");
+    assert!(cost["instructions_per_point"].as_f64().unwrap() > cost["mac_count"].as_f64().unwrap());
+
+    let report = json(&ok(&["compare", s(&model), "--json"]));
+    assert_eq!(report["kind"], "curve");
+    assert_eq!(report["points"], 1001);
+    for row in report["rows"].as_array().unwrap() {
+        if row["on"] == "target" {
+            assert_eq!(row["bit_exact"], true, "{row}");
+        }
+        // Q16.16 control points of a curve in [−1, 1]²: positions within 2·10⁻⁴.
+        assert!(row["field_max"].as_f64().unwrap() < 2e-4, "{row}");
+    }
+}
+
+#[test]
+fn interpolation_passes_through_the_points_and_plots_without_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("ellipse.txt");
+    ok(&[
+        "curve",
+        "sample",
+        "ellipse",
+        "-n",
+        "40",
+        "--out",
+        s(&points),
+    ]);
+    let model = dir.path().join("ellipse.nsb");
+    let fit = json(&ok(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--closed",
+        "--interpolate",
+        "--out",
+        s(&model),
+        "--json",
+    ]));
+    assert_eq!(fit["method"], "interpolation");
+    assert_eq!(fit["closed"], true);
+    assert_eq!(fit["control_points"], 40);
+    assert!(fit["max_residual"].as_f64().unwrap() < 1e-9, "{fit}");
+    let svg = dir.path().join("ellipse.svg");
+    ok(&[
+        "curve",
+        "plot",
+        s(&model),
+        "--control-polygon",
+        "--out",
+        s(&svg),
+    ]);
+    let text = fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("stroke-dasharray") && text.contains("<polyline"));
+}
+
+#[test]
+fn a_fitted_surface_evaluates_identically_on_the_host_and_the_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = sheet_file(dir.path());
+    let model = dir.path().join("sheet.nsb");
+    let mesh = dir.path().join("sheet.obj");
+    let fit = json(&ok(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--out",
+        s(&model),
+        "--mesh",
+        s(&mesh),
+        "--resolution",
+        "16",
+        "--json",
+    ]));
+    assert_eq!(fit["control"], serde_json::json!([8, 8]));
+    assert!(fit["rms_residual"].as_f64().unwrap() < 0.01, "{fit}");
+    let obj = fs::read_to_string(&mesh).unwrap();
+    assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 17 * 17);
+
+    let uv = dir.path().join("uv.txt");
+    fs::write(&uv, "0 0\n0.5 0.5\n1 1\n0.25 0.75\n-1 2\n").unwrap();
+    let rows = ok(&["eval", s(&model), "--points", s(&uv)]);
+    assert!(rows.starts_with("u,v,x,y,z,nx,ny,nz\n"), "{rows}");
+    for scalar in ["q16.16", "f32"] {
+        let common = [s(&model), "--points", s(&uv), "--scalar", scalar];
+        let host = ok(&[&["eval"], &common[..]].concat());
+        let target = ok(&[&["sim"], &common[..]].concat());
+        assert!(host == target, "{scalar}\n{host}\n---\n{target}");
+    }
+    let report = json(&ok(&["compare", s(&model), "--json"]));
+    assert_eq!(report["points"], 33 * 33);
+    for row in report["rows"].as_array().unwrap() {
+        assert!(
+            row["normal_median_degrees"].as_f64().unwrap() < 0.1,
+            "{row}"
+        );
+        if row["on"] == "target" {
+            assert_eq!(row["bit_exact"], true, "{row}");
+        }
+    }
+    // A surface is not a curve: wrong arity and wrong command are refused clearly.
+    let t = dir.path().join("t.txt");
+    fs::write(&t, "0.5\n").unwrap();
+    assert!(fails(&["eval", s(&model), "--points", s(&t)]).contains("2 numbers (u v)"));
+    let svg = dir.path().join("x.svg");
+    assert!(fails(&["curve", "plot", s(&model), "--out", s(&svg)]).contains("draws curves"));
+}
+
+#[test]
+fn bad_point_sets_fail_with_a_message_naming_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.nsb");
+    let case = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        fs::write(&path, text).unwrap();
+        fails(&["curve", "fit", s(&path), "--out", s(&out)])
+    };
+    let few = case("few.txt", "0 0\n1 0\n1 1\n");
+    assert!(few.contains("at least 4"), "{few}");
+    let nan = case("nan.txt", "0 0\n1 0\n1 NaN\n0 1\n2 2\n");
+    assert!(nan.contains("line 3") && nan.contains("NaN"), "{nan}");
+    let duplicate = case("dup.txt", "0 0\n1 0\n1 1\n1 0\n0 1\n");
+    assert!(duplicate.contains("duplicate"), "{duplicate}");
+    let mixed = case("mixed.txt", "0 0\n1 0 0\n");
+    assert!(mixed.contains("first point has 2"), "{mixed}");
+    assert!(!out.exists(), "nothing is written for a failed fit");
+    let flat = dir.path().join("flat.txt");
+    fs::write(&flat, "0 0\n1 0\n1 1\n0 1\n0.5 0.5\n").unwrap();
+    let surface = fails(&["curve", "surface", s(&flat), "--out", s(&out)]);
+    assert!(surface.contains("3-D points"), "{surface}");
+}
