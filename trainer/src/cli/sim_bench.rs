@@ -1,6 +1,7 @@
 //! `neurosurf sim-bench`: what an evaluation costs on the simulated Cortex-M4F — instructions
-//! per evaluation against multiply–accumulates, for f32 and Q16.16, field and field+gradient,
-//! single points and lane batches, with the firmware's flash, RAM and stack.
+//! per evaluation against multiply–accumulates, for f32 and Q16.16, field and field+gradient
+//! (position and position+tangent for curves), single points and lane batches, with the
+//! firmware's flash, RAM and stack.
 
 use std::path::PathBuf;
 
@@ -11,6 +12,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use neurosurf_trainer::compare::{EvaluationPoints, SURFACE_SAMPLES};
+use neurosurf_trainer::curve::{
+    CurveOptions, SampleCurve, SampleOptions, curve_to_blob, reconstruct_curve, sample_curve,
+};
+use neurosurf_trainer::evaluate::{LoadedModel, geometry_columns};
 use neurosurf_trainer::implicit::{
     self, FitRequest, ImplicitNetwork, ImplicitOptions, TrainingSummary,
 };
@@ -33,12 +38,14 @@ pub struct Args {
     json: bool,
 }
 
-/// A model to measure: its blob for each scalar and its evaluation points.
+/// A model to measure: its blob for each scalar, its evaluation points (or parameters), and
+/// its two ops (the value alone, and with its derivative).
 struct Subject {
     name: String,
     path: PathBuf,
     blobs: Vec<(ScalarKind, Vec<u8>)>,
     points: Vec<[f32; 3]>,
+    ops: [Op; 2],
 }
 
 #[derive(Serialize)]
@@ -75,6 +82,10 @@ pub fn run(args: &Args) -> Result<()> {
     let mut subjects = built_in()?;
     for path in &args.models {
         let bytes = target::read_blob(path)?;
+        if let Some(parametric) = parametric(path, &bytes)? {
+            subjects.push(parametric);
+            continue;
+        }
         let decoded = implicit::from_blob(&bytes, path)?;
         subjects.push(Subject {
             name: path.display().to_string(),
@@ -87,12 +98,13 @@ pub fn run(args: &Args) -> Result<()> {
                 (ScalarKind::F32, bytes.clone()),
                 (ScalarKind::Q16_16, bytes),
             ],
+            ops: [Op::Field, Op::FieldGradient],
         });
     }
     let mut jobs = Vec::new();
     for subject in &subjects {
         for (scalar, blob) in &subject.blobs {
-            for op in [Op::Field, Op::FieldGradient] {
+            for op in subject.ops {
                 for mode in [Mode::Single, Mode::Batch] {
                     jobs.push((subject, *scalar, blob, op, mode));
                 }
@@ -108,7 +120,8 @@ pub fn run(args: &Args) -> Result<()> {
                 ..Job::field_gradient(blob, scalar, &subject.points)
             };
             let run = target::run(&simulator, &job, &subject.path)?;
-            let macs = target::mac_count(blob, scalar, op == Op::FieldGradient, &subject.path)?;
+            let derivative = matches!(op, Op::FieldGradient | Op::PositionDirection);
+            let macs = target::mac_count(blob, scalar, derivative, &subject.path)?;
             let instructions = run.instructions_per_point();
             Ok(Row {
                 model: subject.name.clone(),
@@ -178,9 +191,73 @@ fn built_in() -> Result<Vec<Subject>> {
             path: PathBuf::from(format!("<built-in {name}>")),
             points: points(&trained.network, box_size(Some(&trained.summary))),
             blobs,
+            ops: [Op::Field, Op::FieldGradient],
         });
     }
+    subjects.push(spiral_curve()?);
     Ok(subjects)
+}
+
+/// The approximating spline of 200 noisy points on a two-turn spiral (fixed seed), in both
+/// scalars, at [`POINTS`] parameters spread over [0, 1].
+fn spiral_curve() -> Result<Subject> {
+    let sample = sample_curve(
+        SampleCurve::Spiral,
+        &SampleOptions {
+            count: 200,
+            seed: 3,
+            ..SampleOptions::default()
+        },
+    )?;
+    let fit = reconstruct_curve(
+        &sample.curve_points()?,
+        &CurveOptions::new(SampleCurve::Spiral.topology(), 3),
+    )?;
+    let curve = &fit.approximation.curve;
+    let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
+        .into_iter()
+        .map(|scalar| Ok((scalar, curve_to_blob(curve, None, scalar)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let name = format!("spiral curve ({} control points)", curve.control.len());
+    Ok(Subject {
+        path: PathBuf::from(format!("<built-in {name}>")),
+        name,
+        blobs,
+        points: parameters(1),
+        ops: [Op::Position, Op::PositionDirection],
+    })
+}
+
+/// A curve or spline-surface blob as a subject, or `None` for any other kind.
+fn parametric(path: &std::path::Path, bytes: &[u8]) -> Result<Option<Subject>> {
+    let model = LoadedModel::from_bytes(bytes.to_vec(), path)?;
+    if geometry_columns(&model).is_none() {
+        return Ok(None);
+    }
+    Ok(Some(Subject {
+        name: path.display().to_string(),
+        path: path.to_path_buf(),
+        blobs: vec![
+            (ScalarKind::F32, bytes.to_vec()),
+            (ScalarKind::Q16_16, bytes.to_vec()),
+        ],
+        points: parameters(model.query_arity()),
+        ops: [Op::Position, Op::PositionDirection],
+    }))
+}
+
+/// [`POINTS`] parameters over [0, 1] (t), or over [0, 1]² ((u, v) along a diagonal sweep).
+fn parameters(arity: usize) -> Vec<[f32; 3]> {
+    (0..POINTS)
+        .map(|i| {
+            let t = i as f32 / (POINTS - 1) as f32;
+            if arity == 1 {
+                [t, 0.0, 0.0]
+            } else {
+                [t, (t * 5.0).fract(), 0.0]
+            }
+        })
+        .collect()
 }
 
 fn box_size(summary: Option<&TrainingSummary>) -> f64 {
