@@ -119,9 +119,33 @@ fn automatic_features_split_an_unlabelled_shape() {
         "ellipsoid",
         "--points",
         "160",
+        "--axes",
+        "1.2,0.8,0.5",
         "--out",
         s(&points),
     ]);
+    let text = fs::read_to_string(&points).unwrap();
+    let max_z = text
+        .lines()
+        .skip_while(|l| *l != "end_header")
+        .skip(1)
+        .filter_map(|l| l.split_whitespace().nth(2)?.parse::<f64>().ok())
+        .fold(0.0_f64, |m, z| m.max(z.abs()));
+    assert!(
+        max_z <= 0.5 + 1e-9 && max_z > 0.4,
+        "the c semi-axis is 0.5: {max_z}"
+    );
+    let short = fails(&[
+        "sample",
+        "ellipsoid",
+        "-n",
+        "10",
+        "--axes",
+        "1,2",
+        "--out",
+        s(&points),
+    ]);
+    assert!(short.contains("expected 3"), "{short}");
     let out = ok(&[
         "train",
         "implicit",

@@ -10,16 +10,16 @@ use neurosurf_core::scalar::ScalarKind;
 use serde::Serialize;
 
 use neurosurf_trainer::curve::{
-    BENCHMARK_SIZES, BSplineCurve, CurveOptions, CurvePoints, FitSummary, KohonenMapOptions,
-    PlotLayers, PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, benchmark,
-    curve_to_blob, fit_surface, interpolation_parameter, reconstruct_curve, sample_curve,
-    surface_mesh, surface_to_blob, write_plot,
+    BENCHMARK_SIZES, BSplineCurve, CurveOptions, CurvePoints, FitSummary, PlotLayers, PlotOptions,
+    SampleCurve, SampleOptions, SurfaceOptions, Topology, benchmark, curve_to_blob, fit_surface,
+    interpolation_parameter, reconstruct_curve, sample_curve, surface_mesh, surface_to_blob,
+    write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
 use neurosurf_trainer::table::{Align, Table};
 
-use super::output;
+use super::output::{self, comma_list};
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -162,6 +162,9 @@ pub struct FitArgs {
     /// Also draw the points, their order and the curve (`.svg` or `.png`).
     #[arg(long, value_name = "FILE")]
     plot: Option<PathBuf>,
+    /// Size of the plot in pixels, `WIDTH,HEIGHT`.
+    #[arg(long, value_parser = comma_list::<u32, 2>, default_value = "800,800")]
+    plot_size: [u32; 2],
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -230,7 +233,12 @@ fn fit(args: &FitArgs) -> Result<()> {
             curve: Some(curve),
             ..PlotLayers::default()
         };
-        write_plot(path, &layers, &PlotOptions::default())?;
+        let options = PlotOptions {
+            width: args.plot_size[0],
+            height: args.plot_size[1],
+            ..PlotOptions::default()
+        };
+        write_plot(path, &layers, &options)?;
     }
     let report = FitReport {
         out: &args.blob.out,
@@ -299,11 +307,11 @@ pub struct SurfaceArgs {
     /// Scattered 3-D points: text with `x y z` per line, or PLY.
     points: PathBuf,
     /// Map neurons along u and v, `COLUMNS,ROWS`.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [KohonenMapOptions::default().columns, KohonenMapOptions::default().rows])]
-    map: Vec<usize>,
+    #[arg(long, value_parser = comma_list::<usize, 2>, default_value = "12,12")]
+    map: [usize; 2],
     /// Control points of the surface along u and v, `U,V`.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [8, 8])]
-    control: Vec<usize>,
+    #[arg(long, value_parser = comma_list::<usize, 2>, default_value = "8,8")]
+    control: [usize; 2],
     #[command(flatten)]
     blob: BlobArgs,
     /// Also write a triangle mesh of the surface (`.obj`, `.ply` or `.stl`).
@@ -412,8 +420,8 @@ pub struct PlotArgs {
     #[arg(long)]
     control_polygon: bool,
     /// Picture size in pixels, `WIDTH,HEIGHT`.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [800, 800])]
-    size: Vec<u32>,
+    #[arg(long, value_parser = comma_list::<u32, 2>, default_value = "800,800")]
+    size: [u32; 2],
     /// Output picture (`.svg` or `.png`).
     #[arg(long)]
     out: PathBuf,
@@ -479,16 +487,19 @@ fn bench(args: &BenchArgs) -> Result<()> {
         ("neurons", Align::Right),
         ("iterations", Align::Right),
         ("seconds", Align::Right),
-        ("µs per point·iteration", Align::Right),
+        ("µs per presentation", Align::Right),
+        ("time vs first row", Align::Right),
     ]);
+    let baseline = rows.first().map_or(1.0, |r| r.seconds.max(1e-12));
     for row in &rows {
-        let per = row.seconds * 1e6 / (row.points * row.iterations).max(1) as f64;
+        let per = row.seconds * 1e6 / row.iterations.max(1) as f64;
         table.push([
             row.points.to_string(),
             row.neurons.to_string(),
             row.iterations.to_string(),
             format!("{:.4}", row.seconds),
             format!("{per:.3}"),
+            format!("{:.1}×", row.seconds / baseline),
         ]);
     }
     print!("{table}");

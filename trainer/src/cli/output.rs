@@ -9,3 +9,32 @@ pub fn json<T: Serialize>(value: &T) -> Result<()> {
     println!("{text}");
     Ok(())
 }
+
+/// Parses `N` comma-separated values (`800,600`) for an option such as `--size`.
+pub fn comma_list<T: std::str::FromStr, const N: usize>(text: &str) -> Result<[T; N], String> {
+    let values: Vec<T> = text
+        .split(',')
+        .map(|v| {
+            v.trim()
+                .parse()
+                .map_err(|_| format!("'{}' is not a valid value", v.trim()))
+        })
+        .collect::<Result<_, _>>()?;
+    let count = values.len();
+    values
+        .try_into()
+        .map_err(|_| format!("expected {N} comma-separated values, got {count}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::comma_list;
+
+    #[test]
+    fn comma_lists_have_their_exact_length() {
+        assert_eq!(comma_list::<u32, 2>("800, 600"), Ok([800, 600]));
+        assert_eq!(comma_list::<f64, 3>("1,0.5,2"), Ok([1.0, 0.5, 2.0]));
+        assert!(comma_list::<u32, 2>("800").unwrap_err().contains("got 1"));
+        assert!(comma_list::<u32, 2>("8,x").unwrap_err().contains("'x'"));
+    }
+}

@@ -9,7 +9,7 @@ use serde::Serialize;
 use neurosurf_trainer::io::{PlyEncoding, read_mesh, write_points_ply};
 use neurosurf_trainer::sample::{Shape, sample_mesh, sample_shape};
 
-use super::output;
+use super::output::{self, comma_list};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -26,8 +26,8 @@ pub struct Args {
     #[arg(long, default_value_t = 1.0)]
     radius: f64,
     /// Ellipsoid semi-axes `a,b,c`.
-    #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [1.0, 0.7, 0.5])]
-    axes: Vec<f64>,
+    #[arg(long, value_parser = comma_list::<f64, 3>, default_value = "1,0.7,0.5")]
+    axes: [f64; 3],
     /// Torus major radius R (ring), axis z.
     #[arg(long, default_value_t = 1.0)]
     major: f64,
@@ -69,12 +69,7 @@ pub fn run(args: &Args) -> Result<()> {
             args.count,
             args.seed,
         )?,
-        "ellipsoid" => {
-            let [a, b, c] = args.axes[..] else {
-                bail!("--axes takes three numbers a,b,c");
-            };
-            sample_shape(&Shape::Ellipsoid { axes: [a, b, c] }, args.count, args.seed)?
-        }
+        "ellipsoid" => sample_shape(&Shape::Ellipsoid { axes: args.axes }, args.count, args.seed)?,
         "torus" => sample_shape(
             &Shape::Torus {
                 major: args.major,
