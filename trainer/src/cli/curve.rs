@@ -126,13 +126,7 @@ fn sample(args: &SampleArgs) -> Result<()> {
         "# {:?}: {} shuffled points, noise {} of the spacing, seed {}\n",
         curve, args.count, args.noise, args.seed
     );
-    for p in &sample.points {
-        let line = match curve.dimension() {
-            2 => format!("{} {}\n", p[0], p[1]),
-            _ => format!("{} {} {}\n", p[0], p[1], p[2]),
-        };
-        text.push_str(&line);
-    }
+    text.push_str(&rows_text(&sample.points, curve.dimension()));
     write_atomic(&args.out, text.as_bytes())?;
     eprintln!("wrote {} points to {}", args.count, args.out.display());
     Ok(())
@@ -162,6 +156,13 @@ pub struct FitArgs {
     /// Also draw the points, their order and the curve (`.svg` or `.png`).
     #[arg(long, value_name = "FILE")]
     plot: Option<PathBuf>,
+    /// Also write the fitted curve as a polyline: text, one vertex per line (16 per segment).
+    #[arg(long, value_name = "FILE")]
+    polyline: Option<PathBuf>,
+    /// Also write the recovered order: text, one 0-based point index per line (points counted
+    /// in file order, comments skipped), in order along the curve.
+    #[arg(long, value_name = "FILE")]
+    order: Option<PathBuf>,
     /// Size of the plot in pixels, `WIDTH,HEIGHT`.
     #[arg(long, value_parser = comma_list::<u32, 2>, default_value = "800,800")]
     plot_size: [u32; 2],
@@ -240,6 +241,19 @@ fn fit(args: &FitArgs) -> Result<()> {
         };
         write_plot(path, &layers, &options)?;
     }
+    if let Some(path) = &args.polyline {
+        let vertices = curve.polyline(curve.segments().max(1) * 16);
+        write_atomic(path, rows_text(&vertices, dimension).as_bytes())?;
+    }
+    if let Some(path) = &args.order {
+        let text: String = result
+            .ordering
+            .order
+            .iter()
+            .map(|i| format!("{i}\n"))
+            .collect();
+        write_atomic(path, text.as_bytes())?;
+    }
     let report = FitReport {
         out: &args.blob.out,
         stored_as: scalar.name(),
@@ -285,6 +299,17 @@ fn fit(args: &FitArgs) -> Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// Points as text, `x y` (2-D) or `x y z` per line.
+fn rows_text(points: &[[f64; 3]], dimension: usize) -> String {
+    points
+        .iter()
+        .map(|p| match dimension {
+            2 => format!("{} {}\n", p[0], p[1]),
+            _ => format!("{} {} {}\n", p[0], p[1], p[2]),
+        })
+        .collect()
 }
 
 /// RMS and largest distance from each ordered point to the interpolating spline at its

@@ -282,12 +282,6 @@ pub(crate) mod tests {
         round_trip("cube-normals.PLY", true);
     }
 
-    fn data_file(name: &str) -> std::path::PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../shared/data")
-            .join(name)
-    }
-
     #[test]
     fn shared_test_models_load() {
         // Counts from /work/shared/data/README.md.
@@ -298,7 +292,8 @@ pub(crate) mod tests {
             ("fandisk.obj", 6475, 12946),
             ("stanford-bunny.obj", 35947, 69451),
         ] {
-            let mesh = read_mesh(&data_file(name)).unwrap();
+            let path = crate::io::data_file(name).unwrap_or_else(|e| panic!("{e}"));
+            let mesh = read_mesh(&path).unwrap();
             assert_eq!(mesh.vertex_count(), vertices, "{name}");
             assert_eq!(mesh.triangle_count(), faces, "{name}");
             let (lo, hi) = mesh.positions.iter().fold(

@@ -157,8 +157,7 @@ mod tests {
 
     #[test]
     fn spot_samples_lie_on_the_mesh() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/spot.obj");
+        let path = crate::io::data_file("spot.obj").unwrap_or_else(|e| panic!("{e}"));
         let mesh = crate::io::read_mesh(&path).unwrap();
         let points = sample_mesh(&mesh, 2000, 3).unwrap();
         let points = points.validated().unwrap();
