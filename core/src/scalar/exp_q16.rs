@@ -6,9 +6,9 @@
 //! round to 0 (x < −11.8) and results beyond the range saturate to [`Q16::MAX`] (x ≥ 10.3972);
 //! nothing overflows for any input.
 //!
-//! Accuracy: within 0.5 LSB + 2.5·10⁻⁷·e^x of the exact e^x at the Q16.16 input (measured
-//! exhaustively over every input in `core/tests/caoen_scalar.rs`: at most 0.51 LSB for
-//! x ≤ 0 and 0.52 LSB relative to 2⁻¹⁶·max(1, e^x) elsewhere).
+//! Accuracy: within 0.5 LSB + 2.5·10⁻⁷·e^x of the exact e^x at the Q16.16 input, and
+//! monotone (measured over every input from −11.8 to 10.4 and a sweep of the rest in
+//! `core/tests/caoen_scalar.rs`: at most 0.503 LSB for x ≤ 0).
 
 use super::Q16;
 
