@@ -25,6 +25,16 @@ pub enum Quantity {
     ControlPoints,
     /// Polynomial segments of a spline along one parametric direction.
     Segments,
+    /// Key points of a Cao En network (its hidden neurons).
+    KeyPoints,
+    /// Source dimension m of a Cao En network (the hypersphere or torus it maps from).
+    SourceDimension,
+    /// Target dimension p of a Cao En network (its outputs).
+    TargetDimension,
+    /// The code of a Cao En blending function (the valid maximum is reported as expected).
+    Blending,
+    /// The code of a Cao En source domain (the valid maximum is reported as expected).
+    Domain,
 }
 
 impl fmt::Display for Quantity {
@@ -37,6 +47,11 @@ impl fmt::Display for Quantity {
             Quantity::Dimension => "dimension",
             Quantity::ControlPoints => "control point count",
             Quantity::Segments => "segment count",
+            Quantity::KeyPoints => "key point count",
+            Quantity::SourceDimension => "source dimension",
+            Quantity::TargetDimension => "target dimension",
+            Quantity::Blending => "blending function code",
+            Quantity::Domain => "source domain code",
         })
     }
 }

@@ -8,7 +8,10 @@
 //! - [`blob`]: the checked container format trained models travel in;
 //! - [`implicit`]: Carcenac's modular implicit surfaces Φ(x) = 0 — field, gradient, normal;
 //! - [`curve`]: uniform cubic B-spline curves and surfaces (Hoffmann & Várady) — position,
-//!   tangent, partials, normal.
+//!   tangent, partials, normal;
+//! - [`caoen`]: Cao En surfaces (Wyvill, Cao & Trotman) — a two-layer network from a sphere,
+//!   torus or hypersphere: position, exact normal, projections, convex implicit form and
+//!   ray intersections.
 //!
 //! Load a blob once (that validates everything), then evaluate without failure:
 //!
@@ -26,10 +29,12 @@
 #![warn(missing_debug_implementations)]
 
 pub mod blob;
+pub mod caoen;
 pub mod curve;
 mod dense;
 mod error;
 pub mod implicit;
+mod lanes;
 mod math;
 pub mod scalar;
 

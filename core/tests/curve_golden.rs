@@ -31,25 +31,14 @@
 )]
 
 mod curve_support;
-
-use std::path::PathBuf;
-use std::sync::Once;
+mod golden_support;
 
 use curve_support::{CurveDraws, LSB, RefCurve, RefSurface, Rng, angle, curve_blob, surface_blob};
+use golden_support::{assert_bits, assert_ulps, f32_words, golden_dir, q16_words, read, to_bytes};
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 
 const SEED: u64 = 0x00B5_1998;
-
-fn golden_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests")
-        .join("golden")
-}
-
-fn blessing() -> bool {
-    std::env::var_os("NEUROSURF_BLESS").is_some_and(|v| v == "1")
-}
 
 fn golden_curve() -> RefCurve {
     RefCurve::new(false, Rng::new(SEED).points(12, 2.0, false))
@@ -94,29 +83,6 @@ fn surface_parameters() -> Vec<[Q16; 2]> {
     uv
 }
 
-fn to_bytes(words: impl IntoIterator<Item = [u8; 4]>) -> Vec<u8> {
-    words.into_iter().flatten().collect()
-}
-
-fn words(bytes: &[u8]) -> Vec<[u8; 4]> {
-    assert_eq!(bytes.len() % 4, 0, "not a whole number of words");
-    bytes
-        .chunks_exact(4)
-        .map(|c| c.try_into().unwrap())
-        .collect()
-}
-
-fn q16_words(bytes: &[u8]) -> Vec<Q16> {
-    words(bytes)
-        .into_iter()
-        .map(|w| Q16::from_bits(i32::from_le_bytes(w)))
-        .collect()
-}
-
-fn f32_words(bytes: &[u8]) -> Vec<f32> {
-    words(bytes).into_iter().map(f32::from_le_bytes).collect()
-}
-
 /// C and dC/dt, 6 words per parameter.
 fn evaluate_curve<S: Scalar>(blob: &[u8], t: &[S]) -> Vec<S> {
     let curve = BSplineCurve::<S>::from_blob(blob).unwrap();
@@ -138,25 +104,6 @@ fn evaluate_surface<S: Scalar>(blob: &[u8], uv: &[[S; 2]], none: S) -> Vec<S> {
             p.position.into_iter().chain(p.du).chain(p.dv).chain(n)
         })
         .collect()
-}
-
-fn read(name: &str) -> Vec<u8> {
-    let path = golden_dir().join(name);
-    std::fs::read(&path).unwrap_or_else(|e| {
-        panic!(
-            "cannot read golden file {}: {e} (generate it with NEUROSURF_BLESS=1)",
-            path.display()
-        )
-    })
-}
-
-fn bless_if_asked() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        if blessing() {
-            bless();
-        }
-    });
 }
 
 fn bless() {
@@ -226,54 +173,8 @@ fn surface_golden() -> (Vec<u8>, Vec<[Q16; 2]>) {
     )
 }
 
-/// Compares bit for bit and names the first difference.
-fn assert_bits(what: &str, per_point: usize, actual: &[Q16], expected: &[Q16]) {
-    assert_eq!(
-        actual.len(),
-        expected.len(),
-        "{what}: expected file does not match the parameters"
-    );
-    let differing: Vec<usize> = (0..expected.len())
-        .filter(|&i| actual[i] != expected[i])
-        .collect();
-    if let Some(&first) = differing.first() {
-        panic!(
-            "{what}: {} of {} golden Q16.16 words differ; first: word {} of point {}: got {:#010x} \
-             ({}), expected {:#010x} ({}). Bless with NEUROSURF_BLESS=1 only if the change is \
-             intended.",
-            differing.len(),
-            expected.len(),
-            first % per_point,
-            first / per_point,
-            actual[first].to_bits(),
-            actual[first],
-            expected[first].to_bits(),
-            expected[first],
-        );
-    }
-}
-
-/// Distance in ulps over the ordered integer line of f32; NaN only matches NaN.
-fn assert_ulps(what: &str, actual: &[f32], expected: &[f32]) {
-    assert_eq!(actual.len(), expected.len());
-    let ordered = |x: f32| {
-        let b = x.to_bits() as i32;
-        if b < 0 { i32::MIN - b } else { b }
-    };
-    for (i, (&a, &e)) in actual.iter().zip(expected).enumerate() {
-        if e.is_nan() || a.is_nan() {
-            assert!(
-                a.is_nan() && e.is_nan(),
-                "{what} word {i}: got {a}, expected {e}"
-            );
-            continue;
-        }
-        let ulps = (i64::from(ordered(a)) - i64::from(ordered(e))).abs();
-        assert!(
-            ulps <= 1,
-            "{what} word {i}: got {a:e}, expected {e:e} ({ulps} ulp apart)"
-        );
-    }
+fn bless_if_asked() {
+    golden_support::bless_if_asked(bless);
 }
 
 #[test]

@@ -4,6 +4,7 @@
 //! papers in `f64`, writes blobs that `neurosurf-core` evaluates, and evaluates them itself as
 //! the `f64` reference. The `neurosurf` binary is a thin command-line layer over this library.
 
+pub mod caoen;
 pub mod compare;
 pub mod curve;
 pub mod demo;

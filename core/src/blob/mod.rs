@@ -35,8 +35,12 @@
 //! ```
 
 mod crc32;
+mod loader;
+mod words;
 
 pub use crc32::crc32;
+pub(crate) use loader::loader_methods;
+pub(crate) use words::{check_storage, decode_word, stored_value};
 
 pub use crate::error::BlobError;
 use crate::scalar::ScalarKind;
@@ -64,6 +68,9 @@ pub enum ModelKind {
     Curve,
     /// A uniform cubic B-spline tensor-product surface, see [`crate::curve::BSplineSurface`].
     SplineSurface,
+    /// A Cao En surface (Wyvill, Cao & Trotman): a two-layer network mapping a sphere, torus or
+    /// hypersphere to a surface, see [`crate::caoen::CaoEnModel`].
+    CaoEn,
 }
 
 impl ModelKind {
@@ -74,6 +81,7 @@ impl ModelKind {
             ModelKind::Rbf => 2,
             ModelKind::Curve => 3,
             ModelKind::SplineSurface => 4,
+            ModelKind::CaoEn => 5,
         }
     }
 
@@ -84,6 +92,7 @@ impl ModelKind {
             2 => Some(ModelKind::Rbf),
             3 => Some(ModelKind::Curve),
             4 => Some(ModelKind::SplineSurface),
+            5 => Some(ModelKind::CaoEn),
             _ => None,
         }
     }
@@ -95,6 +104,7 @@ impl ModelKind {
             ModelKind::Rbf => "rbf",
             ModelKind::Curve => "curve",
             ModelKind::SplineSurface => "spline-surface",
+            ModelKind::CaoEn => "cao-en",
         }
     }
 }
@@ -220,6 +230,25 @@ pub fn write<T: serde::Serialize + ?Sized>(
         .ok_or(too_small)?
         .copy_from_slice(&crc);
     Ok(total)
+}
+
+/// Checks a blob's framing and that it holds a model of kind `expected`, then decodes its
+/// payload (shared by every model kind's `Payload::from_blob`).
+///
+/// # Errors
+/// Framing errors of [`parse`], [`BlobError::WrongModelKind`], [`BlobError::MalformedPayload`].
+pub(crate) fn decode_kind<'a, T: serde::Deserialize<'a>>(
+    bytes: &'a [u8],
+    expected: ModelKind,
+) -> Result<(BlobHeader, T), BlobError> {
+    let (header, payload) = parse(bytes)?;
+    if header.model != expected {
+        return Err(BlobError::WrongModelKind {
+            expected,
+            found: header.model,
+        });
+    }
+    Ok((header, decode_payload(payload)?))
 }
 
 /// Decodes a postcard payload that must be consumed exactly.

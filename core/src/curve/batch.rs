@@ -6,6 +6,7 @@ use super::bspline_curve::{BSplineCurve, CurvePoint};
 use super::bspline_surface::{BSplineSurface, SurfacePoint};
 use crate::error::LengthMismatch;
 use crate::implicit::LANES;
+use crate::lanes;
 use crate::scalar::Scalar;
 
 impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
@@ -25,14 +26,9 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn position_batch(&self, t: &[S], out: &mut [[S; 3]]) -> Result<(), LengthMismatch> {
-        check_lengths(t.len(), out.len())?;
-        for (chunk, out) in t.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let points = self.lanes::<LANES, false>(&pad(chunk, S::ZERO));
-            for (slot, point) in out.iter_mut().zip(&points) {
-                *slot = point.position;
-            }
-        }
-        Ok(())
+        lanes::batch(t, out, S::ZERO, |t| {
+            self.lanes::<LANES, false>(t).map(|point| point.position)
+        })
     }
 
     /// C(t) and dC/dt for every t of `t` into `out` (same length).
@@ -40,14 +36,7 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn eval_batch(&self, t: &[S], out: &mut [CurvePoint<S>]) -> Result<(), LengthMismatch> {
-        check_lengths(t.len(), out.len())?;
-        for (chunk, out) in t.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let points = self.lanes::<LANES, true>(&pad(chunk, S::ZERO));
-            for (slot, point) in out.iter_mut().zip(points) {
-                *slot = point;
-            }
-        }
-        Ok(())
+        lanes::batch(t, out, S::ZERO, |t| self.lanes::<LANES, true>(t))
     }
 }
 
@@ -57,14 +46,9 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn position_batch(&self, uv: &[[S; 2]], out: &mut [[S; 3]]) -> Result<(), LengthMismatch> {
-        check_lengths(uv.len(), out.len())?;
-        for (chunk, out) in uv.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let points = self.lanes::<LANES, false>(&pad(chunk, [S::ZERO; 2]));
-            for (slot, point) in out.iter_mut().zip(&points) {
-                *slot = point.position;
-            }
-        }
-        Ok(())
+        lanes::batch(uv, out, [S::ZERO; 2], |uv| {
+            self.lanes::<LANES, false>(uv).map(|point| point.position)
+        })
     }
 
     /// S(u, v), ∂S/∂u and ∂S/∂v for every `[u, v]` of `uv` into `out` (same length).
@@ -76,14 +60,7 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
         uv: &[[S; 2]],
         out: &mut [SurfacePoint<S>],
     ) -> Result<(), LengthMismatch> {
-        check_lengths(uv.len(), out.len())?;
-        for (chunk, out) in uv.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let points = self.lanes::<LANES, true>(&pad(chunk, [S::ZERO; 2]));
-            for (slot, point) in out.iter_mut().zip(points) {
-                *slot = point;
-            }
-        }
-        Ok(())
+        lanes::batch(uv, out, [S::ZERO; 2], |uv| self.lanes::<LANES, true>(uv))
     }
 
     /// The unit normal for every `[u, v]` of `uv` into `out` (same length).
@@ -95,27 +72,6 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
         uv: &[[S; 2]],
         out: &mut [Option<[S; 3]>],
     ) -> Result<(), LengthMismatch> {
-        check_lengths(uv.len(), out.len())?;
-        for (chunk, out) in uv.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let normals = self.normal_lanes::<LANES>(&pad(chunk, [S::ZERO; 2]));
-            for (slot, normal) in out.iter_mut().zip(normals) {
-                *slot = normal;
-            }
-        }
-        Ok(())
+        lanes::batch(uv, out, [S::ZERO; 2], |uv| self.normal_lanes::<LANES>(uv))
     }
-}
-
-fn check_lengths(inputs: usize, outputs: usize) -> Result<(), LengthMismatch> {
-    if inputs == outputs {
-        Ok(())
-    } else {
-        Err(LengthMismatch { inputs, outputs })
-    }
-}
-
-/// A full set of lanes: the chunk's parameters, the last one repeated into unused lanes.
-fn pad<T: Copy>(chunk: &[T], empty: T) -> [T; LANES] {
-    let last = chunk.last().copied().unwrap_or(empty);
-    core::array::from_fn(|lane| chunk.get(lane).copied().unwrap_or(last))
 }

@@ -92,68 +92,21 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
         }
     }
 
-    /// Decodes and validates a curve blob, converting its control points to `S`.
-    ///
-    /// # Errors
-    /// Framing errors ([`crate::blob::parse`]); [`BlobError::WrongModelKind`] for another kind
-    /// of blob; [`BlobError::MalformedPayload`]; [`BlobError::UnsupportedStorage`] for `f64`
-    /// storage; [`BlobError::ShapeMismatch`] for a dimension other than 2 or 3 (`Dimension`),
-    /// a control byte string that is not whole points (`Parameters`, in words), fewer than 4
-    /// points (`ControlPoints`), or a nonzero z in a 2-D curve (`Dimension`, expected 2,
-    /// found 3); [`BlobError::CapacityExceeded`] beyond [`MAX_SEGMENTS`](super::MAX_SEGMENTS)
-    /// segments (`Segments`) or `C` points (`ControlPoints`);
-    /// [`BlobError::NonFiniteParameter`] / [`BlobError::ParameterOutOfRange`] (|x| > 1024 for
-    /// Q16.16) naming the first bad coordinate word.
-    pub fn from_blob(bytes: &[u8]) -> Result<Self, BlobError> {
-        let mut curve = Self::new();
-        curve.load(bytes)?;
-        Ok(curve)
-    }
-
-    /// Replaces this curve by the one in `bytes`, in place. On error the curve is left empty.
-    ///
-    /// # Errors
-    /// As [`BSplineCurve::from_blob`].
-    pub fn load(&mut self, bytes: &[u8]) -> Result<(), BlobError> {
-        self.clear();
-        let result = CurvePayload::from_blob(bytes)
-            .and_then(|(header, payload)| self.load_payload(&payload, header.scalar));
-        #[cfg(feature = "defmt")]
-        if let Err(e) = &result {
-            defmt::warn!("curve blob rejected: {}", e);
-        }
-        result
-    }
-
-    /// Validates a decoded payload whose control points are stored as `stored`.
-    ///
-    /// # Errors
-    /// As [`BSplineCurve::from_blob`], minus framing.
-    pub fn from_payload(payload: &CurvePayload<'_>, stored: ScalarKind) -> Result<Self, BlobError> {
-        let mut curve = Self::new();
-        curve.load_payload(payload, stored)?;
-        Ok(curve)
-    }
-
-    /// Replaces this curve by a decoded payload, in place. On error the curve is left empty.
-    ///
-    /// # Errors
-    /// As [`BSplineCurve::from_payload`].
-    pub fn load_payload(
-        &mut self,
-        payload: &CurvePayload<'_>,
-        stored: ScalarKind,
-    ) -> Result<(), BlobError> {
-        let result = self.fill(payload, stored);
-        if result.is_err() {
-            self.clear();
-        }
-        result
-    }
-
-    fn clear(&mut self) {
-        *self = Self::new();
-    }
+    crate::blob::loader_methods!(
+        CurvePayload,
+        "curve",
+        "Framing errors ([`crate::blob::parse`]); [`BlobError::WrongModelKind`] for \
+         another kind of blob; [`BlobError::MalformedPayload`]; \
+         [`BlobError::UnsupportedStorage`] for `f64` storage; \
+         [`BlobError::ShapeMismatch`] for a dimension other than 2 or 3 (`Dimension`), a \
+         control byte string that is not whole points (`Parameters`, in words), fewer \
+         than 4 points (`ControlPoints`), or a nonzero z in a 2-D curve (`Dimension`, \
+         expected 2, found 3); [`BlobError::CapacityExceeded`] beyond \
+         [`MAX_SEGMENTS`](super::MAX_SEGMENTS) segments (`Segments`) or `C` points \
+         (`ControlPoints`); [`BlobError::NonFiniteParameter`] / \
+         [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16) naming the first bad \
+         coordinate word."
+    );
 
     fn fill(&mut self, payload: &CurvePayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
         self.clear();

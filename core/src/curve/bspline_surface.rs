@@ -105,71 +105,20 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
         }
     }
 
-    /// Decodes and validates a surface blob, converting its control points to `S`.
-    ///
-    /// # Errors
-    /// Framing errors ([`crate::blob::parse`]); [`BlobError::WrongModelKind`];
-    /// [`BlobError::MalformedPayload`]; [`BlobError::UnsupportedStorage`] for `f64` storage;
-    /// [`BlobError::ShapeMismatch`] for fewer than 4 points along a direction
-    /// (`ControlPoints`, u checked first) or a control byte string that does not hold exactly
-    /// count_u·count_v points (`Parameters`, in words); [`BlobError::CapacityExceeded`] beyond
-    /// [`MAX_SEGMENTS`](super::MAX_SEGMENTS) segments along a direction (`Segments`) or `C`
-    /// points in total (`ControlPoints`); [`BlobError::NonFiniteParameter`] /
-    /// [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16) naming the first bad
-    /// coordinate word.
-    pub fn from_blob(bytes: &[u8]) -> Result<Self, BlobError> {
-        let mut surface = Self::new();
-        surface.load(bytes)?;
-        Ok(surface)
-    }
-
-    /// Replaces this surface by the one in `bytes`, in place. On error it is left empty.
-    ///
-    /// # Errors
-    /// As [`BSplineSurface::from_blob`].
-    pub fn load(&mut self, bytes: &[u8]) -> Result<(), BlobError> {
-        self.clear();
-        let result = SurfacePayload::from_blob(bytes)
-            .and_then(|(header, payload)| self.load_payload(&payload, header.scalar));
-        #[cfg(feature = "defmt")]
-        if let Err(e) = &result {
-            defmt::warn!("spline surface blob rejected: {}", e);
-        }
-        result
-    }
-
-    /// Validates a decoded payload whose control points are stored as `stored`.
-    ///
-    /// # Errors
-    /// As [`BSplineSurface::from_blob`], minus framing.
-    pub fn from_payload(
-        payload: &SurfacePayload<'_>,
-        stored: ScalarKind,
-    ) -> Result<Self, BlobError> {
-        let mut surface = Self::new();
-        surface.load_payload(payload, stored)?;
-        Ok(surface)
-    }
-
-    /// Replaces this surface by a decoded payload, in place. On error it is left empty.
-    ///
-    /// # Errors
-    /// As [`BSplineSurface::from_payload`].
-    pub fn load_payload(
-        &mut self,
-        payload: &SurfacePayload<'_>,
-        stored: ScalarKind,
-    ) -> Result<(), BlobError> {
-        let result = self.fill(payload, stored);
-        if result.is_err() {
-            self.clear();
-        }
-        result
-    }
-
-    fn clear(&mut self) {
-        *self = Self::new();
-    }
+    crate::blob::loader_methods!(
+        SurfacePayload,
+        "spline surface",
+        "Framing errors ([`crate::blob::parse`]); [`BlobError::WrongModelKind`]; \
+         [`BlobError::MalformedPayload`]; [`BlobError::UnsupportedStorage`] for `f64` \
+         storage; [`BlobError::ShapeMismatch`] for fewer than 4 points along a direction \
+         (`ControlPoints`, u checked first) or a control byte string that does not hold \
+         exactly count_u·count_v points (`Parameters`, in words); \
+         [`BlobError::CapacityExceeded`] beyond [`MAX_SEGMENTS`](super::MAX_SEGMENTS) \
+         segments along a direction (`Segments`) or `C` points in total \
+         (`ControlPoints`); [`BlobError::NonFiniteParameter`] / \
+         [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16) naming the first bad \
+         coordinate word."
+    );
 
     fn fill(&mut self, payload: &SurfacePayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
         self.clear();

@@ -2,24 +2,14 @@
 
 use heapless::Vec;
 
-use crate::blob::ModelKind;
+use crate::blob;
 use crate::error::{BlobError, Quantity};
 use crate::scalar::{Scalar, ScalarKind};
 
 /// Bytes per stored control point: x, y, z, 4 bytes each.
 pub(crate) const POINT_BYTES: usize = 12;
 
-/// Only 4-byte storage kinds hold splines.
-pub(crate) fn check_storage(model: ModelKind, stored: ScalarKind) -> Result<(), BlobError> {
-    if matches!(stored, ScalarKind::F32 | ScalarKind::Q16_16) {
-        Ok(())
-    } else {
-        Err(BlobError::UnsupportedStorage {
-            model,
-            scalar: stored,
-        })
-    }
-}
+pub(crate) use crate::blob::check_storage;
 
 /// The shape error of a control byte string that does not hold exactly `expected` points
 /// (counted in 4-byte words, like the implicit model's parameters).
@@ -71,15 +61,7 @@ pub(crate) fn decode<S: Scalar, const C: usize>(
             .zip(chunk.chunks_exact(4))
             .enumerate()
         {
-            let index = 3 * point + axis;
-            let word: [u8; 4] = word.try_into().map_err(|_| BlobError::MalformedPayload)?;
-            *slot = S::from_stored(word, stored).ok_or_else(|| {
-                if stored == ScalarKind::F32 && !f32::from_le_bytes(word).is_finite() {
-                    BlobError::NonFiniteParameter { index }
-                } else {
-                    BlobError::ParameterOutOfRange { index }
-                }
-            })?;
+            *slot = blob::decode_word(word, stored, 3 * point + axis)?;
         }
         out.push(coordinates)
             .map_err(|_| over_capacity(bytes.len() / POINT_BYTES, C))?;

@@ -92,7 +92,7 @@ impl<'a> CurvePayload<'a> {
     /// Framing errors of [`blob::parse`], [`BlobError::WrongModelKind`],
     /// [`BlobError::MalformedPayload`].
     pub fn from_blob(bytes: &'a [u8]) -> Result<(BlobHeader, Self), BlobError> {
-        decode(bytes, ModelKind::Curve)
+        blob::decode_kind(bytes, ModelKind::Curve)
     }
 
     /// Frames this payload as a [`ModelKind::Curve`] blob in `out`, whose `control` is stored
@@ -113,7 +113,7 @@ impl<'a> SurfacePayload<'a> {
     /// Framing errors of [`blob::parse`], [`BlobError::WrongModelKind`],
     /// [`BlobError::MalformedPayload`].
     pub fn from_blob(bytes: &'a [u8]) -> Result<(BlobHeader, Self), BlobError> {
-        decode(bytes, ModelKind::SplineSurface)
+        blob::decode_kind(bytes, ModelKind::SplineSurface)
     }
 
     /// Frames this payload as a [`ModelKind::SplineSurface`] blob in `out`, whose `control`
@@ -124,18 +124,4 @@ impl<'a> SurfacePayload<'a> {
     pub fn write(&self, scalar: ScalarKind, out: &mut [u8]) -> Result<usize, BlobError> {
         blob::write(ModelKind::SplineSurface, scalar, self, out)
     }
-}
-
-fn decode<'a, T: Deserialize<'a>>(
-    bytes: &'a [u8],
-    expected: ModelKind,
-) -> Result<(BlobHeader, T), BlobError> {
-    let (header, payload) = blob::parse(bytes)?;
-    if header.model != expected {
-        return Err(BlobError::WrongModelKind {
-            expected,
-            found: header.model,
-        });
-    }
-    Ok((header, blob::decode_payload(payload)?))
 }

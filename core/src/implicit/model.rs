@@ -37,14 +37,7 @@ impl<'a> ImplicitPayload<'a> {
     /// Framing errors of [`blob::parse`], [`BlobError::WrongModelKind`],
     /// [`BlobError::MalformedPayload`].
     pub fn from_blob(bytes: &'a [u8]) -> Result<(blob::BlobHeader, Self), BlobError> {
-        let (header, payload) = blob::parse(bytes)?;
-        if header.model != ModelKind::Implicit {
-            return Err(BlobError::WrongModelKind {
-                expected: ModelKind::Implicit,
-                found: header.model,
-            });
-        }
-        Ok((header, blob::decode_payload(payload)?))
+        blob::decode_kind(bytes, ModelKind::Implicit)
     }
 }
 

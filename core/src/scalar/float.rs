@@ -106,4 +106,17 @@ impl Scalar for f32 {
         let r = 1.0 / self;
         (self != 0.0 && r.is_finite()).then_some(r)
     }
+
+    #[inline]
+    fn exp(self) -> Self {
+        super::exp_f32::exp(self)
+    }
+    #[inline]
+    fn quotient(numerator: f32, denominator: f32) -> Self {
+        if denominator == 0.0 {
+            0.0
+        } else {
+            numerator / denominator
+        }
+    }
 }

@@ -5,7 +5,8 @@
 //! both and compare them with an `f64` reference. It provides exactly what the models need:
 //! saturating arithmetic, a wide multiply–accumulate ([`Scalar::Acc`]), the activation
 //! a(H) = 1.7159·tanh(2H/3) with its first and second derivatives, `sqrt`/`recip` for
-//! normalization, and conversions.
+//! normalization, `exp` and a quotient of accumulators for the Cao En blending functions, and
+//! conversions.
 //!
 //! The hot loop of every network is `acc = mac(acc, weight, input)` followed by one
 //! [`Scalar::from_acc`] per neuron: for `f32` that is a plain multiply–add; for Q16.16 it is a
@@ -21,6 +22,8 @@
 //! ```
 
 mod activation_table;
+mod exp_f32;
+mod exp_q16;
 mod float;
 mod q16;
 mod tanh_f32;
@@ -197,6 +200,30 @@ pub trait Scalar:
     fn sqrt(self) -> Self;
     /// 1/x; `None` when x is 0 or the result is not representable.
     fn recip(self) -> Option<Self>;
+
+    /// e^x, total and deterministic (integer or IEEE basic operations only, the same bits on
+    /// every target).
+    ///
+    /// - `f32`: relative error below 2.5·10⁻⁷ on [−86, 88]; 0 below −86, +∞ above 88, NaN
+    ///   for NaN.
+    /// - Q16.16: within 0.5 LSB + 2.5·10⁻⁷·e^x; 0 below −11.8, saturated to the largest
+    ///   value from 10.3972 on. Never overflows.
+    ///
+    /// ```
+    /// use neurosurf_core::scalar::{Q16, Scalar};
+    /// assert!((<f32 as Scalar>::exp(-1.0) - 0.367_879_44).abs() < 1e-7);
+    /// let q = Q16::exp(Q16::from_num(-16));
+    /// assert_eq!(q, Q16::ZERO); // e⁻¹⁶ ≈ 1.1·10⁻⁷ is below half an LSB
+    /// assert_eq!(Q16::exp(Q16::from_num(11)), Q16::MAX);
+    /// ```
+    fn exp(self) -> Self;
+
+    /// `numerator / denominator` of two accumulators (as [`Scalar::from_acc`] would round
+    /// them), rounded to nearest and saturated; 0 when the denominator is 0.
+    ///
+    /// For Q16.16 the denominator must be a sum of Q16.16 values (a multiple of 2⁻¹⁶, as every
+    /// accumulation of `mac(acc, x, ONE)` is); then the quotient is rounded once, exactly.
+    fn quotient(numerator: Self::Acc, denominator: Self::Acc) -> Self;
 }
 
 /// Dot product of two equally long slices, starting from `init` (extra elements of the longer

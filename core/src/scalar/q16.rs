@@ -183,6 +183,31 @@ impl Scalar for Q16 {
         let value = if bits < 0 { -magnitude } else { magnitude };
         i32::try_from(value).ok().map(Q16::from_bits)
     }
+
+    #[inline]
+    fn exp(self) -> Self {
+        super::exp_q16::exp(self)
+    }
+    #[inline]
+    fn quotient(numerator: i64, denominator: i64) -> Self {
+        // The denominator is a multiple of 2¹⁶ in Q32.32 (a sum of Q16.16 values), so
+        // d = denominator / 2¹⁶ is exact and numerator / d is the quotient in Q16.16 bits.
+        let d = denominator >> 16;
+        if d == 0 {
+            return Q16::ZERO;
+        }
+        let (q, r) = (numerator.wrapping_div(d), numerator.wrapping_rem(d));
+        // Round half away from zero; |2r| < 2|d| ≤ 2⁴⁸ cannot overflow.
+        let away = 2 * r.unsigned_abs() >= d.unsigned_abs();
+        let q = if !away {
+            q
+        } else if (r < 0) == (d < 0) {
+            q.saturating_add(1)
+        } else {
+            q.saturating_sub(1)
+        };
+        saturate(q)
+    }
 }
 
 /// ⌊√n⌋ for a 64-bit integer, by the bit-by-bit method (no division, fixed 32 steps).

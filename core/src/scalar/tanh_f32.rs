@@ -2,17 +2,17 @@
 //! ~150, with no table and no branch in the common range.
 //!
 //! tanh(x) = sign(x)·(1 − 2/(e^{2|x|} + 1)), with e^y = 2ⁿ·e^r (n = round(y/ln 2), |r| ≤ ln2/2)
-//! and e^r from its degree-7 Taylor polynomial (truncation < 5·10⁻⁹ relative). Only `+ − × ÷`
-//! and bit operations on plain `f32`, never fused: every IEEE-754 target (x86-64 SSE,
-//! Cortex-M4F FPv4) computes the same bits, so host and target agree exactly.
+//! and e^r from its degree-7 Taylor polynomial (truncation < 5·10⁻⁹ relative; shared with
+//! [`super::exp_f32`]). Only `+ − × ÷` and bit operations on plain `f32`, never fused: every
+//! IEEE-754 target (x86-64 SSE, Cortex-M4F FPv4) computes the same bits, so host and target
+//! agree exactly.
 //!
 //! Accuracy: absolute error below 1.5·10⁻⁷ over all `f32` (measured exhaustively on a dense
 //! sweep in `core/tests/activation.rs`); relative accuracy is not a goal — near 0 the result is
 //! within 1.5·10⁻⁷ of x, not within an ulp.
 
-const LN2_HI: f32 = 0.693_145_75; // ln 2 rounded to 16 significant bits: n·LN2_HI is exact
-const LN2_LO: f32 = 1.428_606_8e-6; // ln 2 − LN2_HI
-const INV_LN2: f32 = core::f32::consts::LOG2_E;
+use super::exp_f32::{INV_LN2, LN2_HI, LN2_LO, exp_reduced, scale_by_power_of_two};
+
 /// Beyond this |x|, tanh(x) rounds to ±1 in `f32` (1 − tanh(9) ≈ 3·10⁻⁸).
 const SATURATION: f32 = 9.0;
 
@@ -29,14 +29,8 @@ pub(crate) fn tanh(x: f32) -> f32 {
         let n = (y * INV_LN2 + 0.5) as i32;
         let nf = n as f32;
         let r = (y - nf * LN2_HI) - nf * LN2_LO;
-        let p = 1.0
-            + r * (1.0
-                + r * (0.5
-                    + r * (1.0 / 6.0
-                        + r * (1.0 / 24.0
-                            + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
-        // p ∈ [0.7, 1.42] and n ∈ [0, 26]: adding n to the exponent cannot overflow.
-        let e = f32::from_bits(p.to_bits().wrapping_add((n as u32) << 23));
+        // e^r ∈ [0.7, 1.42] and n ∈ [0, 26]: adding n to the exponent cannot overflow.
+        let e = scale_by_power_of_two(exp_reduced(r), n);
         1.0 - 2.0 / (e + 1.0)
     };
     f32::from_bits(t.to_bits() | (x.to_bits() & 0x8000_0000))

@@ -1,0 +1,138 @@
+//! The blending functions F (paper §4) and the source domains, with their blob codes.
+
+use crate::scalar::Scalar;
+
+/// Largest sharpness q a blob may give a key point, for either blending function.
+///
+/// In Q16.16 the exponential's argument q·(s − 1) stays within ±2¹² for |s| ≤ 32, and F′ = q·F
+/// within the clamp; powers up to 64 take at most 12 multiplications.
+pub const MAX_SHARPNESS: f64 = 64.0;
+
+/// How a key point turns the cosine s = x·wᵢ into its activation kᵢ = Fᵢ(s).
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum Blending {
+    /// F(s) = s^q for s > 0, else 0 (paper eq. 4); q a whole number 0 … 64.
+    Power,
+    /// F(s) = e^{q(s−1)} (paper eq. 5); q any value in [0, 64].
+    Exponential,
+}
+
+impl Blending {
+    /// The blob code: 0 power, 1 exponential.
+    pub const fn code(self) -> u8 {
+        match self {
+            Blending::Power => 0,
+            Blending::Exponential => 1,
+        }
+    }
+
+    /// The blending a blob code names.
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Blending::Power),
+            1 => Some(Blending::Exponential),
+            _ => None,
+        }
+    }
+
+    /// The largest valid code.
+    pub(crate) const LAST_CODE: u8 = 1;
+}
+
+/// What the network maps from, which fixes how tangents (and so normals) are formed.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum Domain {
+    /// The unit sphere (m = 3) or a hypersphere (m > 3): x with |x| = 1.
+    Sphere,
+    /// The torus (m = 4): x = (cos θ, sin θ, cos φ, sin φ) (paper eq. 18).
+    Torus,
+}
+
+impl Domain {
+    /// The blob code: 0 sphere, 1 torus.
+    pub const fn code(self) -> u8 {
+        match self {
+            Domain::Sphere => 0,
+            Domain::Torus => 1,
+        }
+    }
+
+    /// The domain a blob code names.
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Domain::Sphere),
+            1 => Some(Domain::Torus),
+            _ => None,
+        }
+    }
+
+    /// The largest valid code.
+    pub(crate) const LAST_CODE: u8 = 1;
+}
+
+/// F(s) and, when `DERIVATIVE`, F′(s), both clamped to ±`limit` (see the accuracy notes in
+/// [`crate::caoen`]). `power` is q as a whole number (power blending only).
+#[inline(always)]
+pub(crate) fn blend<S: Scalar, const DERIVATIVE: bool>(
+    blending: Blending,
+    s: S,
+    q: S,
+    power: u8,
+    limit: S,
+) -> (S, S) {
+    let (value, slope) = match blending {
+        Blending::Power => {
+            // NaN is not greater than 0 either and gives 0, like any s ≤ 0.
+            if s.partial_cmp(&S::ZERO) != Some(core::cmp::Ordering::Greater) {
+                return (S::ZERO, S::ZERO);
+            }
+            if power == 0 {
+                return (S::ONE, S::ZERO);
+            }
+            let below = powi(s, u32::from(power) - 1);
+            let slope = if DERIVATIVE { q.mul(below) } else { S::ZERO };
+            (below.mul(s), slope)
+        }
+        Blending::Exponential => {
+            let value = q.mul(s.sub(S::ONE)).exp();
+            let slope = if DERIVATIVE { q.mul(value) } else { S::ZERO };
+            (value, slope)
+        }
+    };
+    (clamp(value, limit), clamp(slope, limit))
+}
+
+/// base^exponent by binary powering (at most 2·⌈log₂(exponent + 1)⌉ rounded products).
+#[inline(always)]
+fn powi<S: Scalar>(base: S, mut exponent: u32) -> S {
+    let mut result = S::ONE;
+    let mut square = base;
+    while exponent > 0 {
+        if exponent & 1 == 1 {
+            result = result.mul(square);
+        }
+        exponent >>= 1;
+        if exponent > 0 {
+            square = square.mul(square);
+        }
+    }
+    result
+}
+
+/// x limited to [−limit, limit]; NaN stays NaN.
+#[inline(always)]
+pub(crate) fn clamp<S: Scalar>(x: S, limit: S) -> S {
+    if x > limit {
+        limit
+    } else if x < limit.neg() {
+        limit.neg()
+    } else {
+        x
+    }
+}

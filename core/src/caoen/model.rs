@@ -1,0 +1,345 @@
+//! The validated Cao En network: loading, accessors and cost.
+
+use heapless::Vec;
+
+use super::blending::{Blending, Domain, MAX_SHARPNESS};
+use super::payload::CaoEnPayload;
+use crate::blob::{self, ModelKind};
+use crate::error::{BlobError, Quantity};
+use crate::scalar::{Scalar, ScalarKind};
+
+/// Largest source dimension m (hyperspheres up to S⁷).
+pub const MAX_SOURCE_DIMENSION: usize = 8;
+/// Largest target dimension p (3 for shapes, 2 for screen projections, 5 for images, …).
+pub const MAX_TARGET_DIMENSION: usize = 8;
+/// Most key points any Cao En blob may have, whatever the capacity: with every weight, target
+/// and blending value within ±1024 in Q16.16 (2²⁶ in bits), 1024 products of 2⁵² stay below
+/// 2⁶² in the Q32.32 accumulator.
+pub const MAX_KEY_POINTS: usize = 1024;
+/// Default key-point capacity of [`CaoEnModel`]: 256 (18 KiB in `f32`), more than twice the
+/// paper's 104-point teapot.
+pub const DEFAULT_KEY_POINTS: usize = 256;
+
+/// One key point: its blending weight wᵢ (the source point), its target tᵢ (column i of V),
+/// and its sharpness q (also as a whole number for power blending).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct Key<S> {
+    pub(crate) weight: [S; MAX_SOURCE_DIMENSION],
+    pub(crate) target: [S; MAX_TARGET_DIMENSION],
+    pub(crate) sharpness: S,
+    pub(crate) power: u8,
+}
+
+/// A Cao En network y = V·k, kᵢ = Fᵢ(x·wᵢ), loaded from a blob and validated (see
+/// [`crate::caoen`] for the contract, the payload and the accuracy).
+///
+/// `K` is the key-point capacity reserved inline (no heap). Evaluation after a successful load
+/// cannot fail: every input, including ±∞ and NaN coordinates, gives a value.
+///
+/// ```
+/// # use neurosurf_core::caoen::{CaoEnModel, CaoEnPayload};
+/// # use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+/// # fn main() -> Result<(), neurosurf_core::BlobError> {
+/// # let blob = example_blob();
+/// let model = CaoEnModel::<f32>::from_blob(&blob)?;
+/// let fixed = CaoEnModel::<Q16>::from_blob(&blob)?; // same blob, other scalar
+/// let x = [0.6, 0.0, 0.8]; // a point of the unit sphere
+/// let y: [f32; 3] = model.eval(&x);
+/// let z: [Q16; 3] = fixed.eval(&x.map(Q16::from_num));
+/// assert!((y[2] - z[2].to_f32()).abs() < 1e-3);
+/// assert_eq!((model.key_count(), model.source_dimension(), model.target_dimension()), (6, 3, 3));
+/// # Ok(())
+/// # }
+/// # fn example_blob() -> Vec<u8> {
+/// #     let axes = [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+/// #     let words: Vec<u8> = axes.iter().flatten().flat_map(|&c| ScalarKind::F32.encode(c).unwrap()).collect();
+/// #     let q: Vec<u8> = [2.0; 6].iter().flat_map(|&c| ScalarKind::F32.encode(c).unwrap()).collect();
+/// #     let payload = CaoEnPayload { domain: 0, blending: 0, normalized: false, source_dimension: 3, target_dimension: 3, weights: &words, targets: &words, sharpness: &q, metadata: &[] };
+/// #     let mut out = vec![0_u8; 512];
+/// #     let n = payload.write(ScalarKind::F32, &mut out).unwrap();
+/// #     out.truncate(n);
+/// #     out
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct CaoEnModel<S: Scalar, const K: usize = DEFAULT_KEY_POINTS> {
+    pub(crate) domain: Domain,
+    pub(crate) blending: Blending,
+    pub(crate) normalized: bool,
+    pub(crate) source_dimension: u8,
+    pub(crate) target_dimension: u8,
+    pub(crate) keys: Vec<Key<S>, K>,
+    pub(crate) stored_as: ScalarKind,
+}
+
+impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
+    /// An empty network (no key points: every output is 0), to be filled by
+    /// [`CaoEnModel::load`]. `const`, so firmware can keep a model in a `static`.
+    pub const fn new() -> Self {
+        CaoEnModel {
+            domain: Domain::Sphere,
+            blending: Blending::Power,
+            normalized: false,
+            source_dimension: 0,
+            target_dimension: 0,
+            keys: Vec::new(),
+            stored_as: S::KIND,
+        }
+    }
+
+    crate::blob::loader_methods!(
+        CaoEnPayload,
+        "Cao En",
+        "Framing errors ([`crate::blob::parse`]); [`BlobError::WrongModelKind`] for \
+         another kind of blob; [`BlobError::MalformedPayload`]; \
+         [`BlobError::UnsupportedStorage`] for `f64` storage; \
+         [`BlobError::ShapeMismatch`] for an unknown domain or blending code (`Domain`, \
+         `Blending`, expected the largest code), a source dimension outside 3 … \
+         [`MAX_SOURCE_DIMENSION`] or other than 4 for a torus (`SourceDimension`), a \
+         target dimension outside 1 … [`MAX_TARGET_DIMENSION`] (`TargetDimension`), no \
+         key points (`KeyPoints`, expected 1) or word strings that disagree with n = \
+         sharpness words (`Parameters`, in words); [`BlobError::CapacityExceeded`] \
+         (`KeyPoints`) beyond [`MAX_KEY_POINTS`] or `K`; \
+         [`BlobError::NonFiniteParameter`] / [`BlobError::ParameterOutOfRange`] (|value| \
+         > 1024 for Q16.16; a sharpness outside [0, 64], or not whole for power blending) \
+         naming the first bad word, counted through W, then V, then q."
+    );
+
+    fn fill(&mut self, payload: &CaoEnPayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
+        self.clear();
+        blob::check_storage(ModelKind::CaoEn, stored)?;
+        let code_error = |what, last: u8, found: u8| BlobError::ShapeMismatch {
+            what,
+            expected: usize::from(last),
+            found: usize::from(found),
+        };
+        let domain = Domain::from_code(payload.domain)
+            .ok_or_else(|| code_error(Quantity::Domain, Domain::LAST_CODE, payload.domain))?;
+        let blending = Blending::from_code(payload.blending)
+            .ok_or_else(|| code_error(Quantity::Blending, Blending::LAST_CODE, payload.blending))?;
+        let m = usize::from(payload.source_dimension);
+        let valid_m = match domain {
+            Domain::Torus => 4..=4,
+            _ => 3..=MAX_SOURCE_DIMENSION,
+        };
+        if !valid_m.contains(&m) {
+            return Err(dimension_error(Quantity::SourceDimension, valid_m, m));
+        }
+        let p = usize::from(payload.target_dimension);
+        if !(1..=MAX_TARGET_DIMENSION).contains(&p) {
+            return Err(dimension_error(
+                Quantity::TargetDimension,
+                1..=MAX_TARGET_DIMENSION,
+                p,
+            ));
+        }
+        let n = payload.sharpness.len() / 4;
+        if !payload.sharpness.len().is_multiple_of(4) {
+            return Err(words_error(n + 1, payload.sharpness.len()));
+        }
+        if n == 0 {
+            return Err(BlobError::ShapeMismatch {
+                what: Quantity::KeyPoints,
+                expected: 1,
+                found: 0,
+            });
+        }
+        for capacity in [MAX_KEY_POINTS, K] {
+            if n > capacity {
+                return Err(BlobError::CapacityExceeded {
+                    what: Quantity::KeyPoints,
+                    needed: n,
+                    capacity,
+                });
+            }
+        }
+        for (bytes, per_key) in [(payload.weights, m), (payload.targets, p)] {
+            if bytes.len() != n * per_key * 4 {
+                return Err(words_error(n * per_key, bytes.len()));
+            }
+        }
+        // Words are numbered through W, then V, then q.
+        let word = |bytes: &[u8], index: usize| -> Result<S, BlobError> {
+            let chunk = bytes.get(4 * index..4 * index + 4).unwrap_or(&[]);
+            blob::decode_word::<S>(chunk, stored, index)
+        };
+        for i in 0..n {
+            let mut key = Key {
+                weight: [S::ZERO; MAX_SOURCE_DIMENSION],
+                target: [S::ZERO; MAX_TARGET_DIMENSION],
+                sharpness: S::ZERO,
+                power: 0,
+            };
+            for (h, slot) in key.weight.iter_mut().take(m).enumerate() {
+                *slot = word(payload.weights, i * m + h)?;
+            }
+            self.keys
+                .push(key)
+                .map_err(|_| BlobError::CapacityExceeded {
+                    what: Quantity::KeyPoints,
+                    needed: n,
+                    capacity: K,
+                })?;
+        }
+        for (i, key) in self.keys.iter_mut().enumerate() {
+            for (g, slot) in key.target.iter_mut().take(p).enumerate() {
+                *slot = word(payload.targets, i * p + g).map_err(|e| renumber(e, n * m))?;
+            }
+        }
+        for (i, key) in self.keys.iter_mut().enumerate() {
+            let index = n * (m + p) + i;
+            key.sharpness = word(payload.sharpness, i).map_err(|e| renumber(e, n * (m + p)))?;
+            let chunk = payload.sharpness.get(4 * i..4 * i + 4).unwrap_or(&[]);
+            key.power = sharpness_check(chunk, stored, blending)
+                .ok_or(BlobError::ParameterOutOfRange { index })?;
+        }
+        self.domain = domain;
+        self.blending = blending;
+        self.normalized = payload.normalized;
+        self.source_dimension = payload.source_dimension;
+        self.target_dimension = payload.target_dimension;
+        self.stored_as = stored;
+        Ok(())
+    }
+
+    /// What the network maps from.
+    pub fn domain(&self) -> Domain {
+        self.domain
+    }
+
+    /// The blending function of every key point.
+    pub fn blending(&self) -> Blending {
+        self.blending
+    }
+
+    /// Whether k is normalized by Σ F (the rational form).
+    pub fn is_normalized(&self) -> bool {
+        self.normalized
+    }
+
+    /// m (0 for an empty network).
+    pub fn source_dimension(&self) -> usize {
+        usize::from(self.source_dimension)
+    }
+
+    /// p (0 for an empty network).
+    pub fn target_dimension(&self) -> usize {
+        usize::from(self.target_dimension)
+    }
+
+    /// n, the number of key points.
+    pub fn key_count(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// wᵢ of key point `index` (m coordinates, zeros after), if it exists.
+    pub fn weight(&self, index: usize) -> Option<[S; MAX_SOURCE_DIMENSION]> {
+        self.keys.get(index).map(|k| k.weight)
+    }
+
+    /// tᵢ of key point `index` (p coordinates, zeros after), if it exists.
+    pub fn target(&self, index: usize) -> Option<[S; MAX_TARGET_DIMENSION]> {
+        self.keys.get(index).map(|k| k.target)
+    }
+
+    /// qᵢ of key point `index`, if it exists.
+    pub fn sharpness(&self, index: usize) -> Option<S> {
+        self.keys.get(index).map(|k| k.sharpness)
+    }
+
+    /// The scalar kind the blob stored its words in.
+    pub fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    /// Multiply–accumulates of the network's two layers for one point: n·(m + p) for the
+    /// position (n more when normalized), and with the exact normal n·m·(p + 1) more (n·m
+    /// more again when normalized). The blending functions are not counted: power q costs at
+    /// most 2·⌈log₂ q⌉ + 2 products per key point, exponential one product and one `exp`.
+    ///
+    /// ```
+    /// # use neurosurf_core::caoen::CaoEnModel;
+    /// # fn demo(model: &CaoEnModel<f32>) {
+    /// // A sphere → 3-D network with 26 key points, not normalized:
+    /// assert_eq!(model.mac_count(false), 26 * 6);
+    /// assert_eq!(model.mac_count(true), 26 * 6 + 26 * 3 * 4);
+    /// # }
+    /// ```
+    pub fn mac_count(&self, normal: bool) -> usize {
+        let (n, m, p) = (
+            self.key_count(),
+            self.source_dimension(),
+            self.target_dimension(),
+        );
+        let extra = usize::from(self.normalized);
+        let position = n * (m + p + extra);
+        if normal {
+            position + n * m * (p + 1 + extra)
+        } else {
+            position
+        }
+    }
+}
+
+impl<S: Scalar, const K: usize> Default for CaoEnModel<S, K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The shape error for a dimension outside `valid` (reports the nearer end as expected).
+fn dimension_error(
+    what: Quantity,
+    valid: core::ops::RangeInclusive<usize>,
+    found: usize,
+) -> BlobError {
+    BlobError::ShapeMismatch {
+        what,
+        expected: if found < *valid.start() {
+            *valid.start()
+        } else {
+            *valid.end()
+        },
+        found,
+    }
+}
+
+/// Shifts the word index of a parameter error by `offset` (from one word string's numbering
+/// to the whole payload's).
+fn renumber(error: BlobError, offset: usize) -> BlobError {
+    match error {
+        BlobError::NonFiniteParameter { index } => BlobError::NonFiniteParameter {
+            index: index + offset,
+        },
+        BlobError::ParameterOutOfRange { index } => BlobError::ParameterOutOfRange {
+            index: index + offset,
+        },
+        other => other,
+    }
+}
+
+/// The shape error of a word string that does not hold `expected` words.
+fn words_error(expected: usize, bytes: usize) -> BlobError {
+    BlobError::ShapeMismatch {
+        what: Quantity::Parameters,
+        expected,
+        found: bytes / 4,
+    }
+}
+
+/// The whole-number power of a valid sharpness word (0 for exponential blending), `None` when
+/// q is outside [0, 64] or, for power blending, not whole. Checked on the stored value, so
+/// both scalars accept the same blobs.
+fn sharpness_check(word: &[u8], stored: ScalarKind, blending: Blending) -> Option<u8> {
+    let q = blob::stored_value(word, stored)?;
+    if !(0.0..=MAX_SHARPNESS).contains(&q) {
+        return None;
+    }
+    match blending {
+        Blending::Power => {
+            let whole = q as u8;
+            (f64::from(whole) == q).then_some(whole)
+        }
+        _ => Some(0),
+    }
+}

@@ -1,0 +1,103 @@
+//! Converting between the f64 network and the core's Cao En blob.
+
+use std::path::Path;
+
+use neurosurf_core::blob::ModelKind;
+use neurosurf_core::caoen::CaoEnPayload;
+use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+
+use super::network::CaoEnNetwork;
+use crate::error::{Error, Result};
+use crate::implicit::frame;
+
+/// Encodes `network` as a Cao En blob storing its words as `scalar` (`metadata` is opaque to
+/// the core).
+///
+/// # Errors
+/// [`Error::InvalidInput`] for an invalid network, a word that cannot be stored (beyond ±1024
+/// for Q16.16), or a scalar other than f32 / Q16.16.
+pub fn to_blob(network: &CaoEnNetwork, scalar: ScalarKind, metadata: &[u8]) -> Result<Vec<u8>> {
+    network.validate()?;
+    let limit = match scalar {
+        ScalarKind::F32 => f64::from(f32::MAX),
+        ScalarKind::Q16_16 => f64::from(<Q16 as Scalar>::MAX_PARAMETER),
+        other => {
+            return Err(Error::invalid(format!(
+                "Cao En networks are stored as f32 or q16.16, not {}",
+                other.name()
+            )));
+        }
+    };
+    let encode = |what: &str, values: &mut dyn Iterator<Item = f64>| -> Result<Vec<u8>> {
+        let mut out = Vec::new();
+        for (index, value) in values.enumerate() {
+            let word = scalar
+                .encode(value)
+                .filter(|_| value.abs() <= limit)
+                .ok_or_else(|| {
+                    Error::invalid(format!(
+                        "{what} word {index} = {value} cannot be stored as {} (limit ±{limit})",
+                        scalar.name()
+                    ))
+                })?;
+            out.extend_from_slice(&word);
+        }
+        Ok(out)
+    };
+    let weights = encode("weight", &mut network.weights.iter().flatten().copied())?;
+    let targets = encode("target", &mut network.targets.iter().flatten().copied())?;
+    let sharpness = encode("sharpness", &mut network.sharpness.iter().copied())?;
+    let payload = CaoEnPayload {
+        domain: network.domain,
+        blending: network.blending,
+        normalized: network.normalized,
+        source_dimension: network.source_dimension() as u8,
+        target_dimension: network.target_dimension() as u8,
+        weights: &weights,
+        targets: &targets,
+        sharpness: &sharpness,
+        metadata,
+    };
+    frame(ModelKind::CaoEn, scalar, &payload)
+}
+
+/// Reads a Cao En blob back into an f64 network (words widened exactly) and its metadata.
+/// `path` only names the source in errors.
+///
+/// # Errors
+/// [`Error::Blob`] when the core rejects the blob.
+pub fn from_blob(bytes: &[u8], path: &Path) -> Result<(CaoEnNetwork, Vec<u8>, ScalarKind)> {
+    let blob_error = |source| Error::Blob {
+        path: path.to_path_buf(),
+        source,
+    };
+    let (header, payload) = CaoEnPayload::from_blob(bytes).map_err(blob_error)?;
+    // Validate with the core itself (f32 accepts every blob Q16.16 accepts).
+    neurosurf_core::caoen::CaoEnModel::<f32, { neurosurf_core::caoen::MAX_KEY_POINTS }>::from_payload(
+        &payload,
+        header.scalar,
+    )
+    .map_err(blob_error)?;
+    let word = |chunk: &[u8]| -> f64 {
+        let bytes: [u8; 4] = chunk.try_into().unwrap_or([0; 4]);
+        match header.scalar {
+            ScalarKind::F32 => f64::from(f32::from_le_bytes(bytes)),
+            _ => f64::from(i32::from_le_bytes(bytes)) / 65_536.0,
+        }
+    };
+    let rows = |bytes: &[u8], width: usize| -> Vec<Vec<f64>> {
+        bytes
+            .chunks_exact(4 * width)
+            .map(|row| row.chunks_exact(4).map(word).collect())
+            .collect()
+    };
+    let network = CaoEnNetwork {
+        domain: payload.domain,
+        blending: payload.blending,
+        normalized: payload.normalized,
+        weights: rows(payload.weights, usize::from(payload.source_dimension)),
+        targets: rows(payload.targets, usize::from(payload.target_dimension)),
+        sharpness: payload.sharpness.chunks_exact(4).map(word).collect(),
+    };
+    Ok((network, payload.metadata.to_vec(), header.scalar))
+}

@@ -1,0 +1,42 @@
+//! Cao En surfaces (Wyvill, Cao & Trotman 1992) on the host, in f64: the network and its
+//! reference evaluation (`network`), construction from key/target points and least-squares
+//! fitting of V and of q per key point (`fit`), blob conversion (`blob`), and polygon meshes
+//! from an icosphere or a torus grid (`mesh`). The core evaluates what this writes
+//! (`neurosurf_core::caoen`).
+//!
+//! ```
+//! use neurosurf_trainer::caoen::{fit_shape, from_key_points, sphere_mesh, to_blob};
+//! use neurosurf_core::scalar::ScalarKind;
+//! // Six key points on the axes, an elongated target for each: a rounded spindle.
+//! let keys: Vec<Vec<f64>> = (0..6).map(|i| {
+//!     let mut k = vec![0.0; 3];
+//!     k[i / 2] = if i % 2 == 0 { 1.0 } else { -1.0 };
+//!     k
+//! }).collect();
+//! let targets: Vec<Vec<f64>> = keys.iter().map(|k| vec![k[0], k[1], 2.0 * k[2]]).collect();
+//! let built = from_key_points(0, 1, false, &keys, &targets, 4.0)?;
+//! let fitted = fit_shape(&built, &keys, &targets)?; // now y(wᵢ) = tᵢ exactly
+//! let y = fitted.position(&keys[4]);
+//! assert!((y[2] - 2.0).abs() < 1e-9);
+//! let mesh = sphere_mesh(&fitted, 2)?;
+//! assert_eq!(mesh.mesh.vertex_count(), 162);
+//! let blob = to_blob(&fitted, ScalarKind::Q16_16, b"spindle")?;
+//! assert!(neurosurf_core::caoen::CaoEnModel::<f32>::from_blob(&blob).is_ok());
+//! # Ok::<(), neurosurf_trainer::Error>(())
+//! ```
+
+mod blob;
+mod fit;
+mod mesh;
+mod network;
+
+pub use blob::{from_blob, to_blob};
+pub use fit::{fit_shape, fit_sharpness, from_key_points, rms_error};
+pub use mesh::{
+    CaoEnMesh, MAX_SUBDIVISIONS, SourceGrid, icosphere, map_mesh, sphere_mesh, torus_grid,
+    torus_mesh,
+};
+pub use network::{CaoEnNetwork, Evaluation, on_domain};
+
+#[cfg(test)]
+mod tests;
