@@ -10,7 +10,8 @@ use defmt_decoder::Table;
 use neurosurf_core::BlobError;
 use neurosurf_core::scalar::{Q16, ScalarKind};
 use neurosurf_sim_protocol::{
-    MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE, RequestHeader, ResultTrailer, Status,
+    MAX_ARITY, MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE, RequestHeader, ResultTrailer,
+    Status,
 };
 use wait_timeout::ChildExt;
 
@@ -31,8 +32,12 @@ pub struct Job<'a> {
     pub op: Op,
     /// Single points or lane batches.
     pub mode: Mode,
-    /// Query points (rounded to `f32` already, as the host core receives them).
-    pub points: &'a [[f32; 3]],
+    /// Query points, `arity` coordinates each, one after the other (rounded to `f32` already,
+    /// as the host core receives them).
+    pub points: &'a [f32],
+    /// Coordinates per point: 3 for implicit models, 1 (t) for curves, 2 (u, v) for spline
+    /// surfaces, the source dimension for Cao En networks (at most [`MAX_ARITY`]).
+    pub arity: usize,
     /// Wall-clock limit; `None` = 30 s plus 1 ms per point.
     pub time_limit: Option<Duration>,
 }
@@ -45,22 +50,31 @@ impl<'a> Job<'a> {
             scalar,
             op: Op::FieldGradient,
             mode: Mode::Batch,
-            points,
+            points: points.as_flattened(),
+            arity: 3,
             time_limit: None,
         }
     }
 
-    /// Position and tangent (curves) or unit normal (spline surfaces) at `parameters` in lane
-    /// batches: t in the first coordinate of each point, (u, v) in the first two.
+    /// The output vector and direction of a parametric model (see [`Op::PositionDirection`]) in
+    /// lane batches, at `points` of `arity` coordinates each, one after the other.
     pub fn position_direction(
         blob: &'a [u8],
         scalar: ScalarKind,
-        parameters: &'a [[f32; 3]],
+        points: &'a [f32],
+        arity: usize,
     ) -> Self {
         Job {
             op: Op::PositionDirection,
-            ..Self::field_gradient(blob, scalar, parameters)
+            points,
+            arity,
+            ..Self::field_gradient(blob, scalar, &[])
         }
+    }
+
+    /// Points in the request.
+    pub fn count(&self) -> usize {
+        self.points.len() / self.arity.max(1)
     }
 }
 
@@ -73,8 +87,11 @@ pub struct Run {
     pub op: Op,
     /// Single points or batches.
     pub mode: Mode,
-    /// Raw result words, `op.words()` per point (`f32` or Q16.16 bits).
+    /// Raw result words, [`Run::words_per_point`] per point (`f32` or Q16.16 bits).
     pub words: Vec<u32>,
+    /// Words per point: fixed by the op for fields, the model's output width (plus 3 with a
+    /// direction) for parametric models.
+    pub words_per_point: usize,
     /// Stack high-water mark of the run, in bytes.
     pub stack_bytes: u32,
     /// Instructions in every timed region; region 0 is empty (the markers' own cost).
@@ -86,7 +103,7 @@ pub struct Run {
 impl Run {
     /// Points evaluated.
     pub fn count(&self) -> usize {
-        self.words.len() / self.op.words().max(1)
+        self.words.len() / self.words_per_point.max(1)
     }
 
     /// Result words decoded to `f64` (exact for `f32` and Q16.16).
@@ -112,15 +129,27 @@ impl Run {
             .collect()
     }
 
-    /// (position, tangent or normal) per point of a curve or spline surface; empty unless the
-    /// op was [`Op::PositionDirection`].
-    pub fn geometry(&self) -> Vec<([f64; 3], [f64; 3])> {
-        if self.op != Op::PositionDirection {
+    /// (outputs, direction) per point of a parametric model — a curve's position and tangent,
+    /// a surface's position and normal, a Cao En network's p outputs and normal; empty unless
+    /// the op was [`Op::PositionDirection`].
+    pub fn geometry(&self) -> Vec<(Vec<f64>, [f64; 3])> {
+        if self.op != Op::PositionDirection || self.words_per_point < 3 {
             return Vec::new();
         }
+        self.rows()
+            .into_iter()
+            .map(|mut row| {
+                let direction = row.split_off(row.len() - 3);
+                (row, [direction[0], direction[1], direction[2]])
+            })
+            .collect()
+    }
+
+    /// The result values of every point, `words_per_point` each, decoded to `f64`.
+    pub fn rows(&self) -> Vec<Vec<f64>> {
         self.values()
-            .chunks_exact(6)
-            .map(|c| ([c[0], c[1], c[2]], [c[3], c[4], c[5]]))
+            .chunks_exact(self.words_per_point.max(1))
+            .map(<[f64]>::to_vec)
             .collect()
     }
 
@@ -217,23 +246,35 @@ impl Simulator {
             std::fs::write(&path, bytes).map_err(SimError::io(path))
         };
         write(MODEL_FILE, job.blob)?;
-        let count = u32::try_from(job.points.len()).map_err(|_| {
-            SimError::Protocol(format!(
-                "{} points is too many for one run",
-                job.points.len()
-            ))
+        let arity = u8::try_from(job.arity)
+            .ok()
+            .filter(|&a| (1..=MAX_ARITY).contains(&usize::from(a)))
+            .ok_or_else(|| {
+                SimError::Protocol(format!(
+                    "points have 1 to {MAX_ARITY} coordinates, not {}",
+                    job.arity
+                ))
+            })?;
+        if !job.points.len().is_multiple_of(job.arity) {
+            return Err(SimError::Protocol(format!(
+                "{} coordinates do not make points of {}",
+                job.points.len(),
+                job.arity
+            )));
+        }
+        let count = u32::try_from(job.count()).map_err(|_| {
+            SimError::Protocol(format!("{} points is too many for one run", job.count()))
         })?;
         let header = RequestHeader {
             scalar: job.scalar.code(),
             op: job.op,
             mode: job.mode,
+            arity,
             count,
         };
         let mut request = header.encode().to_vec();
-        for point in job.points {
-            for c in point {
-                request.extend_from_slice(&c.to_le_bytes());
-            }
+        for c in job.points {
+            request.extend_from_slice(&c.to_le_bytes());
         }
         write(REQUEST_FILE, &request)?;
 
@@ -291,7 +332,7 @@ impl Simulator {
         );
         let limit = job
             .time_limit
-            .unwrap_or(Duration::from_secs(30) + Duration::from_millis(job.points.len() as u64));
+            .unwrap_or(Duration::from_secs(30) + Duration::from_millis(job.count() as u64));
         let waited = child
             .wait_timeout(limit)
             .map_err(SimError::io(&self.toolchain.qemu))?;
@@ -336,13 +377,13 @@ impl Simulator {
             }
         }
         let (answer, trailer) = read_result(dir.path())?;
-        let words_per_point = job.op.words();
-        if usize::from(trailer.words) != words_per_point
-            || trailer.count != count
-            || answer.len() != job.points.len() * words_per_point * 4
+        let words_per_point = usize::from(trailer.words);
+        let width_ok = job.op.words().is_none_or(|w| w == words_per_point);
+        if !width_ok || trailer.count != count || answer.len() != job.count() * words_per_point * 4
         {
             return Err(SimError::Protocol(format!(
-                "expected {count} points × {words_per_point} words, got {trailer:?}"
+                "expected {count} points of {:?} words, got {trailer:?}",
+                job.op.words()
             )));
         }
         let words = answer
@@ -359,6 +400,7 @@ impl Simulator {
             op: job.op,
             mode: job.mode,
             words,
+            words_per_point,
             stack_bytes: trailer.stack_bytes,
             regions: plugin::parse_regions(&plugin_text)?,
             log,

@@ -4,12 +4,13 @@ use core::mem::MaybeUninit;
 
 use neurosurf_core::BlobError;
 use neurosurf_core::blob::{self, ModelKind};
+use neurosurf_core::caoen::{CaoEnModel, CaoEnPoint, MAX_TARGET_DIMENSION};
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface, CurvePoint};
 use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use neurosurf_sim_protocol::{
-    CHUNK_POINTS, MAX_BLOB_BYTES, MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE, RequestHeader,
-    ResultTrailer, Status,
+    CHUNK_POINTS, MAX_ARITY, MAX_BLOB_BYTES, MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE,
+    RequestHeader, ResultTrailer, Status,
 };
 
 use crate::regions::timed;
@@ -99,7 +100,7 @@ fn serve(out: &mut HostFile) -> Answer {
         }
     };
     let expected =
-        RequestHeader::LEN as u64 + u64::from(header.count) * RequestHeader::POINT_BYTES as u64;
+        RequestHeader::LEN as u64 + u64::from(header.count) * header.point_bytes() as u64;
     if request.len().map(|len| len as u64) != Ok(expected) {
         defmt::error!(
             "request length disagrees with its {=u32} points",
@@ -145,7 +146,10 @@ fn serve(out: &mut HostFile) -> Answer {
         return Answer::failed(Status::BadRequest);
     }
     let q16 = scalar == Some(ScalarKind::Q16_16);
-    let parametric = matches!(model, ModelKind::Curve | ModelKind::SplineSurface);
+    let parametric = matches!(
+        model,
+        ModelKind::Curve | ModelKind::SplineSurface | ModelKind::CaoEn
+    );
     let served = parametric || model == ModelKind::Implicit;
     if served && header.op.is_parametric() != parametric {
         defmt::error!(
@@ -167,6 +171,8 @@ fn serve(out: &mut HostFile) -> Answer {
         (ModelKind::Curve, true) => serve_curve::<Q16>(blob, io),
         (ModelKind::SplineSurface, false) => serve_surface::<f32>(blob, io),
         (ModelKind::SplineSurface, true) => serve_surface::<Q16>(blob, io),
+        (ModelKind::CaoEn, false) => serve_caoen::<f32>(blob, io),
+        (ModelKind::CaoEn, true) => serve_caoen::<Q16>(blob, io),
         (other, _) => reject(
             io.out,
             BlobError::WrongModelKind {
@@ -244,28 +250,32 @@ fn serve_implicit<S: Scalar>(
         model.mac_count(true)
     );
     let model = &*model;
-    let point = |p: [S; 3]| p;
+    let point = |p: [S; MAX_ARITY]| [p[0], p[1], p[2]];
     match (io.header.op, io.header.mode) {
         (Op::Field, Mode::Batch) => stream(
             io,
+            1,
             point,
             |p, out| model.field_batch(p, out).is_ok(),
             |v: &S| [*v],
         ),
         (Op::Field, _) => stream(
             io,
+            1,
             point,
             |p, out| each(p, out, |&p| model.field(p)),
             |v: &S| [*v],
         ),
         (_, Mode::Batch) => stream(
             io,
+            4,
             point,
             |p, out| model.field_gradient_batch(p, out).is_ok(),
             field_gradient_words,
         ),
         _ => stream(
             io,
+            4,
             point,
             |p, out| each(p, out, |&p| model.field_gradient(p)),
             field_gradient_words,
@@ -287,28 +297,32 @@ fn serve_curve<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
         curve.segments()
     );
     let curve = &curve;
-    let t = |p: [S; 3]| p[0];
+    let t = |p: [S; MAX_ARITY]| p[0];
     match (io.header.op, io.header.mode) {
         (Op::Position, Mode::Batch) => stream(
             io,
+            3,
             t,
             |t, out| curve.position_batch(t, out).is_ok(),
             |p: &[S; 3]| *p,
         ),
         (Op::Position, _) => stream(
             io,
+            3,
             t,
             |t, out| each(t, out, |&t| curve.position(t)),
             |p: &[S; 3]| *p,
         ),
         (_, Mode::Batch) => stream(
             io,
+            6,
             t,
             |t, out| curve.eval_batch(t, out).is_ok(),
             curve_words,
         ),
         _ => stream(
             io,
+            6,
             t,
             |t, out| each(t, out, |&t| curve.eval(t)),
             curve_words,
@@ -331,32 +345,122 @@ fn serve_surface<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
         count_v
     );
     let surface = &surface;
-    let uv = |p: [S; 3]| [p[0], p[1]];
+    let uv = |p: [S; MAX_ARITY]| [p[0], p[1]];
     match (io.header.op, io.header.mode) {
         (Op::Position, Mode::Batch) => stream(
             io,
+            3,
             uv,
             |uv, out| surface.position_batch(uv, out).is_ok(),
             |p: &[S; 3]| *p,
         ),
         (Op::Position, _) => stream(
             io,
+            3,
             uv,
             |uv, out| each(uv, out, |&uv| surface.position(uv)),
             |p: &[S; 3]| *p,
         ),
         (_, Mode::Batch) => stream(
             io,
+            6,
             uv,
             |uv, out| surface_batch(surface, uv, out),
             surface_words,
         ),
         _ => stream(
             io,
+            6,
             uv,
             |uv, out| each(uv, out, |&uv| (surface.position(uv), surface.normal(uv))),
             surface_words,
         ),
+    }
+}
+
+/// Loads a Cao En network (on the stack: at most 19 KiB) and streams the source points
+/// through it: every output, then (for `PositionDirection`) the unit normal.
+#[inline(never)]
+fn serve_caoen<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
+    let mut network = CaoEnModel::<S>::new();
+    if let Err(e) = network.load(blob) {
+        return reject(io.out, e);
+    }
+    let p = network.target_dimension();
+    defmt::info!(
+        "Cao En network: {=usize} key points, {=usize} → {=usize} dimensions",
+        network.key_count(),
+        network.source_dimension(),
+        p
+    );
+    let network = &network;
+    let x = |x: [S; MAX_ARITY]| x;
+    let outputs = |y: &[S; MAX_TARGET_DIMENSION]| *y;
+    match (io.header.op, io.header.mode) {
+        (Op::Position, Mode::Batch) => stream(
+            io,
+            p,
+            x,
+            |x, out| network.eval_batch(x, out).is_ok(),
+            outputs,
+        ),
+        (Op::Position, _) => stream(
+            io,
+            p,
+            x,
+            |x, out| each(x, out, |x| network.eval(x)),
+            outputs,
+        ),
+        (_, Mode::Batch) => stream(
+            io,
+            p + 3,
+            x,
+            |x, out| caoen_batch(network, x, out),
+            caoen_words(p),
+        ),
+        _ => stream(
+            io,
+            p + 3,
+            x,
+            |x, out| each(x, out, |x| (network.eval(x), network.normal(x))),
+            caoen_words(p),
+        ),
+    }
+}
+
+/// Every output and the unit normal of every source point, through the network's batch calls.
+fn caoen_batch<S: Scalar>(
+    network: &CaoEnModel<S>,
+    x: &[[S; MAX_ARITY]],
+    out: &mut [CaoEnResult<S>],
+) -> bool {
+    let mut outputs = [[S::ZERO; MAX_TARGET_DIMENSION]; CHUNK_POINTS];
+    let mut points = [CaoEnPoint::default(); CHUNK_POINTS];
+    let (Some(outputs), Some(points)) = (outputs.get_mut(..x.len()), points.get_mut(..x.len()))
+    else {
+        return false;
+    };
+    if network.eval_batch(x, outputs).is_err() || network.eval_normal_batch(x, points).is_err() {
+        return false;
+    }
+    for ((slot, &y), point) in out.iter_mut().zip(outputs.iter()).zip(points.iter()) {
+        *slot = (y, point.normal);
+    }
+    true
+}
+
+/// A Cao En network's outputs and unit normal at one source point.
+type CaoEnResult<S> = ([S; MAX_TARGET_DIMENSION], Option<[S; 3]>);
+
+/// The p outputs, then the normal (0, 0, 0 where it does not exist).
+fn caoen_words<S: Scalar>(p: usize) -> impl Fn(&CaoEnResult<S>) -> [S; MAX_TARGET_DIMENSION + 3] {
+    move |(y, normal)| {
+        let mut words = [S::ZERO; MAX_TARGET_DIMENSION + 3];
+        let normal = normal.unwrap_or([S::ZERO; 3]);
+        for (word, &v) in words.iter_mut().zip(y.iter().take(p).chain(&normal)) {
+            *word = v;
+        }
+        words
     }
 }
 
@@ -406,29 +510,33 @@ fn each<I, R>(inputs: &[I], out: &mut [R], f: impl Fn(&I) -> R) -> bool {
 }
 
 /// Streams the request's points through `evaluate`, chunk by chunk: each point is decoded to
-/// `S` and turned into the model's input by `input` (outside the timed region), the chunk is
-/// evaluated inside a timed region, and each result is written as the `W` words of `encode`.
+/// `S` (missing coordinates 0) and turned into the model's input by `input` (outside the timed
+/// region), the chunk is evaluated inside a timed region, and each result is written as the
+/// first `words` (≤ `W`) words of `encode`.
 fn stream<S: Scalar, I: Copy + Default, R: Copy + Default, const W: usize>(
     io: Io<'_>,
-    input: impl Fn([S; 3]) -> I,
+    words: usize,
+    input: impl Fn([S; MAX_ARITY]) -> I,
     mut evaluate: impl FnMut(&[I], &mut [R]) -> bool,
     encode: impl Fn(&R) -> [S; W],
 ) -> Answer {
     let header = io.header;
-    let mut raw = [0_u8; CHUNK_POINTS * RequestHeader::POINT_BYTES];
+    let words = words.min(W);
+    let point_bytes = header.point_bytes();
+    let mut raw = [0_u8; CHUNK_POINTS * 4 * MAX_ARITY];
     let mut inputs = [I::default(); CHUNK_POINTS];
     let mut results = [R::default(); CHUNK_POINTS];
-    let mut encoded = [0_u8; CHUNK_POINTS * 4 * 6];
+    let mut encoded = [0_u8; CHUNK_POINTS * 4 * (MAX_TARGET_DIMENSION + 3)];
     let mut remaining = header.count as usize;
     let mut written = 0_u32;
     while remaining > 0 {
         let n = remaining.min(CHUNK_POINTS);
-        let (raw, inputs) = (&mut raw[..n * RequestHeader::POINT_BYTES], &mut inputs[..n]);
+        let (raw, inputs) = (&mut raw[..n * point_bytes], &mut inputs[..n]);
         if io.request.read_exact(raw).is_err() {
             return Answer::failed(Status::HostIo);
         }
-        for (slot, bytes) in inputs.iter_mut().zip(raw.chunks_exact(4 * 3)) {
-            let mut point = [S::ZERO; 3];
+        for (slot, bytes) in inputs.iter_mut().zip(raw.chunks_exact(point_bytes)) {
+            let mut point = [S::ZERO; MAX_ARITY];
             for (c, b) in point.iter_mut().zip(bytes.chunks_exact(4)) {
                 *c = S::from_f32_saturating(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
             }
@@ -440,7 +548,7 @@ fn stream<S: Scalar, I: Copy + Default, R: Copy + Default, const W: usize>(
         }
         let mut len = 0;
         for result in results.iter() {
-            for v in encode(result) {
+            for v in encode(result).into_iter().take(words) {
                 encoded[len..len + 4].copy_from_slice(&v.to_le_bytes());
                 len += 4;
             }
@@ -454,7 +562,7 @@ fn stream<S: Scalar, I: Copy + Default, R: Copy + Default, const W: usize>(
     defmt::info!("evaluated {=u32} points", header.count);
     Answer {
         status: Status::Ok,
-        words: W as u8,
+        words: words as u8,
         count: header.count,
         bytes: written,
     }

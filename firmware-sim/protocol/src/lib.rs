@@ -6,14 +6,16 @@
 //! | file | written by | content |
 //! |---|---|---|
 //! | [`MODEL_FILE`] | host | the model blob, unchanged |
-//! | [`REQUEST_FILE`] | host | a [`RequestHeader`], then `count` points as 3 little-endian `f32` |
+//! | [`REQUEST_FILE`] | host | a [`RequestHeader`], then `count` points of `arity` little-endian `f32` |
 //! | [`RESULT_FILE`] | target | the answer (see [`Status`]), then a [`ResultTrailer`] |
 //!
-//! On success the answer is `count × op.words()` little-endian 32-bit words, the raw bits of
-//! the scalar (`f32` bits, or Q16.16 bits): for implicit models Φ, then ∇Φ when the op asks for
-//! it; for curves and spline surfaces the position, then the tangent (curves) or the unit
-//! normal (surfaces). A request point is always 3 `f32`: an implicit model reads x, y, z, a
-//! curve reads t from the first and a surface (u, v) from the first two. When the blob
+//! On success the answer is `count × words` little-endian 32-bit words (`words` in the
+//! [`ResultTrailer`]), the raw bits of the scalar (`f32` bits, or Q16.16 bits): for implicit
+//! models Φ, then ∇Φ when the op asks for it; for the parametric kinds the output vector (a
+//! curve's or surface's position, a Cao En network's p outputs), then the tangent (curves) or the
+//! unit normal (surfaces, Cao En shapes). A request point has `arity` coordinates (1 to
+//! [`MAX_ARITY`]): an implicit model reads x, y, z, a curve t, a surface (u, v), a Cao En network
+//! its source point; missing coordinates count as 0, extra ones are ignored. When the blob
 //! is rejected, the answer is the core's `BlobError` encoded with postcard, so the host can
 //! show exactly what the target saw.
 //!
@@ -38,7 +40,9 @@ pub const REGION_START_SYMBOL: &str = "neurosurf_region_start";
 pub const REGION_STOP_SYMBOL: &str = "neurosurf_region_stop";
 
 /// Protocol version, checked by both sides.
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
+/// Most coordinates a request point can have.
+pub const MAX_ARITY: usize = 8;
 /// Points the firmware evaluates per timed region (a multiple of the core's lane count).
 pub const CHUNK_POINTS: usize = 64;
 /// Largest blob the firmware accepts (its static blob buffer).
@@ -104,11 +108,11 @@ pub enum Op {
     Field = 1,
     /// Φ and ∇Φ: four words per point.
     FieldGradient = 2,
-    /// Curves and spline surfaces: the position, three words per point (z = 0 for a 2-D
-    /// curve).
+    /// Parametric models: the output vector — a curve's or surface's position (3 words, z = 0
+    /// for a 2-D curve), a Cao En network's p outputs.
     Position = 3,
-    /// Curves: position and tangent dC/dt; spline surfaces: position and unit normal (0, 0, 0
-    /// where it does not exist). Six words per point.
+    /// The output vector, then three words of direction: a curve's tangent dC/dt, a surface's
+    /// or Cao En shape's unit normal (0, 0, 0 where it does not exist).
     PositionDirection = 4,
     /// Self-test: panic on purpose (checks the runner's panic reporting).
     SelfTestPanic = 0xF0,
@@ -122,14 +126,14 @@ impl Op {
         matches!(self, Op::Position | Op::PositionDirection)
     }
 
-    /// Result words per point.
-    pub const fn words(self) -> usize {
+    /// Result words per point, when the op alone decides it (`None` for the parametric ops,
+    /// whose width is the model's output dimension; the trailer says it).
+    pub const fn words(self) -> Option<usize> {
         match self {
-            Op::Field => 1,
-            Op::FieldGradient => 4,
-            Op::Position => 3,
-            Op::PositionDirection => 6,
-            Op::SelfTestPanic | Op::SelfTestHang => 0,
+            Op::Field => Some(1),
+            Op::FieldGradient => Some(4),
+            Op::Position | Op::PositionDirection => None,
+            Op::SelfTestPanic | Op::SelfTestHang => Some(0),
         }
     }
 
@@ -181,6 +185,8 @@ pub enum RequestError {
     Op(u8),
     /// Unknown mode code.
     Mode(u8),
+    /// Coordinates per point outside 1 ..= [`MAX_ARITY`].
+    Arity(u8),
 }
 
 /// The fixed-size start of [`REQUEST_FILE`].
@@ -192,16 +198,21 @@ pub struct RequestHeader {
     pub op: Op,
     /// Single points or batches.
     pub mode: Mode,
+    /// Coordinates per point (1 ..= [`MAX_ARITY`]).
+    pub arity: u8,
     /// Number of points that follow.
     pub count: u32,
 }
 
 impl RequestHeader {
     /// Encoded size.
-    pub const LEN: usize = 12;
+    pub const LEN: usize = 16;
     const MAGIC: [u8; 4] = *b"NSRQ";
+
     /// Bytes per point after the header.
-    pub const POINT_BYTES: usize = 12;
+    pub const fn point_bytes(&self) -> usize {
+        4 * self.arity as usize
+    }
 
     /// Encodes the header.
     pub fn encode(&self) -> [u8; Self::LEN] {
@@ -212,6 +223,7 @@ impl RequestHeader {
         out[6] = self.op as u8;
         out[7] = self.mode as u8;
         out[8..12].copy_from_slice(&self.count.to_le_bytes());
+        out[12] = self.arity;
         out
     }
 
@@ -233,6 +245,10 @@ impl RequestHeader {
             scalar: header[5],
             op: Op::from_code(header[6]).ok_or(RequestError::Op(header[6]))?,
             mode: Mode::from_code(header[7]).ok_or(RequestError::Mode(header[7]))?,
+            arity: match header[12] {
+                a @ 1..=8 => a,
+                other => return Err(RequestError::Arity(other)),
+            },
             count: u32::from_le_bytes([header[8], header[9], header[10], header[11]]),
         })
     }
@@ -311,16 +327,21 @@ mod tests {
             scalar: 2,
             op: Op::FieldGradient,
             mode: Mode::Batch,
+            arity: 3,
             count: 1234,
         };
         assert_eq!(RequestHeader::decode(&request.encode()), Ok(request));
+        assert_eq!(request.point_bytes(), 12);
+        let mut wide = request.encode();
+        wide[12] = 9;
+        assert_eq!(RequestHeader::decode(&wide), Err(RequestError::Arity(9)));
         let mut bad = request.encode();
         bad[6] = 9;
         assert_eq!(RequestHeader::decode(&bad), Err(RequestError::Op(9)));
         bad[4] = 7;
         assert_eq!(RequestHeader::decode(&bad), Err(RequestError::Version(7)));
         assert_eq!(RequestHeader::decode(b"NSRQ"), Err(RequestError::Truncated));
-        assert_eq!(RequestHeader::decode(&[0; 12]), Err(RequestError::BadMagic));
+        assert_eq!(RequestHeader::decode(&[0; 16]), Err(RequestError::BadMagic));
         let result = ResultTrailer {
             status: 3,
             words: 0,

@@ -9,10 +9,10 @@ use neurosurf_firmware_sim::{Job, Simulator};
 use serde::Serialize;
 
 use neurosurf_trainer::compare::{
-    CompareRow, EvaluationPoints, Measured, PointSource, Quantities, SURFACE_SAMPLES,
+    CompareRow, EvaluationPoints, Measured, ParameterSet, PointSource, Quantities, SURFACE_SAMPLES,
     comparison_table, comparison_table_of,
 };
-use neurosurf_trainer::evaluate::{LoadedModel, Precision, geometry_columns};
+use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision, geometry_columns};
 use neurosurf_trainer::implicit::ImplicitOptions;
 use neurosurf_trainer::io::{read_parameters, read_query_points, write_atomic};
 use neurosurf_trainer::table::Table;
@@ -157,12 +157,6 @@ fn publish(
     Ok(())
 }
 
-/// Parameters spread over a curve (t on a uniform grid of [0, 1]) or a surface ((u, v) on a
-/// uniform grid of [0, 1]²) when the user gives none.
-pub const CURVE_PARAMETERS: usize = 1001;
-/// Grid points per side for a surface.
-pub const SURFACE_GRID: usize = 33;
-
 #[derive(Serialize)]
 struct ParametricReport<'a> {
     model: &'a Path,
@@ -174,30 +168,25 @@ struct ParametricReport<'a> {
     markdown: Option<&'a Path>,
 }
 
-/// `compare` for curves and spline surfaces: positions and tangents or normals.
+/// `compare` for the parametric kinds: outputs and tangents or normals.
 fn run_parametric(args: &Args, model: &LoadedModel) -> Result<()> {
     let (quantities, stored_as) = match model {
         LoadedModel::Curve { decoded, .. } => (Quantities::CURVE, decoded.stored_as),
         LoadedModel::SplineSurface { decoded, .. } => (Quantities::SURFACE, decoded.stored_as),
-        _ => bail!("not a curve or spline surface"),
+        LoadedModel::CaoEn { decoded, .. } => (Quantities::SURFACE, decoded.stored_as),
+        _ => bail!("not a parametric model"),
     };
     let bytes = model.bytes().unwrap_or_default();
-    let parameters = match &args.points {
-        Some(path) => read_parameters(path, model.query_arity())?,
-        None if model.query_arity() == 1 => (0..CURVE_PARAMETERS)
-            .map(|i| [i as f64 / (CURVE_PARAMETERS - 1) as f64, 0.0, 0.0])
-            .collect(),
+    let arity = model.query_arity();
+    let (parameters, source) = match &args.points {
+        Some(path) => {
+            let points = read_parameters(path, arity)?;
+            let source = format!("{} parameters from {}", points.len(), path.display());
+            (points, source)
+        }
         None => {
-            let step = 1.0 / (SURFACE_GRID - 1) as f64;
-            (0..SURFACE_GRID * SURFACE_GRID)
-                .map(|i| {
-                    [
-                        (i % SURFACE_GRID) as f64 * step,
-                        (i / SURFACE_GRID) as f64 * step,
-                        0.0,
-                    ]
-                })
-                .collect()
+            let set = ParameterSet::covering(model).context("not a parametric model")?;
+            (set.points, set.description)
         }
     };
     if parameters.is_empty() {
@@ -208,10 +197,11 @@ fn run_parametric(args: &Args, model: &LoadedModel) -> Result<()> {
             .evaluate_geometry(&parameters, precision)
             .with_context(|| format!("cannot evaluate {} in {precision}", args.model.display()))
     };
-    let inputs: Vec<[f32; 3]> = parameters.iter().map(|p| p.map(|c| c as f32)).collect();
+    let inputs: Vec<f32> = parameters.iter().flatten().map(|&c| c as f32).collect();
     let rows = measure_rows(args, evaluate, |simulator, scalar| {
-        let job = Job::position_direction(bytes, scalar, &inputs);
-        Ok(target::run(simulator, &job, &args.model)?.geometry())
+        let job = Job::position_direction(bytes, scalar, &inputs, arity);
+        let run = target::run(simulator, &job, &args.model)?;
+        Ok(run.geometry().into_iter().map(Geometry::from).collect())
     })?;
     let report = ParametricReport {
         model: &args.model,
@@ -223,11 +213,7 @@ fn run_parametric(args: &Args, model: &LoadedModel) -> Result<()> {
         markdown: args.markdown.as_deref(),
     };
     let table = comparison_table_of(&report.rows, quantities);
-    let source = match &args.points {
-        Some(path) => format!("{} parameters from {}", parameters.len(), path.display()),
-        None if model.query_arity() == 1 => format!("{} uniform parameters t", parameters.len()),
-        None => format!("a {SURFACE_GRID} × {SURFACE_GRID} grid of (u, v)"),
-    };
+
     let legend = format!(
         "Δp = distance from the f64 position; angle = between the {dir}s and the f64 {dir}s; \
          no {dir} = points skipped because a {dir} is zero; = host bits, max ulp: the target \

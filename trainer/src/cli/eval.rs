@@ -45,7 +45,7 @@ pub fn run(args: &Args) -> Result<()> {
         let rows = model
             .evaluate_geometry(&parameters, args.scalar)
             .with_context(|| format!("cannot evaluate {}", args.model.display()))?;
-        return write_geometry(columns, &parameters, &rows, args.json);
+        return write_geometry(&columns, &parameters, &rows, args.json);
     }
     let points = read_query_points(&args.points)?;
     let samples = model
@@ -73,19 +73,18 @@ pub fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-/// Prints curve or surface rows: the parameters (1 or 2 columns), position and direction, as
-/// CSV under `columns`, or as JSON objects keyed by them.
+/// Prints parametric rows: the parameters, the outputs and the direction, as CSV under
+/// `columns`, or as JSON objects keyed by them.
 pub fn write_geometry(
-    columns: &[&str],
-    parameters: &[[f64; 3]],
+    columns: &[String],
+    parameters: &[Vec<f64>],
     rows: &[Geometry],
     json: bool,
 ) -> Result<()> {
-    let arity = columns.len() - 6;
-    let values = |p: &[f64; 3], (position, direction): &Geometry| {
-        let mut row = p[..arity].to_vec();
-        row.extend(position);
-        row.extend(direction);
+    let values = |p: &Vec<f64>, g: &Geometry| {
+        let mut row = p.clone();
+        row.extend(&g.output);
+        row.extend(g.direction);
         row
     };
     if json {
@@ -96,7 +95,7 @@ pub fn write_geometry(
                 columns
                     .iter()
                     .zip(values(p, g))
-                    .map(|(c, v)| ((*c).to_string(), serde_json::Value::from(v)))
+                    .map(|(c, v)| (c.clone(), serde_json::Value::from(v)))
                     .collect()
             })
             .collect();

@@ -22,7 +22,7 @@ pub struct Args {
     json: bool,
 }
 
-#[derive(Serialize)]
+#[derive(Default, Serialize)]
 struct Info<'a> {
     kind: &'static str,
     stored_as: &'static str,
@@ -59,10 +59,8 @@ pub fn run(args: &Args) -> Result<()> {
                 modules: Some(net.module_count()),
                 leaves: Some(net.subtree_leaves(net.root()).len()),
                 macs,
-                centers: None,
                 training: decoded.metadata.as_ref().and_then(|m| m.summary.as_ref()),
-                control: None,
-                fit: None,
+                ..Info::default()
             }
         }
         LoadedModel::Rbf(rbf) => Info {
@@ -70,15 +68,8 @@ pub fn run(args: &Args) -> Result<()> {
             stored_as: "f64",
             blob_bytes: std::fs::metadata(&args.model).map_or(0, |m| m.len() as usize),
             parameters: rbf.parameter_count(),
-            width: None,
-            tree: None,
-            modules: None,
-            leaves: None,
-            macs: None,
             centers: Some(RbfModel::centers(rbf).len()),
-            training: None,
-            control: None,
-            fit: None,
+            ..Info::default()
         },
         LoadedModel::Curve { bytes, decoded } => {
             let curve = &decoded.curve;
@@ -88,13 +79,7 @@ pub fn run(args: &Args) -> Result<()> {
                 stored_as: decoded.stored_as.name(),
                 blob_bytes: bytes.len(),
                 parameters: curve.control.len() * 3,
-                width: None,
-                tree: None,
-                modules: None,
-                leaves: None,
                 macs: core.map(|c| (c.mac_count(false), c.mac_count(true))),
-                centers: None,
-                training: None,
                 control: Some(format!(
                     "{} points, {}-D, {}, {} segments",
                     curve.control.len(),
@@ -103,6 +88,7 @@ pub fn run(args: &Args) -> Result<()> {
                     curve.segments()
                 )),
                 fit: decoded.summary.as_ref(),
+                ..Info::default()
             }
         }
         LoadedModel::SplineSurface { bytes, decoded } => {
@@ -113,13 +99,7 @@ pub fn run(args: &Args) -> Result<()> {
                 stored_as: decoded.stored_as.name(),
                 blob_bytes: bytes.len(),
                 parameters: surface.control.len() * 3,
-                width: None,
-                tree: None,
-                modules: None,
-                leaves: None,
                 macs: core.map(|c| (c.mac_count(false), c.normal_mac_count())),
-                centers: None,
-                training: None,
                 control: Some(format!(
                     "{} × {} points, {} × {}",
                     surface.count_u,
@@ -128,6 +108,37 @@ pub fn run(args: &Args) -> Result<()> {
                     open_or_closed(surface.closed_v)
                 )),
                 fit: decoded.summary.as_ref(),
+                ..Info::default()
+            }
+        }
+        LoadedModel::CaoEn { bytes, decoded } => {
+            let network = &decoded.network;
+            let core = neurosurf_core::caoen::CaoEnModel::<f32>::from_blob(bytes).ok();
+            Info {
+                kind: "cao-en",
+                stored_as: decoded.stored_as.name(),
+                blob_bytes: bytes.len(),
+                parameters: network.key_count()
+                    * (network.source_dimension() + network.target_dimension() + 1),
+                macs: core
+                    .as_ref()
+                    .map(|c| (c.mac_count(false), c.mac_count(true))),
+                control: core.map(|c| {
+                    format!(
+                        "{} key points, {:?} {}-D → {}-D, {:?} blending{}",
+                        c.key_count(),
+                        c.domain(),
+                        c.source_dimension(),
+                        c.target_dimension(),
+                        c.blending(),
+                        if c.is_normalized() {
+                            ", normalized"
+                        } else {
+                            ""
+                        }
+                    )
+                }),
+                ..Info::default()
             }
         }
     };
@@ -153,7 +164,7 @@ pub fn run(args: &Args) -> Result<()> {
             ModelKind::Curve => {
                 println!("  MACs         {value} per position, {derivative} per position+tangent")
             }
-            ModelKind::SplineSurface => {
+            ModelKind::SplineSurface | ModelKind::CaoEn => {
                 println!("  MACs         {value} per position, {derivative} per normal")
             }
             _ => println!("  MACs         {value} per field, {derivative} per field+gradient"),

@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use neurosurf_firmware_sim::{Footprint, Job, Op};
 use serde::Serialize;
 
-use neurosurf_trainer::evaluate::{LoadedModel, Precision, geometry_columns};
+use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision, geometry_columns};
 use neurosurf_trainer::io::{read_parameters, read_query_points};
 
 use super::eval::{write_csv, write_geometry};
@@ -54,16 +54,25 @@ struct Cost<'a> {
 pub fn run(args: &Args) -> Result<()> {
     let scalar = target::scalar(args.scalar)?;
     let bytes = target::read_blob(&args.model)?;
-    // Curves and surfaces are recognized here; anything else goes to the target as a field
+    // Parametric models are recognized here; anything else goes to the target as a field
     // model, so a corrupt blob is judged by the target's own core.
     let parametric = LoadedModel::from_bytes(bytes.clone(), &args.model)
         .ok()
         .filter(|m| geometry_columns(m).is_some());
-    let points = match &parametric {
-        Some(model) => read_parameters(&args.points, model.query_arity())?,
-        None => read_query_points(&args.points)?,
+    let (points, arity) = match &parametric {
+        Some(model) => (
+            read_parameters(&args.points, model.query_arity())?,
+            model.query_arity(),
+        ),
+        None => (
+            read_query_points(&args.points)?
+                .iter()
+                .map(|p| p.to_vec())
+                .collect(),
+            3,
+        ),
     };
-    let inputs: Vec<[f32; 3]> = points.iter().map(|p| p.map(|c| c as f32)).collect();
+    let inputs: Vec<f32> = points.iter().flatten().map(|&c| c as f32).collect();
     let simulator = target::simulator()?;
     let job = Job {
         mode: args.mode.mode(),
@@ -72,7 +81,7 @@ pub fn run(args: &Args) -> Result<()> {
         } else {
             Op::FieldGradient
         },
-        ..Job::field_gradient(&bytes, scalar, &inputs)
+        ..Job::position_direction(&bytes, scalar, &inputs, arity)
     };
     let run = target::run(&simulator, &job, &args.model)?;
     if args.json {
@@ -93,10 +102,12 @@ pub fn run(args: &Args) -> Result<()> {
         });
     }
     if let Some(columns) = parametric.as_ref().and_then(geometry_columns) {
-        return write_geometry(columns, &points, &run.geometry(), false);
+        let rows: Vec<Geometry> = run.geometry().into_iter().map(Geometry::from).collect();
+        return write_geometry(&columns, &points, &rows, false);
     }
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
+    let points: Vec<[f64; 3]> = points.iter().map(|p| [p[0], p[1], p[2]]).collect();
     write_csv(&mut out, &points, &run.samples()).context("cannot write to stdout")?;
     Ok(())
 }

@@ -11,11 +11,11 @@ use neurosurf_firmware_sim::{Footprint, Job, Mode, Op, TARGET_MACHINE};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use neurosurf_trainer::compare::{EvaluationPoints, SURFACE_SAMPLES};
+use neurosurf_trainer::compare::{EvaluationPoints, ParameterSet, SURFACE_SAMPLES};
 use neurosurf_trainer::curve::{
     CurveOptions, SampleCurve, SampleOptions, curve_to_blob, reconstruct_curve, sample_curve,
 };
-use neurosurf_trainer::evaluate::{LoadedModel, geometry_columns};
+use neurosurf_trainer::evaluate::LoadedModel;
 use neurosurf_trainer::implicit::{
     self, FitRequest, ImplicitNetwork, ImplicitOptions, TrainingSummary,
 };
@@ -44,7 +44,9 @@ struct Subject {
     name: String,
     path: PathBuf,
     blobs: Vec<(ScalarKind, Vec<u8>)>,
-    points: Vec<[f32; 3]>,
+    /// `arity` coordinates per point, one point after the other.
+    points: Vec<f32>,
+    arity: usize,
     ops: [Op; 2],
 }
 
@@ -90,6 +92,7 @@ pub fn run(args: &Args) -> Result<()> {
         subjects.push(Subject {
             name: path.display().to_string(),
             path: path.clone(),
+            arity: 3,
             points: points(
                 &decoded.network,
                 box_size(decoded.metadata.as_ref().and_then(|m| m.summary.as_ref())),
@@ -117,7 +120,7 @@ pub fn run(args: &Args) -> Result<()> {
             let job = Job {
                 op,
                 mode,
-                ..Job::field_gradient(blob, scalar, &subject.points)
+                ..Job::position_direction(blob, scalar, &subject.points, subject.arity)
             };
             let run = target::run(&simulator, &job, &subject.path)?;
             let derivative = matches!(op, Op::FieldGradient | Op::PositionDirection);
@@ -190,6 +193,7 @@ fn built_in() -> Result<Vec<Subject>> {
             name: name.to_string(),
             path: PathBuf::from(format!("<built-in {name}>")),
             points: points(&trained.network, box_size(Some(&trained.summary))),
+            arity: 3,
             blobs,
             ops: [Op::Field, Op::FieldGradient],
         });
@@ -223,17 +227,23 @@ fn spiral_curve() -> Result<Subject> {
         path: PathBuf::from(format!("<built-in {name}>")),
         name,
         blobs,
-        points: parameters(1),
+        points: (0..POINTS)
+            .map(|i| i as f32 / (POINTS - 1) as f32)
+            .collect(),
+        arity: 1,
         ops: [Op::Position, Op::PositionDirection],
     })
 }
 
-/// A curve or spline-surface blob as a subject, or `None` for any other kind.
+/// A parametric blob (curve, spline surface, Cao En network) as a subject, measured at the
+/// first [`POINTS`] parameters of its default covering set; `None` for any other kind.
 fn parametric(path: &std::path::Path, bytes: &[u8]) -> Result<Option<Subject>> {
     let model = LoadedModel::from_bytes(bytes.to_vec(), path)?;
-    if geometry_columns(&model).is_none() {
+    let Some(set) = ParameterSet::covering(&model) else {
         return Ok(None);
-    }
+    };
+    // Every POINTS-th point of a long set, so the run spans the domain.
+    let stride = (set.points.len() / POINTS).max(1);
     Ok(Some(Subject {
         name: path.display().to_string(),
         path: path.to_path_buf(),
@@ -241,23 +251,17 @@ fn parametric(path: &std::path::Path, bytes: &[u8]) -> Result<Option<Subject>> {
             (ScalarKind::F32, bytes.to_vec()),
             (ScalarKind::Q16_16, bytes.to_vec()),
         ],
-        points: parameters(model.query_arity()),
+        points: set
+            .points
+            .iter()
+            .step_by(stride)
+            .take(POINTS)
+            .flatten()
+            .map(|&c| c as f32)
+            .collect(),
+        arity: model.query_arity(),
         ops: [Op::Position, Op::PositionDirection],
     }))
-}
-
-/// [`POINTS`] parameters over [0, 1] (t), or over [0, 1]² ((u, v) along a diagonal sweep).
-fn parameters(arity: usize) -> Vec<[f32; 3]> {
-    (0..POINTS)
-        .map(|i| {
-            let t = i as f32 / (POINTS - 1) as f32;
-            if arity == 1 {
-                [t, 0.0, 0.0]
-            } else {
-                [t, (t * 5.0).fract(), 0.0]
-            }
-        })
-        .collect()
 }
 
 fn box_size(summary: Option<&TrainingSummary>) -> f64 {
@@ -265,12 +269,13 @@ fn box_size(summary: Option<&TrainingSummary>) -> f64 {
 }
 
 /// The first [`POINTS`] points on the model's surface, as the core receives them.
-fn points(network: &ImplicitNetwork, box_size: f64) -> Vec<[f32; 3]> {
+fn points(network: &ImplicitNetwork, box_size: f64) -> Vec<f32> {
     EvaluationPoints::on_surface(network, box_size, SURFACE_SAMPLES)
         .points
         .iter()
         .take(POINTS)
-        .map(|p| p.map(|c| c as f32))
+        .flatten()
+        .map(|&c| c as f32)
         .collect()
 }
 

@@ -5,6 +5,7 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use neurosurf_core::blob::{self, ModelKind};
+use neurosurf_core::caoen::CaoEnModel;
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::implicit::ImplicitModel;
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
@@ -98,7 +99,7 @@ pub fn run(simulator: &Simulator, job: &Job<'_>, model: &Path) -> Result<Run> {
 
 /// Multiply–accumulates of one evaluation of the blob in `scalar`, as the host's core counts
 /// them: with the gradient or not (implicit models), with the tangent or not (curves), with
-/// the normal or not (spline surfaces).
+/// the normal or not (spline surfaces, Cao En networks).
 pub fn mac_count(
     bytes: &[u8],
     scalar: ScalarKind,
@@ -118,6 +119,12 @@ pub fn mac_count(
         }
         (Ok(ModelKind::SplineSurface), _) => {
             BSplineSurface::<f32>::from_blob(bytes).map(|s| surface_macs(&s, derivative))
+        }
+        (Ok(ModelKind::CaoEn), ScalarKind::Q16_16) => {
+            CaoEnModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))
+        }
+        (Ok(ModelKind::CaoEn), _) => {
+            CaoEnModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
         }
         (_, ScalarKind::Q16_16) => {
             ImplicitModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))

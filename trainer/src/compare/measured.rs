@@ -1,5 +1,6 @@
 //! What the comparison measures at one point, for every model family: a value (Φ, or a
-//! position) and a direction (∇Φ, a curve's tangent, a surface's normal).
+//! position, or a Cao En network's outputs) and a direction (∇Φ, a curve's tangent, a
+//! surface's normal).
 
 use crate::evaluate::{Geometry, Sample};
 
@@ -30,16 +31,24 @@ impl Measured for Sample {
 
 impl Measured for Geometry {
     fn value_error(&self, reference: &Self) -> f64 {
-        let [a, b, c] = [0, 1, 2].map(|k| self.0[k] - reference.0[k]);
-        (a * a + b * b + c * c).sqrt()
+        if self.output.len() != reference.output.len() {
+            return f64::NAN;
+        }
+        let square: f64 = self
+            .output
+            .iter()
+            .zip(&reference.output)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum();
+        square.sqrt()
     }
 
     fn direction(&self) -> [f64; 3] {
-        self.1
+        self.direction
     }
 
     fn words(&self) -> impl Iterator<Item = f64> {
-        self.0.into_iter().chain(self.1)
+        self.output.iter().copied().chain(self.direction)
     }
 }
 
@@ -52,8 +61,16 @@ mod tests {
         let field: Sample = (1.0, [0.0, 0.0, 2.0]);
         assert_eq!(field.value_error(&(-0.5, [0.0; 3])), 1.5);
         assert_eq!(field.words().collect::<Vec<_>>(), [1.0, 0.0, 0.0, 2.0]);
-        let point: Geometry = ([3.0, 4.0, 0.0], [1.0, 0.0, 0.0]);
-        assert_eq!(point.value_error(&([0.0; 3], [0.0; 3])), 5.0);
+        let point = Geometry::from((vec![3.0, 4.0, 0.0], [1.0, 0.0, 0.0]));
+        assert_eq!(
+            point.value_error(&Geometry::from((vec![0.0; 3], [0.0; 3]))),
+            5.0
+        );
+        assert!(
+            point
+                .value_error(&Geometry::from((vec![0.0; 2], [0.0; 3])))
+                .is_nan()
+        );
         assert_eq!(point.direction(), [1.0, 0.0, 0.0]);
         assert_eq!(point.words().count(), 6);
     }

@@ -13,12 +13,16 @@
 mod agreement;
 mod deviation;
 mod measured;
+mod parameters;
 mod report;
 mod surface;
 
 pub use agreement::{Agreement, ulp_distance};
 pub use deviation::{Deviation, normal_angle_degrees};
 pub use measured::Measured;
+pub use parameters::{
+    CURVE_PARAMETERS, ParameterSet, SPHERE_POINTS, SURFACE_GRID as PARAMETER_GRID, fibonacci_sphere,
+};
 pub use report::{CompareRow, Quantities, Side, comparison_table, comparison_table_of};
 pub use surface::{
     EvaluationPoints, MIN_SURFACE_POINTS, NEWTON_STEPS, PointSource, SURFACE_SAMPLES, SURFACE_SEED,

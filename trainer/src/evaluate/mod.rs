@@ -8,8 +8,9 @@ use std::path::Path;
 
 use neurosurf_core::blob::{self, ModelKind};
 use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
-use neurosurf_core::scalar::{Q16, Scalar};
+use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 
+use crate::caoen::{self, CaoEnNetwork};
 use crate::curve::{DecodedCurve, DecodedSurface, curve_from_blob, surface_from_blob};
 use crate::error::{Error, Result};
 
@@ -47,6 +48,24 @@ pub enum LoadedModel {
         /// Its `f64` reading.
         decoded: Box<DecodedSurface>,
     },
+    /// A Cao En network; `bytes` is the blob, for the core.
+    CaoEn {
+        /// The blob.
+        bytes: Vec<u8>,
+        /// Its `f64` reading.
+        decoded: Box<DecodedCaoEn>,
+    },
+}
+
+/// A Cao En blob read back into the trainer.
+#[derive(Clone, Debug)]
+pub struct DecodedCaoEn {
+    /// The network, words widened to `f64` exactly.
+    pub network: CaoEnNetwork,
+    /// The blob's metadata (opaque bytes).
+    pub metadata: Vec<u8>,
+    /// How the words were stored.
+    pub stored_as: ScalarKind,
 }
 
 impl LoadedModel {
@@ -85,6 +104,15 @@ impl LoadedModel {
                 let decoded = Box::new(surface_from_blob(&bytes, path)?);
                 Ok(LoadedModel::SplineSurface { bytes, decoded })
             }
+            ModelKind::CaoEn => {
+                let (network, metadata, stored_as) = caoen::from_blob(&bytes, path)?;
+                let decoded = Box::new(DecodedCaoEn {
+                    network,
+                    metadata,
+                    stored_as,
+                });
+                Ok(LoadedModel::CaoEn { bytes, decoded })
+            }
             other => Err(Error::format(
                 path,
                 format!("{} models cannot be evaluated here", other.name()),
@@ -99,6 +127,7 @@ impl LoadedModel {
             LoadedModel::Rbf(_) => ModelKind::Rbf,
             LoadedModel::Curve { .. } => ModelKind::Curve,
             LoadedModel::SplineSurface { .. } => ModelKind::SplineSurface,
+            LoadedModel::CaoEn { .. } => ModelKind::CaoEn,
         }
     }
 
@@ -107,17 +136,19 @@ impl LoadedModel {
         match self {
             LoadedModel::Implicit { bytes, .. }
             | LoadedModel::Curve { bytes, .. }
-            | LoadedModel::SplineSurface { bytes, .. } => Some(bytes),
+            | LoadedModel::SplineSurface { bytes, .. }
+            | LoadedModel::CaoEn { bytes, .. } => Some(bytes),
             LoadedModel::Rbf(_) => None,
         }
     }
 
     /// How many coordinates a query has: 3 (x, y, z) for fields, 1 (t) for curves, 2 (u, v)
-    /// for spline surfaces.
+    /// for spline surfaces, the source dimension m for Cao En networks.
     pub fn query_arity(&self) -> usize {
         match self {
             LoadedModel::Curve { .. } => 1,
             LoadedModel::SplineSurface { .. } => 2,
+            LoadedModel::CaoEn { decoded, .. } => decoded.network.source_dimension(),
             _ => 3,
         }
     }
@@ -145,12 +176,15 @@ impl LoadedModel {
             (LoadedModel::Rbf(_), other) => Err(Error::invalid(format!(
                 "the RBF baseline is a host-only model: it evaluates in f64, not {other}"
             ))),
-            (LoadedModel::Curve { .. } | LoadedModel::SplineSurface { .. }, _) => {
-                Err(Error::invalid(format!(
-                    "a {} has no field: evaluate its geometry",
-                    self.kind().name()
-                )))
-            }
+            (
+                LoadedModel::Curve { .. }
+                | LoadedModel::SplineSurface { .. }
+                | LoadedModel::CaoEn { .. },
+                _,
+            ) => Err(Error::invalid(format!(
+                "a {} has no field: evaluate its geometry",
+                self.kind().name()
+            ))),
         }
     }
 }

@@ -1,49 +1,86 @@
-//! Evaluating curves and spline surfaces: position and direction (a curve's tangent dC/dt, a
-//! surface's unit normal) at parameters, in `f64` (the trainer's reference) or through the
-//! core in `f32` or Q16.16.
+//! Evaluating parametric models — curves, spline surfaces and Cao En networks: the output
+//! vector and a direction (a curve's tangent dC/dt, a surface's or Cao En shape's unit normal)
+//! at parameters, in `f64` (the trainer's reference) or through the core in `f32` or Q16.16.
 
+use neurosurf_core::caoen::{CaoEnModel, CaoEnPoint, MAX_SOURCE_DIMENSION, MAX_TARGET_DIMENSION};
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface, CurvePoint};
 use neurosurf_core::scalar::{Q16, Scalar};
 
 use super::{LoadedModel, Precision};
 use crate::error::{Error, Result};
 
-/// Position and direction at one parameter, in `f64` whatever the precision it was computed
-/// in: a curve's C(t) and dC/dt, or a surface's S(u, v) and unit normal ((0, 0, 0) where the
-/// normal does not exist).
-pub type Geometry = ([f64; 3], [f64; 3]);
+/// The outputs and direction at one parameter, in `f64` whatever the precision it was
+/// computed in: a curve's C(t) and dC/dt, a surface's S(u, v) and unit normal, a Cao En
+/// network's p outputs y and unit normal ((0, 0, 0) where the normal does not exist).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Geometry {
+    /// The position (3 coordinates; z = 0 for a 2-D curve) or a Cao En network's p outputs.
+    pub output: Vec<f64>,
+    /// Tangent or unit normal.
+    pub direction: [f64; 3],
+}
 
-/// The CSV columns of `neurosurf eval` for a curve (`t,x,y,z,tx,ty,tz`) or a spline surface
-/// (`u,v,x,y,z,nx,ny,nz`); `None` for field models.
-pub fn geometry_columns(model: &LoadedModel) -> Option<&'static [&'static str]> {
+impl From<(Vec<f64>, [f64; 3])> for Geometry {
+    fn from((output, direction): (Vec<f64>, [f64; 3])) -> Self {
+        Geometry { output, direction }
+    }
+}
+
+/// The CSV columns of `neurosurf eval` for a parametric model, `None` for field models:
+/// `t,x,y,z,tx,ty,tz` for a curve, `u,v,x,y,z,nx,ny,nz` for a spline surface, and for a Cao En
+/// network its source coordinates `s1…sm`, its outputs (`x,y,z` when p = 3, else `y1…yp`)
+/// and `nx,ny,nz`.
+pub fn geometry_columns(model: &LoadedModel) -> Option<Vec<String>> {
+    let names = |list: &[&str]| list.iter().map(|c| (*c).to_string()).collect();
     match model {
-        LoadedModel::Curve { .. } => Some(&["t", "x", "y", "z", "tx", "ty", "tz"]),
-        LoadedModel::SplineSurface { .. } => Some(&["u", "v", "x", "y", "z", "nx", "ny", "nz"]),
+        LoadedModel::Curve { .. } => Some(names(&["t", "x", "y", "z", "tx", "ty", "tz"])),
+        LoadedModel::SplineSurface { .. } => {
+            Some(names(&["u", "v", "x", "y", "z", "nx", "ny", "nz"]))
+        }
+        LoadedModel::CaoEn { decoded, .. } => {
+            let (m, p) = (
+                decoded.network.source_dimension(),
+                decoded.network.target_dimension(),
+            );
+            let mut columns: Vec<String> = (1..=m).map(|i| format!("s{i}")).collect();
+            if p == 3 {
+                columns.extend(names(&["x", "y", "z"]));
+            } else {
+                columns.extend((1..=p).map(|i| format!("y{i}")));
+            }
+            columns.extend(names(&["nx", "ny", "nz"]));
+            Some(columns)
+        }
         _ => None,
     }
 }
 
 impl LoadedModel {
-    /// Position and direction of a curve (t = `parameters[i][0]`) or spline surface
-    /// ((u, v) = the first two coordinates) in `precision`. Parameters are first rounded to
-    /// `f32`, which is what the core receives, so every precision sees the same inputs.
+    /// Outputs and direction of a curve (t = `parameters[i][0]`), spline surface ((u, v) =
+    /// the first two coordinates) or Cao En network (the source point: the first m
+    /// coordinates) in `precision`. Parameters are first rounded to `f32`, which is what the
+    /// core receives, so every precision sees the same inputs.
     ///
     /// # Errors
     /// [`Error::InvalidInput`] for field models, and when the core cannot load the blob in
     /// that precision.
     pub fn evaluate_geometry(
         &self,
-        parameters: &[[f64; 3]],
+        parameters: &[Vec<f64>],
         precision: Precision,
     ) -> Result<Vec<Geometry>> {
-        let rounded: Vec<[f64; 3]> = parameters
+        let rounded: Vec<Vec<f64>> = parameters
             .iter()
-            .map(|p| p.map(|c| f64::from(c as f32)))
+            .map(|p| p.iter().map(|&c| f64::from(c as f32)).collect())
             .collect();
+        let at = |p: &[f64], k: usize| p.get(k).copied().unwrap_or(0.0);
         match (self, precision) {
             (LoadedModel::Curve { decoded, .. }, Precision::F64) => Ok(rounded
                 .iter()
-                .map(|p| (decoded.curve.point(p[0]), decoded.curve.tangent(p[0])))
+                .map(|p| {
+                    let t = at(p, 0);
+                    geometry(decoded.curve.point(t), decoded.curve.tangent(t))
+                })
                 .collect()),
             (LoadedModel::Curve { bytes, .. }, Precision::F32) => {
                 curve_core::<f32>(bytes, &rounded)
@@ -55,10 +92,8 @@ impl LoadedModel {
                 .iter()
                 .map(|p| {
                     let s = &decoded.surface;
-                    (
-                        s.point(p[0], p[1]),
-                        s.normal(p[0], p[1]).unwrap_or([0.0; 3]),
-                    )
+                    let (u, v) = (at(p, 0), at(p, 1));
+                    geometry(s.point(u, v), s.normal(u, v).unwrap_or([0.0; 3]))
                 })
                 .collect()),
             (LoadedModel::SplineSurface { bytes, .. }, Precision::F32) => {
@@ -66,6 +101,26 @@ impl LoadedModel {
             }
             (LoadedModel::SplineSurface { bytes, .. }, Precision::Q16) => {
                 surface_core::<Q16>(bytes, &rounded)
+            }
+            (LoadedModel::CaoEn { decoded, .. }, Precision::F64) => {
+                let network = &decoded.network;
+                let m = network.source_dimension();
+                Ok(rounded
+                    .iter()
+                    .map(|p| {
+                        let x: Vec<f64> = (0..m).map(|k| at(p, k)).collect();
+                        Geometry {
+                            output: network.position(&x),
+                            direction: network.normal(&x).unwrap_or([0.0; 3]),
+                        }
+                    })
+                    .collect())
+            }
+            (LoadedModel::CaoEn { bytes, .. }, Precision::F32) => {
+                caoen_core::<f32>(bytes, &rounded)
+            }
+            (LoadedModel::CaoEn { bytes, .. }, Precision::Q16) => {
+                caoen_core::<Q16>(bytes, &rounded)
             }
             _ => Err(Error::invalid(format!(
                 "a {} model has a field, not a parametric geometry",
@@ -75,48 +130,86 @@ impl LoadedModel {
     }
 }
 
+fn geometry(position: [f64; 3], direction: [f64; 3]) -> Geometry {
+    Geometry {
+        output: position.to_vec(),
+        direction,
+    }
+}
+
 fn load_error(what: &str, scalar: &str, error: impl std::fmt::Display) -> Error {
     Error::invalid(format!(
         "the core cannot load this {what} in {scalar}: {error}"
     ))
 }
 
-fn to_scalar<S: Scalar>(c: f64) -> S {
-    S::from_f32_saturating(c as f32)
+/// Coordinate `k` of a parameter point in `S` (0 when missing), as the target decodes it.
+fn coordinate<S: Scalar>(p: &[f64], k: usize) -> S {
+    S::from_f32_saturating(p.get(k).copied().unwrap_or(0.0) as f32)
+}
+
+fn batch_error(e: impl std::fmt::Display) -> Error {
+    Error::invalid(format!("batch evaluation: {e}"))
 }
 
 /// The core's batch evaluation of a curve in `S`.
-fn curve_core<S: Scalar>(bytes: &[u8], parameters: &[[f64; 3]]) -> Result<Vec<Geometry>> {
+fn curve_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
     let curve =
         BSplineCurve::<S>::from_blob(bytes).map_err(|e| load_error("curve", S::KIND.name(), e))?;
-    let t: Vec<S> = parameters.iter().map(|p| to_scalar(p[0])).collect();
+    let t: Vec<S> = parameters.iter().map(|p| coordinate(p, 0)).collect();
     let mut out = vec![CurvePoint::<S>::default(); t.len()];
-    curve
-        .eval_batch(&t, &mut out)
-        .map_err(|e| Error::invalid(format!("batch evaluation: {e}")))?;
+    curve.eval_batch(&t, &mut out).map_err(batch_error)?;
     Ok(out
         .iter()
-        .map(|p| (p.position.map(S::to_f64), p.tangent.map(S::to_f64)))
+        .map(|p| geometry(p.position.map(S::to_f64), p.tangent.map(S::to_f64)))
         .collect())
 }
 
 /// The core's batch evaluation of a spline surface in `S`.
-fn surface_core<S: Scalar>(bytes: &[u8], parameters: &[[f64; 3]]) -> Result<Vec<Geometry>> {
+fn surface_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
     let surface = BSplineSurface::<S>::from_blob(bytes)
         .map_err(|e| load_error("spline surface", S::KIND.name(), e))?;
     let uv: Vec<[S; 2]> = parameters
         .iter()
-        .map(|p| [to_scalar(p[0]), to_scalar(p[1])])
+        .map(|p| [coordinate(p, 0), coordinate(p, 1)])
         .collect();
     let mut positions = vec![[S::ZERO; 3]; uv.len()];
     let mut normals = vec![None; uv.len()];
     surface
         .position_batch(&uv, &mut positions)
         .and_then(|()| surface.normal_batch(&uv, &mut normals))
-        .map_err(|e| Error::invalid(format!("batch evaluation: {e}")))?;
+        .map_err(batch_error)?;
     Ok(positions
         .iter()
         .zip(&normals)
-        .map(|(p, n)| (p.map(S::to_f64), n.unwrap_or([S::ZERO; 3]).map(S::to_f64)))
+        .map(|(p, n)| geometry(p.map(S::to_f64), n.unwrap_or([S::ZERO; 3]).map(S::to_f64)))
+        .collect())
+}
+
+/// The core's batch evaluation of a Cao En network in `S`, with the widest source and
+/// target the core supports (what the target's firmware runs; extra coordinates are 0).
+fn caoen_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
+    let network = Box::new(
+        CaoEnModel::<S>::from_blob(bytes)
+            .map_err(|e| load_error("Cao En network", S::KIND.name(), e))?,
+    );
+    let p = network.target_dimension();
+    let x: Vec<[S; MAX_SOURCE_DIMENSION]> = parameters
+        .iter()
+        .map(|point| std::array::from_fn(|k| coordinate(point, k)))
+        .collect();
+    let mut outputs = vec![[S::ZERO; MAX_TARGET_DIMENSION]; x.len()];
+    let mut points = vec![CaoEnPoint::<S>::default(); x.len()];
+    network
+        .eval_batch(&x, &mut outputs)
+        .and_then(|()| network.eval_normal_batch(&x, &mut points))
+        .map_err(batch_error)?;
+    Ok(outputs
+        .iter()
+        .zip(&points)
+        .map(|(y, point)| Geometry {
+            output: y.iter().take(p).map(|v| v.to_f64()).collect(),
+            direction: point.normal.unwrap_or([S::ZERO; 3]).map(S::to_f64),
+        })
         .collect())
 }

@@ -62,28 +62,37 @@ fn parse_text_points(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
         &[3, 6],
         "3 numbers (x y z) or 6 (x y z nx ny nz)",
     )?;
-    Ok(rows.into_iter().map(|(values, _)| values).collect())
+    Ok(rows.iter().map(|row| first_three(row)).collect())
 }
 
-/// Reads curve or surface parameters, one point per line: `arity` = 1 (t) or 2 (u v) numbers,
-/// in the text format of [`read_query_points`]. The result is padded with zeros to 3
-/// coordinates, the shape the simulator's requests carry.
+/// Most coordinates of a parameter point (a Cao En network's source dimension).
+pub const MAX_PARAMETERS: usize = 8;
+
+/// Reads the parameters of a parametric model, one point per line with exactly `arity`
+/// numbers — 1 (t) for curves, 2 (u v) for spline surfaces, m for a Cao En network's source
+/// point — in the text format of [`read_query_points`].
 ///
 /// # Errors
-/// As [`read_query_points`]; [`Error::InvalidInput`] for an arity other than 1 or 2.
-pub fn read_parameters(path: &Path, arity: usize) -> Result<Vec<[f64; 3]>> {
+/// As [`read_query_points`]; [`Error::InvalidInput`] for an arity outside 1 ..=
+/// [`MAX_PARAMETERS`].
+pub fn read_parameters(path: &Path, arity: usize) -> Result<Vec<Vec<f64>>> {
     let expected = match arity {
-        1 => "1 number (t)",
-        2 => "2 numbers (u v)",
+        1 => "1 number (t)".to_string(),
+        2 => "2 numbers (u v)".to_string(),
+        3..=MAX_PARAMETERS => format!("{arity} numbers (a source point)"),
         _ => {
             return Err(Error::invalid(format!(
-                "parameters have 1 or 2 coordinates, not {arity}"
+                "parameters have 1 to {MAX_PARAMETERS} coordinates, not {arity}"
             )));
         }
     };
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let rows = parse_rows(path, &bytes, &[arity], expected)?;
-    Ok(rows.into_iter().map(|(values, _)| values).collect())
+    parse_rows(path, &bytes, &[arity], &expected)
+}
+
+/// The first three numbers of a row, zero-padded.
+fn first_three(row: &[f64]) -> [f64; 3] {
+    [0, 1, 2].map(|k| row.get(k).copied().unwrap_or(0.0))
 }
 
 /// Reads scattered 2-D or 3-D points (a curve's samples): PLY (3-D), or text with 2 (x y) or
@@ -98,32 +107,28 @@ pub fn read_scattered_points(path: &Path) -> Result<(usize, Vec<[f64; 3]>)> {
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let rows = parse_rows(path, &bytes, &[2, 3], "2 numbers (x y) or 3 (x y z)")?;
-    let dimension = rows.first().map_or(3, |&(_, count)| count);
-    if let Some(line) = rows.iter().position(|&(_, count)| count != dimension) {
+    let dimension = rows.first().map_or(3, Vec::len);
+    if let Some(line) = rows.iter().position(|row| row.len() != dimension) {
         return Err(Error::format(
             path,
             format!(
                 "point {}: {} numbers where the first point has {dimension}",
                 line + 1,
-                rows[line].1
+                rows[line].len()
             ),
         ));
     }
-    Ok((
-        dimension,
-        rows.into_iter().map(|(values, _)| values).collect(),
-    ))
+    Ok((dimension, rows.iter().map(|row| first_three(row)).collect()))
 }
 
 /// Whitespace-separated rows of finite numbers: blank and `#` lines skipped, every other line
-/// holds one of `counts` numbers (`expected` says which, for errors). Returns the first three
-/// numbers of each row (zero-padded) and how many it had.
+/// holds one of `counts` numbers (`expected` says which, for errors).
 fn parse_rows(
     path: &Path,
     bytes: &[u8],
     counts: &[usize],
     expected: &str,
-) -> Result<Vec<([f64; 3], usize)>> {
+) -> Result<Vec<Vec<f64>>> {
     let mut rows = Vec::new();
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line_no = i + 1;
@@ -133,8 +138,7 @@ fn parse_rows(
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let mut values = [0.0f64; 3];
-        let mut count = 0;
+        let mut values = Vec::new();
         for token in line.split_ascii_whitespace() {
             let value: f64 = token
                 .parse()
@@ -142,15 +146,12 @@ fn parse_rows(
             if !value.is_finite() {
                 return Err(err(format!("'{token}' is not a finite number")));
             }
-            if count < 3 {
-                values[count] = value;
-            }
-            count += 1;
+            values.push(value);
         }
-        if !counts.contains(&count) {
-            return Err(err(format!("expected {expected}, found {count}")));
+        if !counts.contains(&values.len()) {
+            return Err(err(format!("expected {expected}, found {}", values.len())));
         }
-        rows.push((values, count));
+        rows.push(values);
     }
     Ok(rows)
 }
@@ -210,11 +211,13 @@ mod tests {
         std::fs::write(&path, "# t\n0\n0.5\n1\n").unwrap();
         assert_eq!(
             read_parameters(&path, 1).unwrap(),
-            vec![[0.0; 3], [0.5, 0.0, 0.0], [1.0, 0.0, 0.0]]
+            vec![vec![0.0], vec![0.5], vec![1.0]]
         );
         let e = read_parameters(&path, 2).unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("2 numbers (u v)"), "{e}");
-        assert!(read_parameters(&path, 3).is_err());
+        let e = read_parameters(&path, 4).unwrap_err().to_string();
+        assert!(e.contains("4 numbers (a source point)"), "{e}");
+        assert!(read_parameters(&path, 9).is_err());
 
         std::fs::write(&path, "1 2\n3 4\n").unwrap();
         assert_eq!(
