@@ -6,17 +6,14 @@
 //! the same exact moving-neuron grid as the chain. Cost per presentation: one query plus
 //! (2⌈3σ⌉ + 1)² updates.
 
-use rand::seq::SliceRandom;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-use super::grid::NeuronGrid;
 use super::kohonen::MAX_NEURONS;
 use super::points::CurvePoints;
-use super::schedule::{Schedule, gaussian_table, radius_block};
+use super::schedule::Schedule;
+use super::som;
 
 /// Settings of [`train_map`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -136,51 +133,16 @@ pub fn train_map(
             .max(options.final_radius),
         final_radius: options.final_radius,
     };
-    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
-    let (lower, upper) = points.bounds();
-    let mut neurons: Vec<[f64; 3]> = (0..columns * rows)
-        .map(|_| [0, 1, 2].map(|k| lower[k] + rng.random::<f64>() * (upper[k] - lower[k])))
-        .collect();
-    let mut grid = NeuronGrid::new(lower, upper, &neurons);
+    let som = som::train(
+        points,
+        columns * rows,
+        &schedule,
+        options.seed,
+        "map",
+        &mut Grid { columns, rows },
+    )?;
+    let (neurons, grid, t) = (som.neurons, som.grid, som.presented);
     let data = points.points();
-    let mut order: Vec<usize> = (0..n).collect();
-    let mut table = Vec::new();
-    let block = radius_block(total);
-    let limit = columns.max(rows);
-    let mut t = 0;
-    while t < total {
-        order.shuffle(&mut rng);
-        for &p in &order {
-            if t == total {
-                break;
-            }
-            if t % block == 0 {
-                gaussian_table(schedule.radius(t), limit, &mut table);
-            }
-            let x = data[p];
-            let Some((c, _)) = grid.nearest(x, &neurons, None) else {
-                return Err(Error::invalid(format!(
-                    "no winner for input point {p}: the map's weights became non-finite"
-                )));
-            };
-            let (cu, cv) = (c % columns, c / columns);
-            let reach = table.len() - 1;
-            let rate = schedule.rate(t);
-            for row in cv.saturating_sub(reach)..(cv + reach + 1).min(rows) {
-                let hv = rate * table[row.abs_diff(cv)];
-                for column in cu.saturating_sub(reach)..(cu + reach + 1).min(columns) {
-                    let gain = hv * table[column.abs_diff(cu)];
-                    let j = row * columns + column;
-                    let w = &mut neurons[j];
-                    for k in 0..3 {
-                        w[k] += gain * (x[k] - w[k]);
-                    }
-                    grid.moved(j, *w);
-                }
-            }
-            t += 1;
-        }
-    }
     let distances: Vec<f64> = data
         .iter()
         .map(|&x| {
@@ -201,4 +163,29 @@ pub fn train_map(
         },
         report,
     ))
+}
+
+/// The map's neighbourhood: a square of offsets around the winner, weighted by the product of
+/// the Gaussian along each direction.
+struct Grid {
+    columns: usize,
+    rows: usize,
+}
+
+impl som::Neighbourhood for Grid {
+    fn reach_limit(&self) -> usize {
+        self.columns.max(self.rows)
+    }
+
+    fn pull(&self, c: usize, rate: f64, table: &[f64], pull: &mut dyn FnMut(usize, f64)) {
+        let (columns, rows) = (self.columns, self.rows);
+        let (cu, cv) = (c % columns, c / columns);
+        let reach = table.len() - 1;
+        for row in cv.saturating_sub(reach)..(cv + reach + 1).min(rows) {
+            let hv = rate * table[row.abs_diff(cv)];
+            for column in cu.saturating_sub(reach)..(cu + reach + 1).min(columns) {
+                pull(row * columns + column, hv * table[column.abs_diff(cu)]);
+            }
+        }
+    }
 }

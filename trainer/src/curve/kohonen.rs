@@ -15,17 +15,14 @@
 //! one core, training + ordering + refinement + both fits): 20 points 4 ms, 200 points
 //! 70 ms, 2 000 points 0.6 s.
 
-use rand::seq::SliceRandom;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
 use super::convergence::{Convergence, check_chain, point_spacing};
-use super::grid::NeuronGrid;
 use super::points::CurvePoints;
-use super::schedule::{Schedule, gaussian_table, radius_block};
+use super::schedule::Schedule;
+use super::som;
 
 /// Most neurons a chain may have.
 pub const MAX_NEURONS: usize = 16_000_000;
@@ -197,76 +194,29 @@ pub fn train_chain(
     let epsilon = options.epsilon * spacing;
     let tolerance = options.line_tolerance * spacing;
 
-    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
-    let (lower, upper) = points.bounds();
-    let mut neurons: Vec<[f64; 3]> = (0..m)
-        .map(|_| [0, 1, 2].map(|k| lower[k] + rng.random::<f64>() * (upper[k] - lower[k])))
-        .collect();
-    let mut grid = NeuronGrid::new(lower, upper, &neurons);
-    // Farthest neighbour offset that is still a distinct neuron.
-    let limit = if closed { (m - 1) / 2 } else { m - 1 };
-
-    let data = points.points();
-    let mut order: Vec<usize> = (0..n).collect();
-    let mut table = Vec::new();
-    let block = radius_block(total);
-    let mut t = 0;
-    let mut convergence = None;
-    while t < total {
-        order.shuffle(&mut rng);
-        for &p in &order {
-            if t == total {
-                break;
-            }
-            if t % block == 0 {
-                gaussian_table(schedule.radius(t), limit, &mut table);
-            }
-            let x = data[p];
-            let Some((c, _)) = grid.nearest(x, &neurons, None) else {
-                return Err(Error::invalid(format!(
-                    "no winner for input point {p}: the chain's weights became non-finite"
-                )));
-            };
-            let rate = schedule.rate(t);
-            for (d, &h) in table.iter().enumerate() {
-                let gain = rate * h;
-                let mut pull = |j: usize| {
-                    let w = &mut neurons[j];
-                    for k in 0..3 {
-                        w[k] += gain * (x[k] - w[k]);
-                    }
-                    grid.moved(j, *w);
-                };
-                if d == 0 {
-                    pull(c);
-                    continue;
-                }
-                if closed {
-                    pull((c + d) % m);
-                    pull((c + m - d) % m);
-                } else {
-                    if c + d < m {
-                        pull(c + d);
-                    }
-                    if d <= c {
-                        pull(c - d);
-                    }
-                }
-            }
-            t += 1;
-        }
-        if options.early_stop && t < total && 2 * t >= total {
-            let check = check_chain(data, &neurons, &grid, closed, epsilon, tolerance);
-            if check.converged() {
-                convergence = Some(check);
-                break;
-            }
-        }
-    }
-    let convergence = match convergence {
-        Some(c) => c,
-        None => check_chain(data, &neurons, &grid, closed, epsilon, tolerance),
+    let mut chain = Chain {
+        m,
+        closed,
+        early_stop: options.early_stop,
+        data: points.points(),
+        epsilon,
+        tolerance,
+        convergence: None,
     };
+    let som = som::train(points, m, &schedule, options.seed, "chain", &mut chain)?;
+    let t = som.presented;
+    let convergence = match chain.convergence {
+        Some(c) => c,
+        None => check_chain(
+            chain.data,
+            &som.neurons,
+            &som.grid,
+            closed,
+            epsilon,
+            tolerance,
+        ),
+    };
+    let neurons = som.neurons;
     let report = TrainingReport {
         neurons: m,
         iterations: t,
@@ -280,4 +230,65 @@ pub fn train_chain(
         neurons,
     };
     Ok((chain, report))
+}
+
+/// The chain's neighbourhood (offsets along it, cyclic for a ring) and its early stop: the
+/// paper's two convergence tests, checked at the end of each epoch after half the schedule.
+struct Chain<'a> {
+    m: usize,
+    closed: bool,
+    early_stop: bool,
+    data: &'a [[f64; 3]],
+    epsilon: f64,
+    tolerance: f64,
+    convergence: Option<Convergence>,
+}
+
+impl som::Neighbourhood for Chain<'_> {
+    fn reach_limit(&self) -> usize {
+        if self.closed {
+            (self.m - 1) / 2
+        } else {
+            self.m - 1
+        }
+    }
+
+    fn pull(&self, c: usize, rate: f64, table: &[f64], pull: &mut dyn FnMut(usize, f64)) {
+        let m = self.m;
+        for (d, &h) in table.iter().enumerate() {
+            let gain = rate * h;
+            if d == 0 {
+                pull(c, gain);
+            } else if self.closed {
+                pull((c + d) % m, gain);
+                pull((c + m - d) % m, gain);
+            } else {
+                if c + d < m {
+                    pull(c + d, gain);
+                }
+                if d <= c {
+                    pull(c - d, gain);
+                }
+            }
+        }
+    }
+
+    fn converged(&mut self, som: &som::Som, total: usize) -> bool {
+        if !self.early_stop || 2 * som.presented < total {
+            return false;
+        }
+        let check = check_chain(
+            self.data,
+            &som.neurons,
+            &som.grid,
+            self.closed,
+            self.epsilon,
+            self.tolerance,
+        );
+        let converged = check.converged();
+        if converged {
+            self.convergence = Some(check);
+        }
+        converged
+    }
 }

@@ -50,6 +50,7 @@ mod points;
 mod refine;
 mod samples;
 mod schedule;
+mod som;
 mod spline;
 mod surface;
 mod surface_fit;
