@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
-use neurosurf_core::scalar::ScalarKind;
 use serde::Serialize;
 
 use neurosurf_trainer::curve::{
@@ -19,7 +18,7 @@ use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
 use neurosurf_trainer::table::{Align, Table};
 
-use super::output::{self, comma_list};
+use super::output::{self, blob_scalar, comma_list, wrote_blob};
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -68,15 +67,6 @@ impl CurveName {
             CurveName::Peanut => SampleCurve::Peanut,
             CurveName::Trefoil => SampleCurve::Trefoil,
         }
-    }
-}
-
-/// `f32` or `q16.16`: how a blob stores its control points.
-fn stored_scalar(precision: Precision) -> Result<ScalarKind> {
-    match precision {
-        Precision::F32 => Ok(ScalarKind::F32),
-        Precision::Q16 => Ok(ScalarKind::Q16_16),
-        Precision::F64 => anyhow::bail!("blobs store f32 or q16.16 control points, not f64"),
     }
 }
 
@@ -189,7 +179,7 @@ struct FitReport<'a> {
 }
 
 fn fit(args: &FitArgs) -> Result<()> {
-    let scalar = stored_scalar(args.blob.scalar)?;
+    let scalar = blob_scalar(args.blob.scalar)?;
     let (dimension, raw) = read_scattered_points(&args.points)?;
     let points = CurvePoints::new(dimension, raw)
         .with_context(|| format!("cannot fit a curve to {}", args.points.display()))?;
@@ -363,7 +353,7 @@ struct SurfaceReport<'a> {
 }
 
 fn surface(args: &SurfaceArgs) -> Result<()> {
-    let scalar = stored_scalar(args.blob.scalar)?;
+    let scalar = blob_scalar(args.blob.scalar)?;
     let (dimension, raw) = read_scattered_points(&args.points)?;
     if dimension != 3 {
         anyhow::bail!(
@@ -422,15 +412,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         fit.max_residual,
         seconds
     );
-    println!(
-        "wrote {} ({} bytes, {})",
-        args.blob.out.display(),
-        blob.len(),
-        scalar.name()
-    );
-    if let Some(path) = &args.mesh {
-        println!("wrote {}", path.display());
-    }
+    wrote_blob(&args.blob.out, blob.len(), scalar, args.mesh.as_deref());
     Ok(())
 }
 

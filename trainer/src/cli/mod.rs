@@ -1,5 +1,6 @@
 //! The command line: one module per command, each a thin layer over the library.
 
+mod caoen;
 mod compare;
 mod curve;
 mod demo;
@@ -32,6 +33,10 @@ enum Command {
     /// Train a model from control points and write its blob.
     #[command(subcommand)]
     Train(train::Command),
+    /// Cao En surfaces (Wyvill, Cao & Trotman): fit a network to key and target points, mesh
+    /// it.
+    #[command(subcommand)]
+    Caoen(caoen::Command),
     /// Curves and surfaces from scattered points (Hoffmann & Várady): sample, fit, plot,
     /// bench.
     #[command(subcommand)]
@@ -90,6 +95,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Sample(args) => sample::run(&args),
         Command::Train(command) => train::run(&command),
+        Command::Caoen(command) => caoen::run(&command),
         Command::Curve(command) => curve::run(&command),
         Command::Eval(args) => eval::run(&args),
         Command::Info(args) => info::run(&args),

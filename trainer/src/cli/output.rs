@@ -1,6 +1,7 @@
 //! Printing a command's result: a JSON document with `--json`, human text otherwise.
 
 use anyhow::{Context, Result};
+use neurosurf_core::scalar::ScalarKind;
 use serde::Serialize;
 
 /// Prints `value` as pretty JSON on stdout.
@@ -8,6 +9,33 @@ pub fn json<T: Serialize>(value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).context("cannot encode the JSON summary")?;
     println!("{text}");
     Ok(())
+}
+
+/// The scalar a blob stores its numbers in: `f32` or `q16.16` (blobs hold no `f64`).
+pub fn blob_scalar(precision: neurosurf_trainer::evaluate::Precision) -> Result<ScalarKind> {
+    use neurosurf_trainer::evaluate::Precision;
+    match precision {
+        Precision::F32 => Ok(ScalarKind::F32),
+        Precision::Q16 => Ok(ScalarKind::Q16_16),
+        Precision::F64 => anyhow::bail!("blobs store f32 or q16.16 numbers, not f64"),
+    }
+}
+
+/// Says what a fitting command wrote: the blob (its size and scalar), then any extra file.
+pub fn wrote_blob(
+    path: &std::path::Path,
+    bytes: usize,
+    scalar: ScalarKind,
+    extra: Option<&std::path::Path>,
+) {
+    println!(
+        "wrote {} ({bytes} bytes, {})",
+        path.display(),
+        scalar.name()
+    );
+    if let Some(extra) = extra {
+        println!("wrote {}", extra.display());
+    }
 }
 
 /// Parses `N` comma-separated values (`800,600`) for an option such as `--size`.

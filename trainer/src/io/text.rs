@@ -90,6 +90,30 @@ pub fn read_parameters(path: &Path, arity: usize) -> Result<Vec<Vec<f64>>> {
     parse_rows(path, &bytes, &[arity], &expected)
 }
 
+/// Reads rows of numbers with the same count on every line (1 to 64), in the text format of
+/// [`read_query_points`] (blank and `#` lines skipped).
+///
+/// # Errors
+/// As [`read_query_points`], and [`Error::Format`] naming the first line whose count differs
+/// from the first row's.
+pub fn read_rows(path: &Path) -> Result<Vec<Vec<f64>>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let counts: Vec<usize> = (1..=64).collect();
+    let rows = parse_rows(path, &bytes, &counts, "1 to 64 numbers")?;
+    let width = rows.first().map_or(0, Vec::len);
+    if let Some(i) = rows.iter().position(|r| r.len() != width) {
+        return Err(Error::format(
+            path,
+            format!(
+                "row {}: {} numbers where the first row has {width}",
+                i + 1,
+                rows[i].len()
+            ),
+        ));
+    }
+    Ok(rows)
+}
+
 /// The first three numbers of a row, zero-padded.
 fn first_three(row: &[f64]) -> [f64; 3] {
     [0, 1, 2].map(|k| row.get(k).copied().unwrap_or(0.0))

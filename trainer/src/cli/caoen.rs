@@ -1,0 +1,265 @@
+//! `neurosurf caoen`: Cao En surfaces (Wyvill, Cao & Trotman 1992) — build or fit a network
+//! from key and target points, and mesh it.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::{Subcommand, ValueEnum};
+use neurosurf_core::caoen::{Blending, Domain};
+use serde::Serialize;
+
+use neurosurf_trainer::caoen::{
+    self, CaoEnNetwork, fit_shape, fit_sharpness, from_key_points, rms_error,
+};
+use neurosurf_trainer::evaluate::{LoadedModel, Precision};
+use neurosurf_trainer::io::{read_rows, write_atomic, write_mesh};
+
+use super::output::{self, blob_scalar, comma_list, wrote_blob};
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Build a network from key and target points (the paper's construction) and, by
+    /// default, fit V so the surface passes through the targets; write its blob.
+    Fit(FitArgs),
+    /// Map a subdivided sphere (or a torus grid) through a network: a polygon mesh with exact
+    /// normals (OBJ or PLY).
+    Mesh(MeshArgs),
+}
+
+pub fn run(command: &Command) -> Result<()> {
+    match command {
+        Command::Fit(args) => fit(args),
+        Command::Mesh(args) => mesh(args),
+    }
+}
+
+/// The source domain.
+#[derive(Copy, Clone, Debug, ValueEnum)]
+pub enum DomainArg {
+    /// The unit sphere (or a hypersphere with --source-dimension > 3).
+    Sphere,
+    /// The torus: source (cos θ, sin θ, cos φ, sin φ).
+    Torus,
+}
+
+/// The blending function of every key point.
+#[derive(Copy, Clone, Debug, ValueEnum)]
+pub enum BlendingArg {
+    /// s^q for s > 0, else 0 (q whole).
+    Power,
+    /// e^{q(s − 1)}.
+    Exponential,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct FitArgs {
+    /// Text, one key point per line: its m source coordinates, then its target's p
+    /// coordinates. A line of 3 numbers is a target alone on the sphere: its key point is
+    /// its direction from the targets' centroid.
+    points: PathBuf,
+    /// The source domain.
+    #[arg(long, value_enum, default_value_t = DomainArg::Sphere)]
+    domain: DomainArg,
+    /// Source coordinates per key point (3 on the sphere, 4 on the torus, more for a
+    /// hypersphere).
+    #[arg(long)]
+    source_dimension: Option<usize>,
+    /// The blending function.
+    #[arg(long, value_enum, default_value_t = BlendingArg::Power)]
+    blending: BlendingArg,
+    /// Use the rational (normalized) form: the surface stays in the targets' convex hull.
+    #[arg(long)]
+    normalized: bool,
+    /// q of every key point (whole for power blending).
+    #[arg(long, default_value_t = 4.0)]
+    sharpness: f64,
+    /// Keep V = the targets, as the paper does (the surface passes near them, not through).
+    #[arg(long)]
+    no_fit: bool,
+    /// Also choose q per key point from these candidates (comma-separated), scored between the
+    /// key points.
+    #[arg(long, value_delimiter = ',')]
+    fit_sharpness: Vec<f64>,
+    /// How the blob stores the network: `f32` or `q16.16`.
+    #[arg(long, default_value = "f32")]
+    scalar: Precision,
+    /// Output blob.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the mapped icosphere (`.obj` or `.ply`).
+    #[arg(long, value_name = "FILE")]
+    mesh: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct FitReport<'a> {
+    out: &'a Path,
+    stored_as: &'static str,
+    blob_bytes: usize,
+    key_points: usize,
+    source_dimension: usize,
+    target_dimension: usize,
+    fitted: bool,
+    /// RMS distance from y(wᵢ) to tᵢ over the key points.
+    rms_at_keys: f64,
+    mesh: Option<&'a Path>,
+}
+
+/// Key points and their targets, one row each.
+type KeysAndTargets = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// Key points and targets from the rows of the point file.
+fn keys_and_targets(rows: &[Vec<f64>], m: usize) -> Result<KeysAndTargets> {
+    let width = rows.first().map_or(0, Vec::len);
+    if width == 3 && m == 3 {
+        let n = rows.len().max(1) as f64;
+        let centroid: Vec<f64> = (0..3)
+            .map(|k| rows.iter().map(|r| r[k]).sum::<f64>() / n)
+            .collect();
+        let keys = rows
+            .iter()
+            .map(|r| {
+                let d: Vec<f64> = (0..3).map(|k| r[k] - centroid[k]).collect();
+                let length = d.iter().map(|c| c * c).sum::<f64>().sqrt();
+                if length > 0.0 {
+                    Ok(d.iter().map(|c| c / length).collect())
+                } else {
+                    bail!("a target sits at the targets' centroid: it has no direction")
+                }
+            })
+            .collect::<Result<Vec<_>>>()?;
+        return Ok((keys, rows.to_vec()));
+    }
+    if width <= m {
+        bail!("each line needs {m} source coordinates and at least one target coordinate");
+    }
+    Ok(rows
+        .iter()
+        .map(|r| (r[..m].to_vec(), r[m..].to_vec()))
+        .unzip())
+}
+
+fn fit(args: &FitArgs) -> Result<()> {
+    let scalar = blob_scalar(args.scalar)?;
+    let (domain, default_m) = match args.domain {
+        DomainArg::Sphere => (Domain::Sphere, 3),
+        DomainArg::Torus => (Domain::Torus, 4),
+    };
+    let m = args.source_dimension.unwrap_or(default_m);
+    let blending = match args.blending {
+        BlendingArg::Power => Blending::Power,
+        BlendingArg::Exponential => Blending::Exponential,
+    };
+    let rows = read_rows(&args.points)?;
+    if rows.is_empty() {
+        bail!("{}: no key points", args.points.display());
+    }
+    let (keys, targets) = keys_and_targets(&rows, m)
+        .with_context(|| format!("cannot read key points from {}", args.points.display()))?;
+    let built = from_key_points(
+        domain.code(),
+        blending.code(),
+        args.normalized,
+        &keys,
+        &targets,
+        args.sharpness,
+    )?;
+    // The fit takes the keys as they sit on the domain (the network normalizes them).
+    let on_domain = built.weights.clone();
+    let network: CaoEnNetwork = match (args.no_fit, args.fit_sharpness.is_empty()) {
+        (true, _) => built,
+        (false, true) => fit_shape(&built, &on_domain, &targets)?,
+        (false, false) => fit_sharpness(&built, &on_domain, &targets, &args.fit_sharpness)?.0,
+    };
+    let blob = caoen::to_blob(&network, scalar, b"neurosurf caoen fit")?;
+    write_atomic(&args.out, &blob)?;
+    if let Some(path) = &args.mesh {
+        write_network_mesh(&network, path, 4, [48, 24])?;
+    }
+    let report = FitReport {
+        out: &args.out,
+        stored_as: scalar.name(),
+        blob_bytes: blob.len(),
+        key_points: network.key_count(),
+        source_dimension: network.source_dimension(),
+        target_dimension: network.target_dimension(),
+        fitted: !args.no_fit,
+        rms_at_keys: rms_error(&network, &on_domain, &targets),
+        mesh: args.mesh.as_deref(),
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "{} key points, {}-D → {}-D, {}: RMS distance to the targets at the key points {:.3e}",
+        report.key_points,
+        report.source_dimension,
+        report.target_dimension,
+        if report.fitted {
+            "V fitted through the targets"
+        } else {
+            "V = the targets (the paper's construction)"
+        },
+        report.rms_at_keys
+    );
+    wrote_blob(&args.out, blob.len(), scalar, args.mesh.as_deref());
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct MeshArgs {
+    /// A Cao En blob (p ≥ 3 outputs: the first three are the position).
+    model: PathBuf,
+    /// Icosphere subdivisions for a sphere network (level s: 10·4ˢ + 2 vertices).
+    #[arg(long, default_value_t = 4)]
+    subdivisions: usize,
+    /// Grid of a torus network, `AROUND,ACROSS`.
+    #[arg(long, value_parser = comma_list::<usize, 2>, default_value = "48,24")]
+    grid: [usize; 2],
+    /// Output mesh (`.obj` or `.ply`), with the exact normals.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn mesh(args: &MeshArgs) -> Result<()> {
+    let model = LoadedModel::read(&args.model)?;
+    let LoadedModel::CaoEn { decoded, .. } = &model else {
+        bail!(
+            "{}: a {} model; `caoen mesh` maps Cao En networks",
+            args.model.display(),
+            model.kind().name()
+        );
+    };
+    let (vertices, triangles) =
+        write_network_mesh(&decoded.network, &args.out, args.subdivisions, args.grid)?;
+    println!(
+        "wrote {} ({vertices} vertices, {triangles} triangles)",
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// Meshes a sphere network (icosphere) or a torus network (grid) and writes it with its
+/// normals; returns the vertex and triangle counts.
+fn write_network_mesh(
+    network: &CaoEnNetwork,
+    path: &Path,
+    subdivisions: usize,
+    [around, across]: [usize; 2],
+) -> Result<(usize, usize)> {
+    let mapped = match (
+        network.source_dimension(),
+        network.domain == Domain::Torus.code(),
+    ) {
+        (4, true) => caoen::torus_mesh(network, around, across)?,
+        (3, false) => caoen::sphere_mesh(network, subdivisions)?,
+        (m, _) => {
+            bail!("only sphere (m = 3) and torus (m = 4) networks are meshed, this one has m = {m}")
+        }
+    };
+    write_mesh(path, &mapped.mesh, Some(&mapped.normals))?;
+    Ok((mapped.mesh.vertex_count(), mapped.mesh.triangle_count()))
+}

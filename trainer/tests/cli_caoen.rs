@@ -1,0 +1,180 @@
+//! `neurosurf caoen …` run as a user would: fit a Cao En network to targets (on the sphere)
+//! or to key/target pairs (on the torus), mesh it, and evaluate the blob on the host and on
+//! the simulated Cortex-M4F — which must print exactly what the host prints.
+
+mod common;
+
+use common::{fails, ok};
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_3};
+use std::fs;
+use std::path::{Path, PathBuf};
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
+}
+
+/// 26 targets on a bent ellipsoid, one per direction of the cube's corners, edges and faces.
+fn targets_file(dir: &Path) -> PathBuf {
+    let mut text = String::from("# x y z of each target\n");
+    for i in -1_i32..=1 {
+        for j in -1_i32..=1 {
+            for k in -1_i32..=1 {
+                if (i, j, k) == (0, 0, 0) {
+                    continue;
+                }
+                let n = f64::from(i * i + j * j + k * k).sqrt();
+                let (x, y, z) = (f64::from(i) / n, f64::from(j) / n, f64::from(k) / n);
+                text.push_str(&format!(
+                    "{} {} {}\n",
+                    1.3 * x,
+                    0.8 * y + 0.25 * x * x,
+                    0.6 * z
+                ));
+            }
+        }
+    }
+    let path = dir.join("targets.txt");
+    fs::write(&path, text).unwrap();
+    path
+}
+
+/// Source points on the sphere (unit vectors, 3 per line).
+fn sphere_points(dir: &Path) -> PathBuf {
+    let mut text = String::new();
+    for i in 0..30 {
+        let (a, z) = (f64::from(i) * 2.4, 1.0 - f64::from(2 * i + 1) / 30.0);
+        let r = (1.0 - z * z).sqrt();
+        text.push_str(&format!("{} {} {z}\n", r * a.cos(), r * a.sin()));
+    }
+    let path = dir.join("sources.txt");
+    fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn a_fitted_sphere_network_passes_through_its_targets_and_runs_on_the_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let targets = targets_file(dir.path());
+    let model = dir.path().join("bean.nsb");
+    let mesh = dir.path().join("bean.obj");
+    let report = json(&ok(&[
+        "caoen",
+        "fit",
+        s(&targets),
+        "--out",
+        s(&model),
+        "--mesh",
+        s(&mesh),
+        "--scalar",
+        "q16.16",
+        "--json",
+    ]));
+    assert_eq!(report["key_points"], 26);
+    assert!(report["rms_at_keys"].as_f64().unwrap() < 1e-6, "{report}");
+    let obj = fs::read_to_string(&mesh).unwrap();
+    assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 2562);
+
+    let info = ok(&["info", s(&model)]);
+    assert!(
+        info.contains("cao-en model") && info.contains("26 key points"),
+        "{info}"
+    );
+    let sources = sphere_points(dir.path());
+    let rows = ok(&["eval", s(&model), "--points", s(&sources)]);
+    assert!(rows.starts_with("s1,s2,s3,x,y,z,nx,ny,nz\n"), "{rows}");
+    for scalar in ["q16.16", "f32"] {
+        let common = [s(&model), "--points", s(&sources), "--scalar", scalar];
+        let host = ok(&[&["eval"], &common[..]].concat());
+        for mode in ["batch", "single"] {
+            let target = ok(&[&["sim"], &common[..], &["--mode", mode]].concat());
+            assert!(host == target, "{scalar} {mode}\n{host}\n---\n{target}");
+        }
+    }
+    let compare = json(&ok(&["compare", s(&model), "--json"]));
+    assert_eq!(compare["kind"], "cao-en");
+    for row in compare["rows"].as_array().unwrap() {
+        assert!(
+            row["normal_median_degrees"].as_f64().unwrap() < 0.05,
+            "{row}"
+        );
+        if row["on"] == "target" {
+            assert_eq!(row["bit_exact"], true, "{row}");
+        }
+    }
+}
+
+#[test]
+fn a_torus_network_from_key_and_target_pairs_meshes_its_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::new();
+    for i in 0..6 {
+        for j in 0..4 {
+            let (a, b) = (f64::from(i) * FRAC_PI_3, f64::from(j) * FRAC_PI_2);
+            let r = 1.0 + 0.4 * b.cos();
+            text.push_str(&format!(
+                "{} {} {} {} {} {} {}\n",
+                a.cos(),
+                a.sin(),
+                b.cos(),
+                b.sin(),
+                r * a.cos(),
+                r * a.sin(),
+                0.4 * b.sin()
+            ));
+        }
+    }
+    let pairs = dir.path().join("torus.txt");
+    fs::write(&pairs, text).unwrap();
+    let model = dir.path().join("torus.nsb");
+    let report = json(&ok(&[
+        "caoen",
+        "fit",
+        s(&pairs),
+        "--domain",
+        "torus",
+        "--blending",
+        "exponential",
+        "--out",
+        s(&model),
+        "--json",
+    ]));
+    assert_eq!(report["source_dimension"], 4);
+    assert!(report["rms_at_keys"].as_f64().unwrap() < 1e-6, "{report}");
+    let mesh = dir.path().join("torus.ply");
+    let out = ok(&[
+        "caoen",
+        "mesh",
+        s(&model),
+        "--grid",
+        "24,12",
+        "--out",
+        s(&mesh),
+    ]);
+    assert!(
+        out.contains("288 vertices") && out.contains("576 triangles"),
+        "{out}"
+    );
+}
+
+#[test]
+fn bad_key_point_files_fail_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.nsb");
+    let case = |name: &str, text: &str, extra: &[&str]| {
+        let path = dir.path().join(name);
+        fs::write(&path, text).unwrap();
+        fails(&[&["caoen", "fit", s(&path), "--out", s(&out)], extra].concat())
+    };
+    assert!(case("empty.txt", "# nothing\n", &[]).contains("no key points"));
+    let mixed = case("mixed.txt", "1 0 0\n0 1 0 1\n", &[]);
+    assert!(mixed.contains("row 2"), "{mixed}");
+    let centre = case("centre.txt", "1 0 0\n-1 0 0\n0 0 0\n", &[]);
+    assert!(centre.contains("centroid"), "{centre}");
+    let short = case("short.txt", "1 0 0 0\n0 1 0 0\n", &["--domain", "torus"]);
+    assert!(short.contains("4 source coordinates"), "{short}");
+    assert!(!out.exists());
+}
