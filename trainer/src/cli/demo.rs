@@ -78,9 +78,36 @@ pub fn run(args: &Args) -> Result<()> {
             println!("       (not every module reached the threshold)");
         }
     }
+    for demo in &report.parametric {
+        println!(
+            "\n{}: {} ({:.3} s)",
+            demo.name, demo.description, demo.seconds
+        );
+        for (what, value) in &demo.quality {
+            if value.abs() >= 0.01 {
+                println!("  {what}: {value:.4}");
+            } else {
+                println!("  {what}: {value:.2e}");
+            }
+        }
+        for (precision, d) in &demo.deviation {
+            println!(
+                "  {:<7} against f64: max |Δ| {:.2e}, RMS {:.2e}, median angle {:.2e}°",
+                precision.name(),
+                d.field_max.unwrap_or(f64::NAN),
+                d.field_rms.unwrap_or(f64::NAN),
+                d.normal_median_degrees.unwrap_or(f64::NAN)
+            );
+        }
+    }
     println!();
     for m in &report.models {
         for (path, bytes) in &m.blobs {
+            println!("wrote {} ({bytes} bytes)", path.display());
+        }
+    }
+    for demo in &report.parametric {
+        for (path, bytes) in &demo.files {
             println!("wrote {} ({bytes} bytes)", path.display());
         }
     }

@@ -1,5 +1,10 @@
 //! The main job on built-in data: sample a torus and the 3-feature head, train both, write
-//! their blobs, and measure each in `f64`, `f32` and Q16.16 against the true surface.
+//! their blobs, and measure each in `f64`, `f32` and Q16.16 against the true surface; then a
+//! curve recovered from scattered points and a Cao En surface (`parametric`).
+
+mod parametric;
+
+pub use parametric::{ParametricDemo, cao_en, curve};
 
 use std::path::{Path, PathBuf};
 
@@ -46,6 +51,8 @@ pub struct DemoReport {
     pub out_dir: PathBuf,
     /// The models.
     pub models: Vec<DemoModel>,
+    /// The curve and the Cao En surface.
+    pub parametric: Vec<ParametricDemo>,
 }
 
 /// Runs the demo into `out_dir` (created if missing) with `seed`.
@@ -129,8 +136,10 @@ pub fn run(
             max_field_deviation: deviation,
         });
     }
+    let parametric = vec![curve(out_dir, seed)?, cao_en(out_dir)?];
     Ok(DemoReport {
         out_dir: out_dir.to_path_buf(),
         models,
+        parametric,
     })
 }
