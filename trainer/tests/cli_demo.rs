@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::ok;
+use common::{fails, ok};
 
 #[test]
 fn the_demo_writes_every_model_and_reports_their_accuracy() {
@@ -46,4 +46,14 @@ fn the_demo_writes_every_model_and_reports_their_accuracy() {
     assert_eq!((png.width(), png.height()), (720, 330));
     let obj = std::fs::read_to_string(out.join("cao-en.obj")).unwrap();
     assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 2562);
+}
+
+#[test]
+fn an_output_folder_that_is_a_file_is_refused_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("taken");
+    std::fs::write(&file, "not a folder").unwrap();
+    let error = fails(&["demo", "--out", file.to_str().unwrap()]);
+    assert!(error.contains("taken"), "{error}");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "not a folder");
 }
