@@ -92,7 +92,7 @@ impl Distortion {
     fn lift(&self, p: [f64; 3]) -> Result<[f64; 4]> {
         let u = [0, 1, 2].map(|k| (p[k] - self.centre[k]) / self.radius);
         let r2 = dot(&u, &u);
-        if !(r2 <= 1.0 + 1e-12) {
+        if r2.is_nan() || r2 > 1.0 + 1e-12 {
             return Err(Error::invalid(format!(
                 "{p:?} is outside the distortion's ball (radius {} around {:?})",
                 self.radius, self.centre
