@@ -13,6 +13,7 @@
 //! here: each q only shapes its neighbourhood, and every trial is one linear solve.
 
 use nalgebra::DMatrix;
+use neurosurf_core::caoen::{Blending, Domain};
 
 use super::network::{CaoEnNetwork, on_domain};
 use crate::error::{Error, Result};
@@ -24,8 +25,8 @@ use crate::error::{Error, Result};
 /// [`Error::InvalidInput`] for mismatched counts or an invalid network (see
 /// [`CaoEnNetwork::validate`]).
 pub fn from_key_points(
-    domain: u8,
-    blending: u8,
+    domain: Domain,
+    blending: Blending,
     normalized: bool,
     keys: &[Vec<f64>],
     targets: &[Vec<f64>],
@@ -39,10 +40,10 @@ pub fn from_key_points(
         )));
     }
     let network = CaoEnNetwork {
-        domain,
-        blending,
+        domain: domain.code(),
+        blending: blending.code(),
         normalized,
-        weights: keys.iter().map(|k| on_domain(domain, k)).collect(),
+        weights: keys.iter().map(|k| on_domain(domain.code(), k)).collect(),
         targets: targets.to_vec(),
         sharpness: vec![q; keys.len()],
     };

@@ -1,11 +1,17 @@
 //! Cao En surfaces (Wyvill, Cao & Trotman 1992) on the host, in f64: the network and its
 //! reference evaluation (`network`), construction from key/target points and least-squares
 //! fitting of V and of q per key point (`fit`), blob conversion (`blob`), and polygon meshes
-//! from an icosphere or a torus grid (`mesh`). The core evaluates what this writes
+//! from an icosphere or a torus grid (`mesh`). Fitting to a closed genus-0 mesh:
+//! `topology` (welding, parts, holes), `spherical` (the spherical Tutte embedding with
+//! stretch reweighting), `mesh_fit` (keys, least squares against every vertex, the error
+//! table), `distance` (two-sided surface-to-mesh distance). Pictures: `render` (depth buffer
+//! through the projection network) and `raymarch` (the convex implicit form in the core).
+//! Applications: `morph` (metamorphosis with empty key points), `distort` (S³ → ℝ³). The core evaluates what this writes
 //! (`neurosurf_core::caoen`).
 //!
 //! ```
 //! use neurosurf_trainer::caoen::{fit_shape, from_key_points, sphere_mesh, to_blob};
+//! use neurosurf_core::caoen::{Blending, Domain};
 //! use neurosurf_core::scalar::ScalarKind;
 //! // Six key points on the axes, an elongated target for each: a rounded spindle.
 //! let keys: Vec<Vec<f64>> = (0..6).map(|i| {
@@ -14,7 +20,7 @@
 //!     k
 //! }).collect();
 //! let targets: Vec<Vec<f64>> = keys.iter().map(|k| vec![k[0], k[1], 2.0 * k[2]]).collect();
-//! let built = from_key_points(0, 1, false, &keys, &targets, 4.0)?;
+//! let built = from_key_points(Domain::Sphere, Blending::Exponential, false, &keys, &targets, 4.0)?;
 //! let fitted = fit_shape(&built, &keys, &targets)?; // now y(wᵢ) = tᵢ exactly
 //! let y = fitted.position(&keys[4]);
 //! assert!((y[2] - 2.0).abs() < 1e-9);
@@ -26,17 +32,38 @@
 //! ```
 
 mod blob;
+mod distance;
+mod distort;
 mod fit;
 mod mesh;
+mod mesh_fit;
+mod morph;
 mod network;
+mod raymarch;
+mod render;
+mod spherical;
+mod topology;
 
 pub use blob::{from_blob, to_blob};
+pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
+pub use distort::Distortion;
 pub use fit::{fit_shape, fit_sharpness, from_key_points, rms_error};
 pub use mesh::{
     CaoEnMesh, MAX_SUBDIVISIONS, SourceGrid, icosphere, map_mesh, sphere_mesh, torus_grid,
     torus_mesh,
 };
+pub use mesh_fit::{
+    FitRow, KeyPlacement, MeshFit, MeshFitOptions, farthest_points, fit_error_table,
+    fit_parameterized,
+};
+pub use morph::{MAX_FRAMES, Morph, morph_meshes};
 pub use network::{CaoEnNetwork, Evaluation, on_domain};
+pub use raymarch::{convex_implicit, ray_marched_image};
+pub use render::{MAX_SAMPLE_GAP, Rendering, View, depth_buffer_image};
+pub use spherical::{SphericalMap, flipped_triangles, spherical_parameterization};
+pub use topology::{boundary_loops, cap_holes, check_sphere_topology, edge_components, weld};
 
+#[cfg(test)]
+mod support;
 #[cfg(test)]
 mod tests;

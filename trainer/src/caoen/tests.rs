@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use neurosurf_core::caoen::CaoEnModel;
+use neurosurf_core::caoen::{Blending, CaoEnModel, Domain};
 use neurosurf_core::scalar::{Q16, ScalarKind};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -24,15 +24,7 @@ fn unit(rng: &mut ChaCha8Rng, m: usize) -> Vec<f64> {
 /// Key points spread over the sphere (a Fibonacci lattice) and targets on an ellipsoid with
 /// radii 1, 1.5, 0.7.
 fn ellipsoid(n: usize) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-    let golden = std::f64::consts::PI * (3.0 - 5.0_f64.sqrt());
-    let keys: Vec<Vec<f64>> = (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let r = (1.0 - z * z).sqrt();
-            let a = golden * i as f64;
-            vec![r * a.cos(), r * a.sin(), z]
-        })
-        .collect();
+    let keys = support::fibonacci(n);
     let targets = keys
         .iter()
         .map(|k| vec![k[0], 1.5 * k[1], 0.7 * k[2]])
@@ -46,17 +38,18 @@ fn ellipsoid(n: usize) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
 fn fitted_shape_passes_through_the_targets() {
     let mut rng = ChaCha8Rng::seed_from_u64(40);
     for (blending, normalized, q) in [
-        (0, false, 6.0),
-        (1, false, 8.0),
-        (1, true, 8.0),
-        (0, true, 4.0),
+        (Blending::Power, false, 6.0),
+        (Blending::Exponential, false, 8.0),
+        (Blending::Exponential, true, 8.0),
+        (Blending::Power, true, 4.0),
     ] {
         for n in [6, 26, 104] {
             let (keys, _) = ellipsoid(n);
             let targets: Vec<Vec<f64>> = (0..n)
                 .map(|_| (0..3).map(|_| rng.random_range(-2.0..2.0)).collect())
                 .collect();
-            let built = from_key_points(0, blending, normalized, &keys, &targets, q).unwrap();
+            let built =
+                from_key_points(Domain::Sphere, blending, normalized, &keys, &targets, q).unwrap();
             let before = rms_error(&built, &keys, &targets);
             let fitted = fit_shape(&built, &keys, &targets).unwrap();
             let worst = keys
@@ -67,7 +60,7 @@ fn fitted_shape_passes_through_the_targets() {
                     (0..3).map(move |g| (y[g] - t[g]).abs()).collect::<Vec<_>>()
                 })
                 .fold(0.0, f64::max);
-            assert!(worst < 1e-6, "blending {blending}, n {n}: {worst:e}");
+            assert!(worst < 1e-6, "blending {blending:?}, n {n}: {worst:e}");
             // With dense keys the paper's network only passes near its targets.
             assert!(n < 26 || before > 1e-3, "n {n}: unfitted error {before:e}");
         }
@@ -84,7 +77,15 @@ fn sharpness_search_lowers_the_error_between_keys() {
     points.extend(samples);
     let mut data = targets.clone();
     data.extend(values);
-    let built = from_key_points(0, 1, false, &keys, &targets, 2.0).unwrap();
+    let built = from_key_points(
+        Domain::Sphere,
+        Blending::Exponential,
+        false,
+        &keys,
+        &targets,
+        2.0,
+    )
+    .unwrap();
     let start = rms_error(&fit_shape(&built, &points, &data).unwrap(), &points, &data);
     let (best, error) = fit_sharpness(&built, &points, &data, &[1.0, 2.0, 3.0, 4.0, 6.0]).unwrap();
     println!("rms between keys: q = 2 for all {start:.3e}, per-key q {error:.3e}");
@@ -97,8 +98,7 @@ fn sharpness_search_lowers_the_error_between_keys() {
 #[test]
 fn blobs_round_trip_through_the_core() {
     let (keys, targets) = ellipsoid(26);
-    let built = from_key_points(0, 1, true, &keys, &targets, 6.0).unwrap();
-    let fitted = fit_shape(&built, &keys, &targets).unwrap();
+    let fitted = support::fitted(&keys, &targets, Blending::Exponential, true, 6.0);
     let mut rng = ChaCha8Rng::seed_from_u64(41);
     for kind in [ScalarKind::F32, ScalarKind::Q16_16] {
         let blob = to_blob(&fitted, kind, b"ellipsoid").unwrap();
@@ -168,7 +168,8 @@ fn meshes_are_closed_and_outward() {
             k
         })
         .collect();
-    let identity = from_key_points(0, 0, false, &axes, &axes, 1.0).unwrap();
+    let identity =
+        from_key_points(Domain::Sphere, Blending::Power, false, &axes, &axes, 1.0).unwrap();
     let mesh = sphere_mesh(&identity, 3).unwrap();
     for (p, n) in mesh.mesh.positions.iter().zip(&mesh.normals) {
         let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
@@ -185,8 +186,7 @@ fn meshes_are_closed_and_outward() {
 #[test]
 fn approximate_normal_network_tracks_exact_normals() {
     let (keys, targets) = ellipsoid(104);
-    let built = from_key_points(0, 1, true, &keys, &targets, 12.0).unwrap();
-    let fitted = fit_shape(&built, &keys, &targets).unwrap();
+    let fitted = support::fitted(&keys, &targets, Blending::Exponential, true, 12.0);
     let normals = fitted.normal_network().unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(42);
     let (mut worst, mut mean) = (0.0_f64, 0.0);
@@ -229,7 +229,15 @@ fn torus_network_mesh() {
         .iter()
         .map(|k| k.iter().map(|c| c / 2.0).collect())
         .collect();
-    let mut built = from_key_points(1, 1, true, &keys, &targets, 8.0).unwrap();
+    let mut built = from_key_points(
+        Domain::Torus,
+        Blending::Exponential,
+        true,
+        &keys,
+        &targets,
+        8.0,
+    )
+    .unwrap();
     built.weights = halved;
     let fitted = fit_shape(&built, &keys, &targets).unwrap();
     assert!(rms_error(&fitted, &keys, &targets) < 1e-9);

@@ -1,0 +1,423 @@
+//! Depth-buffer rendering of Cao En surfaces (paper §10.3) with Lambert shading from the exact
+//! normals, and the orthographic [`View`] shared with the ray marcher ([`super::raymarch`]).
+//!
+//! Each model's network is first turned into a screen network (paper §8): its targets are
+//! replaced by their projections onto the screen axes α, β and the view direction, so the
+//! same network evaluates screen coordinates and depth directly. Source points (an icosphere
+//! or a torus grid) are mapped, and wherever adjacent samples land more than
+//! [`MAX_SAMPLE_GAP`] pixels apart an intermediate source point is generated (the paper's gap
+//! filling: each source triangle is split in four until its screen edges are short enough),
+//! then every sample updates the depth buffer of its pixel if it is nearer. A last pass fills
+//! isolated empty pixels between two filled neighbours (from rounding at the edges of
+//! samples). Shading: ambient + diffuse·max(0, n·l) with n the network's exact unit normal at
+//! the sample's source point.
+
+use image::RgbImage;
+
+use super::network::{CaoEnNetwork, cross, dot};
+use super::{icosphere, on_domain, torus_grid};
+use crate::error::{Error, Result};
+use crate::plot::{MAX_SIDE, Rgb};
+
+/// Largest screen distance, in pixels, between adjacent samples of a splatted triangle.
+pub const MAX_SAMPLE_GAP: f64 = 0.7;
+/// Deepest subdivision of one source triangle (4¹² pieces).
+const MAX_DEPTH: u32 = 12;
+/// Ambient share of the shading.
+const AMBIENT: f64 = 0.2;
+
+/// An orthographic camera: what is seen, from where, at what scale, and the light.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct View {
+    /// The point at the centre of the picture.
+    pub centre: [f64; 3],
+    /// Unit direction the camera looks along (into the scene).
+    pub direction: [f64; 3],
+    /// Unit screen-right axis α.
+    pub right: [f64; 3],
+    /// Unit screen-up axis β.
+    pub up: [f64; 3],
+    /// Pixels per unit length.
+    pub scale: f64,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Unit direction towards the light.
+    pub light: [f64; 3],
+}
+
+impl View {
+    /// A camera looking along `direction` with `up` roughly up, framing the sphere of
+    /// `radius` around `centre` in a `width` × `height` picture; the light comes from over
+    /// the viewer's left shoulder.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for a zero or non-finite direction, `up` parallel to it, a
+    /// non-positive radius, or a side outside 1 … [`MAX_SIDE`].
+    pub fn framing(
+        centre: [f64; 3],
+        radius: f64,
+        direction: [f64; 3],
+        up: [f64; 3],
+        width: u32,
+        height: u32,
+    ) -> Result<View> {
+        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+            return Err(Error::invalid(format!(
+                "a picture of {width} × {height} pixels: each side must be 1 to {MAX_SIDE}"
+            )));
+        }
+        let unit = |v: [f64; 3], what: &str| -> Result<[f64; 3]> {
+            let r = dot(&v, &v).sqrt();
+            if r > 1e-12 && r.is_finite() {
+                Ok(v.map(|c| c / r))
+            } else {
+                Err(Error::invalid(format!("the view's {what} is degenerate")))
+            }
+        };
+        if !(radius > 0.0 && radius.is_finite()) || centre.iter().any(|c| !c.is_finite()) {
+            return Err(Error::invalid(format!(
+                "a view needs a finite centre and a positive radius, got {radius}"
+            )));
+        }
+        let direction = unit(direction, "direction")?;
+        let right = unit(cross(direction, up), "up (parallel to the direction)")?;
+        let up = cross(right, direction);
+        let light = unit(
+            [0, 1, 2].map(|k| -direction[k] + 0.6 * up[k] - 0.5 * right[k]),
+            "light",
+        )?;
+        Ok(View {
+            centre,
+            direction,
+            right,
+            up,
+            scale: 0.5 * f64::from(width.min(height)) / radius,
+            width,
+            height,
+            light,
+        })
+    }
+
+    /// Screen x, y (pixels, y down) and depth of a point.
+    pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
+        let d = [0, 1, 2].map(|k| p[k] - self.centre[k]);
+        [
+            0.5 * f64::from(self.width) + self.scale * dot(&d, &self.right),
+            0.5 * f64::from(self.height) - self.scale * dot(&d, &self.up),
+            dot(&d, &self.direction),
+        ]
+    }
+
+    /// The shade of a surface of `color` with unit normal `n` (Lambert, plus ambient).
+    pub fn shade(&self, n: [f64; 3], color: Rgb) -> image::Rgb<u8> {
+        let intensity = AMBIENT + (1.0 - AMBIENT) * dot(&n, &self.light).max(0.0);
+        let scale = |c: u8| (f64::from(c) * intensity).round().clamp(0.0, 255.0) as u8;
+        image::Rgb([scale(color.0), scale(color.1), scale(color.2)])
+    }
+}
+
+/// A rendered picture with its depth buffer.
+#[derive(Clone, Debug)]
+pub struct Rendering {
+    /// The shaded picture on a white background.
+    pub image: RgbImage,
+    /// Depth along the view direction per pixel, row-major; +∞ where nothing was drawn.
+    pub depth: Vec<f64>,
+    /// Which model drew each pixel (`None`: background).
+    pub model: Vec<Option<usize>>,
+}
+
+impl Rendering {
+    /// A blank picture for `view`.
+    pub(crate) fn new(view: &View) -> Self {
+        let pixels = view.width as usize * view.height as usize;
+        Rendering {
+            image: RgbImage::from_pixel(view.width, view.height, image::Rgb([0xff; 3])),
+            depth: vec![f64::INFINITY; pixels],
+            model: vec![None; pixels],
+        }
+    }
+
+    /// Draws at screen point `s` if nearer than what is there; returns whether it did.
+    pub(crate) fn splat(&mut self, s: [f64; 3], model: usize, color: image::Rgb<u8>) -> bool {
+        let (w, h) = (self.image.width(), self.image.height());
+        if !(s[0] >= 0.0 && s[1] >= 0.0 && s[0] < f64::from(w) && s[1] < f64::from(h)) {
+            return false;
+        }
+        let (x, y) = (s[0] as u32, s[1] as u32);
+        let i = y as usize * w as usize + x as usize;
+        if s[2] < self.depth[i] {
+            self.depth[i] = s[2];
+            self.model[i] = Some(model);
+            self.image.put_pixel(x, y, color);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Number of pixels drawn.
+    pub fn covered(&self) -> usize {
+        self.model.iter().filter(|m| m.is_some()).count()
+    }
+
+    /// Fills every empty pixel whose two opposite neighbours (left/right or above/below) are
+    /// drawn, with the nearer of them.
+    fn fill_gaps(&mut self) {
+        let (w, h) = (self.image.width() as usize, self.image.height() as usize);
+        let mut fills = Vec::new();
+        for y in 1..h.saturating_sub(1) {
+            for x in 1..w.saturating_sub(1) {
+                let i = y * w + x;
+                if self.model[i].is_some() {
+                    continue;
+                }
+                let nearer = [(i - 1, i + 1), (i - w, i + w)]
+                    .into_iter()
+                    .filter(|&(a, b)| self.model[a].is_some() && self.model[b].is_some())
+                    .flat_map(|(a, b)| [a, b])
+                    .min_by(|&a, &b| self.depth[a].total_cmp(&self.depth[b]));
+                if let Some(from) = nearer {
+                    fills.push((i, from));
+                }
+            }
+        }
+        for (i, from) in fills {
+            self.depth[i] = self.depth[from];
+            self.model[i] = self.model[from];
+            let (fx, fy) = ((from % w) as u32, (from / w) as u32);
+            let color = *self.image.get_pixel(fx, fy);
+            self.image.put_pixel((i % w) as u32, (i / w) as u32, color);
+        }
+    }
+}
+
+/// A source triangle awaiting drawing: its source points, their screen points, its depth
+/// of subdivision.
+type Piece = ([Vec<f64>; 3], [[f64; 3]; 3], u32);
+
+/// Renders the surfaces of `models` (sphere or torus networks with p = 3, each with its
+/// colour) into a depth buffer; `subdivisions` sets the starting source grid (an icosphere of
+/// that level, or a torus grid of 10·2ˢ × 5·2ˢ), refined per triangle to
+/// [`MAX_SAMPLE_GAP`].
+///
+/// # Errors
+/// [`Error::InvalidInput`] for an invalid network, one with p ≠ 3 or another domain than
+/// the sphere (m = 3) and the torus, or `subdivisions` above 6.
+pub fn depth_buffer_image(
+    models: &[(&CaoEnNetwork, Rgb)],
+    view: &View,
+    subdivisions: usize,
+) -> Result<Rendering> {
+    if subdivisions > 6 {
+        return Err(Error::invalid(format!(
+            "at most 6 subdivisions for the starting grid, got {subdivisions}"
+        )));
+    }
+    let mut picture = Rendering::new(view);
+    for (index, &(network, color)) in models.iter().enumerate() {
+        network.validate()?;
+        let (m, p) = (network.source_dimension(), network.target_dimension());
+        let (sources, triangles) = match (network.domain, m, p) {
+            (0, 3, 3) => {
+                let sphere = icosphere(subdivisions)?;
+                let sources: Vec<Vec<f64>> = sphere.positions.iter().map(|x| x.to_vec()).collect();
+                (sources, sphere.triangles)
+            }
+            (1, 4, 3) => {
+                let grid = torus_grid(10 << subdivisions, 5 << subdivisions)?;
+                (grid.sources, grid.triangles)
+            }
+            _ => {
+                return Err(Error::invalid(format!(
+                    "model {index}: depth-buffer rendering needs a sphere (m = 3) or torus \
+                     network with p = 3, got domain {} with m = {m}, p = {p}",
+                    network.domain
+                )));
+            }
+        };
+        let screen = screen_network(network, view);
+        let offset = view.project([0.0; 3]);
+        let to_screen = |x: &[f64]| -> [f64; 3] {
+            let y = screen.position(x);
+            [offset[0] + y[0], offset[1] + y[1], offset[2] + y[2]]
+        };
+        let mapped: Vec<[f64; 3]> = sources.iter().map(|x| to_screen(x)).collect();
+        let draw = |x: &[f64], s: [f64; 3], picture: &mut Rendering| {
+            let n = network.normal(x).unwrap_or([0.0, 0.0, 0.0]);
+            picture.splat(s, index, view.shade(n, color));
+        };
+        let mut stack: Vec<Piece> = triangles
+            .iter()
+            .map(|t| {
+                (
+                    t.map(|v| sources[v as usize].clone()),
+                    t.map(|v| mapped[v as usize]),
+                    0,
+                )
+            })
+            .collect();
+        while let Some((x, s, depth)) = stack.pop() {
+            let gap = (0..3)
+                .map(|k| {
+                    let (a, b) = (s[k], s[(k + 1) % 3]);
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+                })
+                .fold(0.0, f64::max);
+            let on_screen = s.iter().any(|p| {
+                p[0] > -2.0
+                    && p[1] > -2.0
+                    && p[0] < f64::from(view.width) + 2.0
+                    && p[1] < f64::from(view.height) + 2.0
+            });
+            if gap <= MAX_SAMPLE_GAP || depth >= MAX_DEPTH || (!on_screen && gap < 4.0) {
+                for k in 0..3 {
+                    draw(&x[k], s[k], &mut picture);
+                }
+                continue;
+            }
+            let middle = |a: &[f64], b: &[f64]| -> Vec<f64> {
+                let sum: Vec<f64> = a.iter().zip(b).map(|(p, q)| p + q).collect();
+                on_domain(network.domain, &sum)
+            };
+            let [a, b, c] = &x;
+            let (ab, bc, ca) = (middle(a, b), middle(b, c), middle(c, a));
+            let (sab, sbc, sca) = (to_screen(&ab), to_screen(&bc), to_screen(&ca));
+            let next = depth + 1;
+            stack.push(([a.clone(), ab.clone(), ca.clone()], [s[0], sab, sca], next));
+            stack.push(([b.clone(), bc.clone(), ab.clone()], [s[1], sbc, sab], next));
+            stack.push(([c.clone(), ca.clone(), bc.clone()], [s[2], sca, sbc], next));
+            stack.push(([ab, bc, ca], [sab, sbc, sca], next));
+        }
+    }
+    picture.fill_gaps();
+    Ok(picture)
+}
+
+/// The paper's projection network (§8): targets replaced by (α·t, −β·t, d·t) scaled to
+/// pixels, so the network's output is the screen position relative to the projected origin.
+fn screen_network(network: &CaoEnNetwork, view: &View) -> CaoEnNetwork {
+    let targets = network
+        .targets
+        .iter()
+        .map(|t| {
+            vec![
+                view.scale * dot(t, &view.right),
+                -view.scale * dot(t, &view.up),
+                dot(t, &view.direction),
+            ]
+        })
+        .collect();
+    CaoEnNetwork {
+        targets,
+        ..network.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::caoen::from_key_points;
+    use crate::caoen::support::{axes, fibonacci, fitted};
+    use neurosurf_core::caoen::{Blending, Domain};
+
+    /// The paper's Fig. 2 network with q = 1: exactly the unit sphere.
+    fn unit_sphere() -> CaoEnNetwork {
+        from_key_points(
+            Domain::Sphere,
+            Blending::Power,
+            false,
+            &axes(),
+            &axes(),
+            1.0,
+        )
+        .unwrap()
+    }
+
+    /// The paper's Fig. 2 network with q = 1 is exactly the unit sphere: its picture is a
+    /// disc of πr² pixels (within 2 %: silhouette pixels count when any sample lands in them)
+    /// with no hole inside.
+    #[test]
+    fn unit_sphere_renders_a_full_disc() {
+        let sphere = unit_sphere();
+        let view =
+            View::framing([0.0; 3], 1.25, [0.3, -0.2, -1.0], [0.0, 1.0, 0.0], 200, 200).unwrap();
+        let picture = depth_buffer_image(&[(&sphere, Rgb(200, 80, 40))], &view, 2).unwrap();
+        let r = view.scale;
+        let expected = std::f64::consts::PI * r * r;
+        let covered = picture.covered() as f64;
+        println!("disc: {covered} pixels, πr² = {expected:.0}");
+        assert!((covered / expected - 1.0).abs() < 0.02);
+        for y in 0..200_u32 {
+            for x in 0..200_u32 {
+                let d = ((f64::from(x) + 0.5 - 100.0).powi(2)
+                    + (f64::from(y) + 0.5 - 100.0).powi(2))
+                .sqrt();
+                let i = (y * 200 + x) as usize;
+                if d < r - 1.0 {
+                    assert!(picture.model[i].is_some(), "hole at {x}, {y}");
+                    // Depth of the sphere's front: −√(1 − ρ²) in view units.
+                    let rho = d / r;
+                    assert!((picture.depth[i] + (1.0 - rho * rho).sqrt()).abs() < 0.05);
+                }
+                if d > r + 1.5 {
+                    assert!(picture.model[i].is_none());
+                }
+            }
+        }
+        // Lit from over the left shoulder: the upper left is brighter than the lower right.
+        let (a, b) = (
+            picture.image.get_pixel(70, 70),
+            picture.image.get_pixel(130, 130),
+        );
+        assert!(a[0] > b[0]);
+    }
+
+    /// A small sphere in front of a large one hides it where they overlap, whatever order
+    /// they are drawn in.
+    #[test]
+    fn nearer_surfaces_win_the_depth_test() {
+        let keys = fibonacci(26);
+        let ball = |centre: [f64; 3], radius: f64| {
+            let targets: Vec<Vec<f64>> = keys
+                .iter()
+                .map(|k| (0..3).map(|j| centre[j] + radius * k[j]).collect())
+                .collect();
+            fitted(&keys, &targets, Blending::Exponential, true, 6.0)
+        };
+        let (back, front) = (ball([0.0; 3], 1.0), ball([0.3, 0.0, 1.2], 0.4));
+        let view =
+            View::framing([0.0; 3], 1.5, [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], 120, 120).unwrap();
+        let (red, blue) = (Rgb(200, 0, 0), Rgb(0, 0, 200));
+        let one = depth_buffer_image(&[(&back, red), (&front, blue)], &view, 2).unwrap();
+        let two = depth_buffer_image(&[(&front, blue), (&back, red)], &view, 2).unwrap();
+        let swapped: Vec<Option<usize>> = two.model.iter().map(|m| m.map(|i| 1 - i)).collect();
+        let differ = one
+            .model
+            .iter()
+            .zip(&swapped)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(differ <= 2, "{differ} pixels depend on the drawing order");
+        // The small sphere's centre projects to (60 + 0.3·40, 60): blue; far left: red.
+        let at = |x: usize, y: usize| one.model[y * 120 + x];
+        assert_eq!(at(72, 60), Some(1));
+        assert_eq!(at(25, 60), Some(0));
+        assert!(one.depth[60 * 120 + 72] < -1.0);
+    }
+
+    #[test]
+    fn bad_views_and_models_are_errors() {
+        assert!(View::framing([0.0; 3], 1.0, [0.0, 0.0, 1.0], [0.0, 0.0, 2.0], 10, 10).is_err());
+        assert!(View::framing([0.0; 3], 0.0, [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], 10, 10).is_err());
+        assert!(View::framing([0.0; 3], 1.0, [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], 0, 10).is_err());
+        let view = View::framing([0.0; 3], 1.0, [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], 8, 8).unwrap();
+        let sphere = unit_sphere();
+        assert!(depth_buffer_image(&[(&sphere, Rgb::WHITE)], &view, 7).is_err());
+        let mut flat = sphere.clone();
+        flat.targets.iter_mut().for_each(|t| t.truncate(2));
+        assert!(depth_buffer_image(&[(&flat, Rgb::WHITE)], &view, 1).is_err());
+    }
+}
