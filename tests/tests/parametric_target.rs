@@ -6,7 +6,7 @@
 
 use std::f64::consts::FRAC_PI_2;
 
-use neurosurf_core::caoen::CaoEnModel;
+use neurosurf_core::caoen::{Blending, CaoEnModel, Domain};
 use neurosurf_core::curve::BSplineCurve;
 use neurosurf_core::scalar::{Q16, ScalarKind};
 use neurosurf_firmware_sim::{Job, Mode, Op, SimError, Simulator, Status};
@@ -75,7 +75,9 @@ fn caoen_sphere_blob(scalar: ScalarKind) -> Vec<u8> {
         .iter()
         .map(|k| vec![1.2 * k[0], 0.8 * k[1], 0.6 * k[2] + 0.1 * k[0] * k[1]])
         .collect();
-    let built = caoen::from_key_points(0, 0, false, &keys, &targets, 3.0).unwrap();
+    let built =
+        caoen::from_key_points(Domain::Sphere, Blending::Power, false, &keys, &targets, 3.0)
+            .unwrap();
     let fitted = caoen::fit_shape(&built, &keys, &targets).unwrap();
     caoen::to_blob(&fitted, scalar, b"test").unwrap()
 }
@@ -93,7 +95,15 @@ fn caoen_torus_blob(scalar: ScalarKind) -> Vec<u8> {
             targets.push(vec![r * a.cos(), r * a.sin(), 0.35 * b.sin()]);
         }
     }
-    let built = caoen::from_key_points(1, 1, false, &keys, &targets, 4.0).unwrap();
+    let built = caoen::from_key_points(
+        Domain::Torus,
+        Blending::Exponential,
+        false,
+        &keys,
+        &targets,
+        4.0,
+    )
+    .unwrap();
     caoen::to_blob(&built, scalar, b"").unwrap()
 }
 
@@ -113,7 +123,15 @@ fn caoen_image_blob(scalar: ScalarKind) -> Vec<u8> {
                 .collect()
         })
         .collect();
-    let built = caoen::from_key_points(0, 1, true, &keys, &targets, 6.0).unwrap();
+    let built = caoen::from_key_points(
+        Domain::Sphere,
+        Blending::Exponential,
+        true,
+        &keys,
+        &targets,
+        6.0,
+    )
+    .unwrap();
     caoen::to_blob(&built, scalar, b"").unwrap()
 }
 

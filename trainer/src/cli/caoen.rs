@@ -160,8 +160,8 @@ fn fit(args: &FitArgs) -> Result<()> {
     let (keys, targets) = keys_and_targets(&rows, m)
         .with_context(|| format!("cannot read key points from {}", args.points.display()))?;
     let built = from_key_points(
-        domain.code(),
-        blending.code(),
+        domain,
+        blending,
         args.normalized,
         &keys,
         &targets,

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use neurosurf_core::caoen::{Blending, Domain};
 use neurosurf_core::scalar::ScalarKind;
 use serde::Serialize;
 
@@ -150,7 +151,7 @@ pub fn cao_en(out_dir: &Path) -> Result<ParametricDemo> {
         .map(|k| vec![1.3 * k[0], 0.8 * k[1] + 0.25 * k[0] * k[0], 0.6 * k[2]])
         .collect();
     let start = Instant::now();
-    let built = from_key_points(0, 0, false, &keys, &targets, 4.0)?;
+    let built = from_key_points(Domain::Sphere, Blending::Power, false, &keys, &targets, 4.0)?;
     let network = fit_shape(&built, &keys, &targets)?;
     let seconds = start.elapsed().as_secs_f64();
     let at_keys = caoen::rms_error(&network, &keys, &targets);
