@@ -137,14 +137,23 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             return [[S::ZERO; L]; N];
         };
         let width = width::<N, EXACT>(self.width);
-        let layout = ModuleLayout::new(entry.kind, width);
-        let params = self.module_parameters(entry.offset, layout.len);
-        let hidden_a: [[S; L]; N] = match entry.kind {
+        // The layout is built from a constant kind in each arm, so that its shapes fold.
+        let module = |kind| {
+            let layout = ModuleLayout::new(kind, width);
+            (layout, self.module_parameters(entry.offset, layout.len))
+        };
+        let (layout, params, hidden_a): (_, _, [[S; L]; N]) = match entry.kind {
             ModuleKind::Leaf => {
+                let (layout, params) = module(ModuleKind::Leaf);
                 let input = normalized_input(params, points);
-                forward(params, &layout.hidden_a, (&input, &[]))
+                (
+                    layout,
+                    params,
+                    forward(params, &layout.hidden_a, (&input, &[])),
+                )
             }
             ModuleKind::Node => {
+                let (layout, params) = module(ModuleKind::Node);
                 let left = self.last_hidden::<L, N, EXACT>(entry.left, points, budget);
                 let right =
                     self.last_hidden::<L, N, EXACT>(index.saturating_sub(1), points, budget);
@@ -152,7 +161,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                     left.get(..width).unwrap_or(&[]),
                     right.get(..width).unwrap_or(&[]),
                 );
-                forward(params, &layout.hidden_a, inputs)
+                (layout, params, forward(params, &layout.hidden_a, inputs))
             }
         };
         let hidden_a = hidden_a.get(..width).unwrap_or(&[]);

@@ -42,17 +42,23 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         points: &[[S; 3]; L],
     ) -> [FieldGradient<S>; L] {
         let model = self.model;
-        let width = width::<N, EXACT>(model.width);
         let mut value = [S::ZERO; L];
         let mut gradient = [[S::ZERO.to_acc(); L]; 3];
         if let Some(entry) = model.modules.get(self.module) {
-            let layout = ModuleLayout::new(entry.kind, width);
-            let params = model.module_parameters(entry.offset, layout.len);
             let root = &mut |hidden: &[[S; L]; N], _: &mut Gradient<S, L>| {
+                // Built here, not captured: the shapes are then constants in this closure.
+                let Pass {
+                    params,
+                    layout,
+                    width,
+                } = model.pass::<N, EXACT>(entry.offset, entry.kind);
                 let hidden = hidden.get(..width).unwrap_or(&[]);
                 let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[]));
                 value = out;
-                let slope = [out.map(S::activation_slope)];
+                let mut slope = [out];
+                for a in slope.iter_mut().flatten() {
+                    *a = S::activation_slope(*a);
+                }
                 // ∂Φ/∂bⱼ = a′(H)·wⱼ
                 transposed(params, &layout.output, (0, width), &slope)
             };
@@ -85,21 +91,14 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         let (Some(entry), Some(budget)) = (self.modules.get(index), budget.checked_sub(1)) else {
             return;
         };
-        let width = width::<N, EXACT>(self.width);
-        let layout = ModuleLayout::new(entry.kind, width);
-        let params = self.module_parameters(entry.offset, layout.len);
-        let pass = Pass {
-            params,
-            layout,
-            width,
-        };
         match entry.kind {
             ModuleKind::Leaf => {
-                let input = normalized_input(params, points);
+                let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Leaf);
+                let input = normalized_input(pass.params, points);
                 let delta_a = pass.run::<L, N>((&input, &[]), gradient, above);
-                let delta_a = delta_a.get(..width).unwrap_or(&[]);
-                let delta_input = transposed(params, &layout.hidden_a, (0, 3), delta_a);
-                add_normalization_transpose(params, &delta_input, gradient);
+                let delta_a = delta_a.get(..pass.width).unwrap_or(&[]);
+                let delta_input = transposed(pass.params, &pass.layout.hidden_a, (0, 3), delta_a);
+                add_normalization_transpose(pass.params, &delta_input, gradient);
             }
             ModuleKind::Node => {
                 let right_child = index.saturating_sub(1);
@@ -116,13 +115,15 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                             budget,
                             gradient,
                             &mut |right, gradient| {
+                                let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Node);
+                                let (params, width) = (pass.params, pass.width);
                                 let inputs = (
                                     left.get(..width).unwrap_or(&[]),
                                     right.get(..width).unwrap_or(&[]),
                                 );
                                 let delta_a = pass.run::<L, N>(inputs, gradient, &mut *above);
                                 let delta_a = delta_a.get(..width).unwrap_or(&[]);
-                                let hidden_a = &layout.hidden_a;
+                                let hidden_a = &pass.layout.hidden_a;
                                 delta_left =
                                     Some(transposed(params, hidden_a, (0, width), delta_a));
                                 transposed(params, hidden_a, (width, width), delta_a)
@@ -132,6 +133,24 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                     },
                 );
             }
+        }
+    }
+
+    /// The module whose parameters start at `offset`, with layers of capacity `N` (see
+    /// [`width`]). Called where the pass runs, with a constant `kind` wherever the caller knows
+    /// it, so that the layout's shapes are constants there (never captured by a closure).
+    #[inline(always)]
+    fn pass<const N: usize, const EXACT: bool>(
+        &self,
+        offset: usize,
+        kind: ModuleKind,
+    ) -> Pass<'_, S> {
+        let width = width::<N, EXACT>(self.width);
+        let layout = ModuleLayout::new(kind, width);
+        Pass {
+            params: self.module_parameters(offset, layout.len),
+            layout,
+            width,
         }
     }
 }
