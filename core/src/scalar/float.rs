@@ -19,6 +19,8 @@ impl Scalar for f32 {
     const KIND: ScalarKind = ScalarKind::F32;
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
+    /// Eight `f32` accumulators (and their inputs) fit the FPU's 32 registers.
+    const LANE_GROUP: usize = 8;
     const MAX_PARAMETER: f32 = f32::MAX;
 
     #[inline]

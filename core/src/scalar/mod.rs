@@ -147,6 +147,10 @@ pub trait Scalar:
     const ZERO: Self;
     /// 1.
     const ONE: Self;
+    /// How many points of a batch go through the layers together, in structure-of-arrays
+    /// lanes: 1 or [`crate::implicit::LANES`], whichever costs fewer instructions per point on a
+    /// Cortex-M4F (other values mean [`crate::implicit::LANES`]).
+    const LANE_GROUP: usize;
     /// Largest parameter magnitude a blob may hold for evaluation in this scalar; the loader
     /// rejects larger ones so that accumulators provably cannot overflow.
     const MAX_PARAMETER: f32;
