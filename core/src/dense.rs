@@ -41,7 +41,7 @@ pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
         accumulate_row(&mut acc, first, inputs.0);
         accumulate_row(&mut acc, second, inputs.1);
         for (out, &acc) in out.iter_mut().zip(&acc) {
-            *out = S::activation(S::from_acc(acc));
+            *out = S::activation_from_acc(acc);
         }
     }
     out

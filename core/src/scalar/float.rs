@@ -1,4 +1,4 @@
-//! [`Scalar`] for `f32`: IEEE arithmetic, a fast exp-based tanh ([`super::tanh_f32`]), `libm`
+//! [`Scalar`] for `f32`: IEEE arithmetic, a fast exp-based activation ([`super::activation_f32`]), `libm`
 //! for sqrt.
 //!
 //! No fused multiply–add is used, so results are bit-identical on every IEEE-754 target
@@ -7,8 +7,6 @@
 use super::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN, Q16, Scalar, ScalarKind};
 use crate::math;
 
-const AMPLITUDE: f32 = ACTIVATION_AMPLITUDE as f32;
-const GAIN: f32 = ACTIVATION_GAIN as f32;
 const SLOPE_OFFSET: f32 = (ACTIVATION_GAIN * ACTIVATION_AMPLITUDE) as f32;
 const SLOPE_SQUARE: f32 = (ACTIVATION_GAIN / ACTIVATION_AMPLITUDE) as f32;
 const CURVATURE: f32 = (2.0 * ACTIVATION_GAIN / ACTIVATION_AMPLITUDE) as f32;
@@ -88,7 +86,7 @@ impl Scalar for f32 {
 
     #[inline]
     fn activation(h: Self) -> Self {
-        AMPLITUDE * super::tanh_f32::tanh(GAIN * h)
+        super::activation_f32::activation(h)
     }
     #[inline]
     fn activation_slope(a: Self) -> Self {

@@ -45,6 +45,23 @@ fn round_q32(acc: i64) -> Q16 {
     saturate(acc.wrapping_add(HALF_BITS) >> 16)
 }
 
+/// a(H) for H = `bits`·2⁻¹⁶: the table entry below |H| interpolated linearly towards the next,
+/// the sign restored (odd symmetry).
+#[inline(always)]
+fn activation_bits(bits: i32) -> i32 {
+    let magnitude = bits.unsigned_abs();
+    let index = (magnitude >> FRACTION_BITS) as usize;
+    let value = if index >= LAST {
+        TABLE.get(LAST).copied().unwrap_or(0)
+    } else {
+        let lower = TABLE.get(index).copied().unwrap_or(0);
+        let upper = TABLE.get(index + 1).copied().unwrap_or(lower);
+        let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
+        lower + (((upper - lower) * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
+    };
+    if bits < 0 { -value } else { value }
+}
+
 impl Scalar for Q16 {
     type Acc = i64;
 
@@ -133,18 +150,22 @@ impl Scalar for Q16 {
 
     #[inline]
     fn activation(h: Self) -> Self {
-        let bits = h.to_bits();
-        let magnitude = bits.unsigned_abs();
-        let index = (magnitude >> FRACTION_BITS) as usize;
-        let value = if index >= LAST {
-            TABLE.get(LAST).copied().unwrap_or(0)
+        Q16::from_bits(activation_bits(h.to_bits()))
+    }
+    #[inline(always)]
+    fn activation_from_acc(acc: i64) -> Self {
+        // Exactly `activation(from_acc(acc))`: when the high word of the rounded accumulator
+        // (the integer part of H, rounded down) lies in [−10, 10), H fits `i32` unsaturated;
+        // otherwise |H| ≥ 10, where the table has saturated (index ≥ LAST) whatever the
+        // rounding and saturation would have given.
+        let rounded = acc.wrapping_add(HALF_BITS);
+        let high = (rounded >> 32) as i32;
+        Q16::from_bits(if (high as u32).wrapping_add(10) < 20 {
+            activation_bits((rounded >> 16) as i32)
         } else {
-            let lower = TABLE.get(index).copied().unwrap_or(0);
-            let upper = TABLE.get(index + 1).copied().unwrap_or(lower);
-            let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
-            lower + (((upper - lower) * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
-        };
-        Q16::from_bits(if bits < 0 { -value } else { value })
+            let last = TABLE.get(LAST).copied().unwrap_or(0);
+            if high < 0 { -last } else { last }
+        })
     }
     #[inline]
     fn activation_slope(a: Self) -> Self {
@@ -210,7 +231,37 @@ fn isqrt(n: u64) -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use super::isqrt;
+    use super::{Q16, isqrt};
+    use crate::scalar::Scalar;
+
+    /// The fused epilogue equals rounding, saturating and then the activation, around every
+    /// boundary it special-cases (|H| = 10, the i32 range) and on a sweep in between.
+    #[test]
+    fn activation_from_acc_is_activation_of_from_acc() {
+        let check = |acc: i64| {
+            assert_eq!(
+                Q16::activation_from_acc(acc),
+                Q16::activation(Q16::from_acc(acc)),
+                "acc {acc}"
+            );
+        };
+        for h in [0_i64, 10, 32768, 1 << 29] {
+            for sign in [1, -1] {
+                let centre = sign * (h << 32);
+                (-70_000..70_000).for_each(|delta| check(centre + delta));
+            }
+        }
+        [i64::MAX / 4, i64::MIN / 4, (1 << 47) - 1, -(1 << 47)]
+            .into_iter()
+            .for_each(check);
+        let mut x = 0x9E37_79B9_7F4A_7C15_u64;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            check((x as i64) >> (x % 40));
+        }
+    }
 
     #[test]
     fn isqrt_is_floor_sqrt() {
