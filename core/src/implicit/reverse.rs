@@ -56,8 +56,10 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
                 let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[]));
                 value = out;
                 let mut slope = [out];
-                for a in slope.iter_mut().flatten() {
-                    *a = S::activation_slope(*a);
+                for lanes in &mut slope {
+                    for a in lanes {
+                        *a = S::activation_slope(*a);
+                    }
                 }
                 // ∂Φ/∂bⱼ = a′(H)·wⱼ
                 transposed(params, &layout.output, (0, width), &slope)
