@@ -1,8 +1,9 @@
 //! Batch evaluation: [`LANES`] points at a time in structure-of-arrays form, so every
 //! multiply–accumulate of a weight runs over contiguous lanes (the parallel-hardware intent of
 //! both Carcenac and Wyvill–Cao: one weight, many points) — for the scalars where that pays on
-//! a Cortex-M4F ([`Scalar::LANE_GROUP`]): `f32` yes, Q16.16 no (its 64-bit accumulators do not
-//! fit eight to a register file), so a Q16.16 batch runs point by point.
+//! the machine ([`Scalar::LANE_GROUP`]): `f32` yes; Q16.16 on 64-bit hosts, but not on a
+//! Cortex-M4F (eight 64-bit accumulators do not fit its register file), where a Q16.16 batch
+//! runs point by point.
 
 use super::eval::{FieldGradient, ModuleView};
 use super::model::ImplicitModel;

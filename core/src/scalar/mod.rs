@@ -148,8 +148,9 @@ pub trait Scalar:
     /// 1.
     const ONE: Self;
     /// How many points of a batch go through the layers together, in structure-of-arrays
-    /// lanes: 1 or [`crate::implicit::LANES`], whichever costs fewer instructions per point on a
-    /// Cortex-M4F (other values mean [`crate::implicit::LANES`]).
+    /// lanes: 1 or [`crate::implicit::LANES`], whichever is cheaper per point on the machine
+    /// compiled for (other values mean [`crate::implicit::LANES`]). Never changes a result:
+    /// every lane computes exactly what a single point does.
     const LANE_GROUP: usize;
     /// Largest parameter magnitude a blob may hold for evaluation in this scalar; the loader
     /// rejects larger ones so that accumulators provably cannot overflow.
