@@ -1,9 +1,10 @@
 //! Batch evaluation: [`LANES`] points at a time in structure-of-arrays form, so every
 //! multiply–accumulate of a weight runs over contiguous lanes (the parallel-hardware intent of
 //! both Carcenac and Wyvill–Cao: one weight, many points) — for the scalars where that pays on
-//! the machine ([`Scalar::LANE_GROUP`]): `f32` yes; Q16.16 on 64-bit hosts, but not on a
-//! Cortex-M4F (eight 64-bit accumulators do not fit its register file), where a Q16.16 batch
-//! runs point by point.
+//! the machine ([`Scalar::LANE_GROUP`], [`Scalar::GRADIENT_LANE_GROUP`]): on 64-bit hosts
+//! always; on a Cortex-M4F only for the `f32` field (eight 64-bit Q16.16 accumulators do not
+//! fit its register file, and eight-lane backward layers are zeroed and copied in memory), so
+//! there Q16.16 batches and `f32` field-and-gradient batches run point by point.
 
 use super::eval::{FieldGradient, ModuleView};
 use super::model::ImplicitModel;
@@ -11,7 +12,7 @@ use crate::error::LengthMismatch;
 use crate::scalar::Scalar;
 
 /// Points evaluated together by the batch functions (for scalars whose
-/// [`Scalar::LANE_GROUP`] is 1: one at a time).
+/// [`Scalar::LANE_GROUP`] or [`Scalar::GRADIENT_LANE_GROUP`] is 1: one at a time).
 pub const LANES: usize = 8;
 
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
@@ -59,7 +60,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         Ok(())
     }
 
-    /// Φ and ∇Φ at every point, [`LANES`] at a time (see [`Scalar::LANE_GROUP`]).
+    /// Φ and ∇Φ at every point, [`LANES`] at a time (see [`Scalar::GRADIENT_LANE_GROUP`]).
     ///
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
@@ -69,7 +70,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         out: &mut [FieldGradient<S>],
     ) -> Result<(), LengthMismatch> {
         check_lengths(points.len(), out.len())?;
-        match S::LANE_GROUP {
+        match S::GRADIENT_LANE_GROUP {
             1 => grouped::<S, _, 1>(points, out, |group| self.field_gradient_lanes(group)),
             _ => grouped::<S, _, LANES>(points, out, |group| self.field_gradient_lanes(group)),
         }

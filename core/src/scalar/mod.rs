@@ -147,11 +147,14 @@ pub trait Scalar:
     const ZERO: Self;
     /// 1.
     const ONE: Self;
-    /// How many points of a batch go through the layers together, in structure-of-arrays
+    /// How many points of a field batch go through the layers together, in structure-of-arrays
     /// lanes: 1 or [`crate::implicit::LANES`], whichever is cheaper per point on the machine
     /// compiled for (other values mean [`crate::implicit::LANES`]). Never changes a result:
     /// every lane computes exactly what a single point does.
     const LANE_GROUP: usize;
+    /// [`Scalar::LANE_GROUP`] for field-and-gradient batches, whose backward pass keeps four
+    /// layers per module alive.
+    const GRADIENT_LANE_GROUP: usize;
     /// Largest parameter magnitude a blob may hold for evaluation in this scalar; the loader
     /// rejects larger ones so that accumulators provably cannot overflow.
     const MAX_PARAMETER: f32;

@@ -77,6 +77,8 @@ impl Scalar for Q16 {
     } else {
         1
     };
+    /// As [`Q16::LANE_GROUP`].
+    const GRADIENT_LANE_GROUP: usize = Self::LANE_GROUP;
     /// 1024: with |parameter| ≤ 2¹⁰ (2²⁶ in bits) and inputs below 2³¹ bits, each product is
     /// below 2⁵⁷, and a neuron's at most 2·16 inputs plus its bias stay below 2⁶².
     const MAX_PARAMETER: f32 = 1024.0;
