@@ -2,12 +2,14 @@
 //! multiply–accumulate of a weight runs over contiguous lanes (the parallel-hardware intent of
 //! both Carcenac and Wyvill–Cao: one weight, many points) — for the scalars where that pays on
 //! the machine ([`Scalar::LANE_GROUP`], [`Scalar::GRADIENT_LANE_GROUP`]): on 64-bit hosts
-//! always; on a Cortex-M4F only for the `f32` field (eight 64-bit Q16.16 accumulators do not
-//! fit its register file, and eight-lane backward layers are zeroed and copied in memory), so
-//! there Q16.16 batches and `f32` field-and-gradient batches run point by point.
+//! always; on a Cortex-M4F never for Q16.16 (eight 64-bit accumulators do not fit its register
+//! file) and not for the `f32` field and gradient at a width compiled as a constant (its
+//! eight-lane backward layers are zeroed and copied in memory): those batches run point by
+//! point.
 
 use super::eval::{FieldGradient, ModuleView};
 use super::model::ImplicitModel;
+use super::width::SPECIALIZED as SPECIALIZED_WIDTHS;
 use crate::error::LengthMismatch;
 use crate::scalar::Scalar;
 
@@ -70,7 +72,12 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         out: &mut [FieldGradient<S>],
     ) -> Result<(), LengthMismatch> {
         check_lengths(points.len(), out.len())?;
-        match S::GRADIENT_LANE_GROUP {
+        let group = if SPECIALIZED_WIDTHS.contains(&self.model.width) {
+            S::GRADIENT_LANE_GROUP
+        } else {
+            S::LANE_GROUP
+        };
+        match group {
             1 => grouped::<S, _, 1>(points, out, |group| self.field_gradient_lanes(group)),
             _ => grouped::<S, _, LANES>(points, out, |group| self.field_gradient_lanes(group)),
         }

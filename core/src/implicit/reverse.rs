@@ -8,7 +8,8 @@
 //! the largest model; instead each module hands the rest of the evaluation to its parent as a
 //! continuation ([`Above`]) and keeps its slopes in its own stack frame until the pass comes back
 //! down through it. Stack use is therefore proportional to the model actually loaded (about
-//! `4·MAX_WIDTH·L` scalars per module), and nothing is allocated or zeroed beyond that.
+//! `4·N·L` scalars per module, N the layer capacity: the width itself for the specialized widths,
+//! else `MAX_WIDTH`; see `width.rs`), and nothing is allocated beyond that.
 
 use super::eval::{FieldGradient, ModuleView, normalized_input};
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
@@ -62,7 +63,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
                     }
                 }
                 // ∂Φ/∂bⱼ = a′(H)·wⱼ
-                transposed(params, &layout.output, (0, width), &slope)
+                transposed::<S, L, N, EXACT>(params, &layout.output, (0, width), &slope)
             };
             model.reverse::<L, N, EXACT>(self.module, points, MAX_HEIGHT, &mut gradient, root);
         }
@@ -97,9 +98,11 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             ModuleKind::Leaf => {
                 let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Leaf);
                 let input = normalized_input(pass.params, points);
-                let delta_a = pass.run::<L, N>((&input, &[]), gradient, above);
+                let delta_a = pass.run::<L, N, EXACT>((&input, &[]), gradient, above);
                 let delta_a = delta_a.get(..pass.width).unwrap_or(&[]);
-                let delta_input = transposed(pass.params, &pass.layout.hidden_a, (0, 3), delta_a);
+                let hidden_a = &pass.layout.hidden_a;
+                let delta_input =
+                    transposed::<S, L, 3, EXACT>(pass.params, hidden_a, (0, 3), delta_a);
                 add_normalization_transpose(pass.params, &delta_input, gradient);
             }
             ModuleKind::Node => {
@@ -123,12 +126,22 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                                     left.get(..width).unwrap_or(&[]),
                                     right.get(..width).unwrap_or(&[]),
                                 );
-                                let delta_a = pass.run::<L, N>(inputs, gradient, &mut *above);
+                                let delta_a =
+                                    pass.run::<L, N, EXACT>(inputs, gradient, &mut *above);
                                 let delta_a = delta_a.get(..width).unwrap_or(&[]);
                                 let hidden_a = &pass.layout.hidden_a;
-                                delta_left =
-                                    Some(transposed(params, hidden_a, (0, width), delta_a));
-                                transposed(params, hidden_a, (width, width), delta_a)
+                                delta_left = Some(transposed::<S, L, N, EXACT>(
+                                    params,
+                                    hidden_a,
+                                    (0, width),
+                                    delta_a,
+                                ));
+                                transposed::<S, L, N, EXACT>(
+                                    params,
+                                    hidden_a,
+                                    (width, width),
+                                    delta_a,
+                                )
                             },
                         );
                         delta_left.unwrap_or([[S::ZERO; L]; N])
@@ -169,7 +182,7 @@ impl<S: Scalar> Pass<'_, S> {
     /// returns ∂Φ/∂Hₐ, the gradient at layer a's pre-activations (its transpose gives
     /// ∂Φ/∂inputs).
     #[inline(always)]
-    fn run<const L: usize, const N: usize>(
+    fn run<const L: usize, const N: usize, const EXACT: bool>(
         &self,
         inputs: (&[[S; L]], &[[S; L]]),
         gradient: &mut Gradient<S, L>,
@@ -182,7 +195,8 @@ impl<S: Scalar> Pass<'_, S> {
         let mut delta_b = above(&b, gradient);
         through_activation(&mut delta_b, &b);
         let delta_b = delta_b.get(..width).unwrap_or(&[]);
-        let mut delta_a: [[S; L]; N] = transposed(params, &layout.hidden_b, (0, width), delta_b);
+        let mut delta_a: [[S; L]; N] =
+            transposed::<S, L, N, EXACT>(params, &layout.hidden_b, (0, width), delta_b);
         through_activation(&mut delta_a, a);
         delta_a
     }

@@ -8,9 +8,10 @@
 //! time) for every other width. Both compute exactly the same operations in the same order, so
 //! the results are bit-identical.
 
-/// The widths compiled as constants: Carcenac's N = 9 (the trainer's default). Every other
-/// width runs the same code with run-time loop bounds.
-pub const SPECIALIZED: [usize; 1] = [9];
+/// The widths compiled as constants: Carcenac's N = 9 (the trainer's default) and the small
+/// N = 4, where run-time loop set-up would weigh most. Every other width runs the same code with
+/// run-time loop bounds.
+pub const SPECIALIZED: [usize; 2] = [4, 9];
 
 /// `at_width!(width, receiver.method::<L>(args…))` calls `receiver.method::<L, N, EXACT>(args…)`
 /// specialized for `width` (`N = width`, `EXACT = true`) when that is one of [`SPECIALIZED`],
@@ -18,6 +19,7 @@ pub const SPECIALIZED: [usize; 1] = [9];
 macro_rules! at_width {
     ($width:expr, $receiver:ident . $method:ident :: < $lanes:ident > ( $($arg:expr),* )) => {
         match $width {
+            4 => $receiver.$method::<$lanes, 4, true>($($arg),*),
             9 => $receiver.$method::<$lanes, 9, true>($($arg),*),
             _ => $receiver.$method::<$lanes, { $crate::implicit::MAX_WIDTH }, false>($($arg),*),
         }

@@ -152,8 +152,10 @@ pub trait Scalar:
     /// compiled for (other values mean [`crate::implicit::LANES`]). Never changes a result:
     /// every lane computes exactly what a single point does.
     const LANE_GROUP: usize;
-    /// [`Scalar::LANE_GROUP`] for field-and-gradient batches, whose backward pass keeps four
-    /// layers per module alive.
+    /// [`Scalar::LANE_GROUP`] for field-and-gradient batches at a width compiled as a constant
+    /// ([`crate::implicit::SPECIALIZED_WIDTHS`]), whose backward pass keeps four layers per
+    /// module alive. At other widths [`Scalar::LANE_GROUP`] applies: loops with run-time bounds
+    /// amortize their set-up over the lanes.
     const GRADIENT_LANE_GROUP: usize;
     /// Largest parameter magnitude a blob may hold for evaluation in this scalar; the loader
     /// rejects larger ones so that accumulators provably cannot overflow.
