@@ -1,13 +1,20 @@
 //! Batch evaluation: [`LANES`] points at a time in structure-of-arrays form, so every
 //! multiply–accumulate of a weight runs over contiguous lanes (the parallel-hardware intent of
-//! both Carcenac and Wyvill–Cao: one weight, many points).
+//! both Carcenac and Wyvill–Cao: one weight, many points) — for the scalars where that pays on
+//! the machine ([`Scalar::LANE_GROUP`], [`Scalar::GRADIENT_LANE_GROUP`]): on 64-bit hosts
+//! always; on a Cortex-M4F never for Q16.16 (eight 64-bit accumulators do not fit its register
+//! file) and not for the `f32` field and gradient at a width compiled as a constant (its
+//! eight-lane backward layers are zeroed and copied in memory): those batches run point by
+//! point.
 
 use super::eval::{FieldGradient, ModuleView};
 use super::model::ImplicitModel;
+use super::width::SPECIALIZED as SPECIALIZED_WIDTHS;
 use crate::error::LengthMismatch;
 use crate::scalar::Scalar;
 
-/// Points evaluated together by the batch functions.
+/// Points evaluated together by the batch functions (for scalars whose
+/// [`Scalar::LANE_GROUP`] or [`Scalar::GRADIENT_LANE_GROUP`] is 1: one at a time).
 pub const LANES: usize = 8;
 
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
@@ -42,22 +49,20 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
 }
 
 impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
-    /// Φ at every point, [`LANES`] at a time.
+    /// Φ at every point, [`LANES`] at a time (see [`Scalar::LANE_GROUP`]).
     ///
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn field_batch(&self, points: &[[S; 3]], out: &mut [S]) -> Result<(), LengthMismatch> {
         check_lengths(points.len(), out.len())?;
-        for (chunk, out) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let values = self.field_lanes(&pad(chunk));
-            for (slot, &value) in out.iter_mut().zip(&values) {
-                *slot = value;
-            }
+        match S::LANE_GROUP {
+            1 => grouped::<S, S, 1>(points, out, |group| self.field_lanes(group)),
+            _ => grouped::<S, S, LANES>(points, out, |group| self.field_lanes(group)),
         }
         Ok(())
     }
 
-    /// Φ and ∇Φ at every point, [`LANES`] at a time.
+    /// Φ and ∇Φ at every point, [`LANES`] at a time (see [`Scalar::GRADIENT_LANE_GROUP`]).
     ///
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
@@ -67,11 +72,14 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         out: &mut [FieldGradient<S>],
     ) -> Result<(), LengthMismatch> {
         check_lengths(points.len(), out.len())?;
-        for (chunk, out) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            let results = self.field_gradient_lanes(&pad(chunk));
-            for (slot, result) in out.iter_mut().zip(results) {
-                *slot = result;
-            }
+        let group = if SPECIALIZED_WIDTHS.contains(&self.model.width) {
+            S::GRADIENT_LANE_GROUP
+        } else {
+            S::LANE_GROUP
+        };
+        match group {
+            1 => grouped::<S, _, 1>(points, out, |group| self.field_gradient_lanes(group)),
+            _ => grouped::<S, _, LANES>(points, out, |group| self.field_gradient_lanes(group)),
         }
         Ok(())
     }
@@ -85,8 +93,24 @@ fn check_lengths(inputs: usize, outputs: usize) -> Result<(), LengthMismatch> {
     }
 }
 
-/// A full set of lanes: the chunk's points, the last one repeated into unused lanes.
-fn pad<S: Scalar>(chunk: &[[S; 3]]) -> [[S; 3]; LANES] {
+/// Evaluates `points` `G` at a time with `evaluate` (which computes every lane with the same
+/// operations as a single point, so the grouping never changes a result) into `out`.
+#[inline(always)]
+fn grouped<S: Scalar, R: Copy, const G: usize>(
+    points: &[[S; 3]],
+    out: &mut [R],
+    evaluate: impl Fn(&[[S; 3]; G]) -> [R; G],
+) {
+    for (chunk, out) in points.chunks(G).zip(out.chunks_mut(G)) {
+        let results = evaluate(&pad(chunk));
+        for (slot, &result) in out.iter_mut().zip(&results) {
+            *slot = result;
+        }
+    }
+}
+
+/// A full group of lanes: the chunk's points, the last one repeated into unused lanes.
+fn pad<S: Scalar, const G: usize>(chunk: &[[S; 3]]) -> [[S; 3]; G] {
     let last = chunk.last().copied().unwrap_or([S::ZERO; 3]);
     core::array::from_fn(|lane| chunk.get(lane).copied().unwrap_or(last))
 }

@@ -1,8 +1,9 @@
 //! Evaluation of Φ, ∇Φ and the unit normal: a recursive walk over the module tree.
 
-use super::layout::{MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
+use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
-use crate::dense::{Layer, forward};
+use super::width::{at_width, width};
+use crate::dense::forward;
 use crate::scalar::{Scalar, normalize3};
 
 /// Φ and ∇Φ at one point.
@@ -93,18 +94,25 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
     /// Φ at `L` points at once.
     #[inline]
     pub(crate) fn field_lanes<const L: usize>(&self, points: &[[S; 3]; L]) -> [S; L] {
+        at_width!(self.model.width, self.field_at::<L>(points))
+    }
+
+    /// Φ at `L` points with layers of capacity `N` (see [`width`]).
+    #[inline(always)]
+    fn field_at<const L: usize, const N: usize, const EXACT: bool>(
+        &self,
+        points: &[[S; 3]; L],
+    ) -> [S; L] {
         let model = self.model;
         let Some(entry) = model.modules.get(self.module) else {
             return [S::ZERO; L];
         };
-        let layout = ModuleLayout::new(entry.kind, model.width);
+        let width = width::<N, EXACT>(model.width);
+        let layout = ModuleLayout::new(entry.kind, width);
         let params = model.module_parameters(entry.offset, layout.len);
-        let mut last = [[S::ZERO; L]; MAX_WIDTH];
-        model.last_hidden(self.module, points, MAX_HEIGHT, &mut last);
-        let hidden = last.get(..model.width).unwrap_or(&[]);
-        let mut out = [[S::ZERO; L]; 1];
-        forward(params, &layout.output, (hidden, &[]), &mut out);
-        let [out] = out;
+        let last = model.last_hidden::<L, N, EXACT>(self.module, points, MAX_HEIGHT);
+        let hidden = last.get(..width).unwrap_or(&[]);
+        let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[]));
         out
     }
 }
@@ -116,39 +124,48 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         self.parameters.get(offset..offset + len).unwrap_or(&[])
     }
 
-    /// The last hidden layer (b) of module `index` into `out`, recursing into children.
-    /// `budget` bounds the recursion (validated tree heights never exhaust it).
-    fn last_hidden<const L: usize>(
+    /// The last hidden layer (b) of module `index`, recursing into children, with layers of
+    /// capacity `N` (see [`width`]). `budget` bounds the recursion (validated tree heights
+    /// never exhaust it).
+    fn last_hidden<const L: usize, const N: usize, const EXACT: bool>(
         &self,
         index: usize,
         points: &[[S; 3]; L],
         budget: usize,
-        out: &mut Layer<S, L>,
-    ) {
+    ) -> [[S; L]; N] {
         let (Some(entry), Some(budget)) = (self.modules.get(index), budget.checked_sub(1)) else {
-            return;
+            return [[S::ZERO; L]; N];
         };
-        let width = self.width;
-        let layout = ModuleLayout::new(entry.kind, width);
-        let params = self.module_parameters(entry.offset, layout.len);
-        let mut hidden_a = [[S::ZERO; L]; MAX_WIDTH];
-        match entry.kind {
+        let width = width::<N, EXACT>(self.width);
+        // The layout is built from a constant kind in each arm, so that its shapes fold.
+        let module = |kind| {
+            let layout = ModuleLayout::new(kind, width);
+            (layout, self.module_parameters(entry.offset, layout.len))
+        };
+        let (layout, params, hidden_a): (_, _, [[S; L]; N]) = match entry.kind {
             ModuleKind::Leaf => {
+                let (layout, params) = module(ModuleKind::Leaf);
                 let input = normalized_input(params, points);
-                forward(params, &layout.hidden_a, (&input, &[]), &mut hidden_a);
+                (
+                    layout,
+                    params,
+                    forward(params, &layout.hidden_a, (&input, &[])),
+                )
             }
             ModuleKind::Node => {
-                // The children's last hidden layers; `out` holds the left one meanwhile.
-                let mut right = [[S::ZERO; L]; MAX_WIDTH];
-                self.last_hidden(entry.left, points, budget, out);
-                self.last_hidden(index.saturating_sub(1), points, budget, &mut right);
-                let (left, right) = (out.get(..width), right.get(..width));
-                let inputs = (left.unwrap_or(&[]), right.unwrap_or(&[]));
-                forward(params, &layout.hidden_a, inputs, &mut hidden_a);
+                let (layout, params) = module(ModuleKind::Node);
+                let left = self.last_hidden::<L, N, EXACT>(entry.left, points, budget);
+                let right =
+                    self.last_hidden::<L, N, EXACT>(index.saturating_sub(1), points, budget);
+                let inputs = (
+                    left.get(..width).unwrap_or(&[]),
+                    right.get(..width).unwrap_or(&[]),
+                );
+                (layout, params, forward(params, &layout.hidden_a, inputs))
             }
-        }
+        };
         let hidden_a = hidden_a.get(..width).unwrap_or(&[]);
-        forward(params, &layout.hidden_b, (hidden_a, &[]), out);
+        forward(params, &layout.hidden_b, (hidden_a, &[]))
     }
 }
 

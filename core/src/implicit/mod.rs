@@ -11,8 +11,10 @@ mod eval;
 mod layout;
 mod model;
 mod reverse;
+mod width;
 
 pub use batch::LANES;
 pub use eval::{FieldGradient, ModuleView};
 pub use layout::{DenseLayout, MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 pub use model::{DEFAULT_MODULES, DEFAULT_PARAMETERS, ImplicitModel, ImplicitPayload};
+pub use width::SPECIALIZED as SPECIALIZED_WIDTHS;

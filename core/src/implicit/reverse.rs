@@ -8,12 +8,14 @@
 //! the largest model; instead each module hands the rest of the evaluation to its parent as a
 //! continuation ([`Above`]) and keeps its slopes in its own stack frame until the pass comes back
 //! down through it. Stack use is therefore proportional to the model actually loaded (about
-//! `4·MAX_WIDTH·L` scalars per module), and nothing is allocated or zeroed beyond that.
+//! `4·N·L` scalars per module, N the layer capacity: the width itself for the specialized widths,
+//! else `MAX_WIDTH`; see `width.rs`), and nothing is allocated beyond that.
 
 use super::eval::{FieldGradient, ModuleView, normalized_input};
-use super::layout::{MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
+use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
-use crate::dense::{Layer, forward, through_activation, transposed};
+use super::width::{at_width, width};
+use crate::dense::{forward, through_activation, transposed};
 use crate::scalar::Scalar;
 
 /// ∇Φ summed over the leaves, per coordinate and lane, in the wide accumulator.
@@ -21,7 +23,8 @@ type Gradient<S, const L: usize> = [[<S as Scalar>::Acc; L]; 3];
 
 /// The evaluation above a module: given the module's last hidden layer (b), it finishes the
 /// forward pass, runs the transposed pass down to this module, and returns ∂Φ/∂b.
-type Above<'f, S, const L: usize> = dyn FnMut(&[[S; L]], &mut Gradient<S, L>) -> Layer<S, L> + 'f;
+type Above<'f, S, const L: usize, const N: usize> =
+    dyn FnMut(&[[S; L]; N], &mut Gradient<S, L>) -> [[S; L]; N] + 'f;
 
 impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
     /// Φ and ∇Φ at `L` points at once.
@@ -30,25 +33,39 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         &self,
         points: &[[S; 3]; L],
     ) -> [FieldGradient<S>; L] {
+        at_width!(self.model.width, self.field_gradient_at::<L>(points))
+    }
+
+    /// Φ and ∇Φ at `L` points with layers of capacity `N` (see [`width`]).
+    #[inline(always)]
+    fn field_gradient_at<const L: usize, const N: usize, const EXACT: bool>(
+        &self,
+        points: &[[S; 3]; L],
+    ) -> [FieldGradient<S>; L] {
         let model = self.model;
-        let width = model.width;
         let mut value = [S::ZERO; L];
         let mut gradient = [[S::ZERO.to_acc(); L]; 3];
         if let Some(entry) = model.modules.get(self.module) {
-            let layout = ModuleLayout::new(entry.kind, width);
-            let params = model.module_parameters(entry.offset, layout.len);
-            let root = &mut |hidden: &[[S; L]], _: &mut Gradient<S, L>| {
-                let mut out = [[S::ZERO; L]; 1];
-                forward(params, &layout.output, (hidden, &[]), &mut out);
-                [value] = out;
-                let slope = [value.map(S::activation_slope)];
+            let root = &mut |hidden: &[[S; L]; N], _: &mut Gradient<S, L>| {
+                // Built here, not captured: the shapes are then constants in this closure.
+                let Pass {
+                    params,
+                    layout,
+                    width,
+                } = model.pass::<N, EXACT>(entry.offset, entry.kind);
+                let hidden = hidden.get(..width).unwrap_or(&[]);
+                let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[]));
+                value = out;
+                let mut slope = [out];
+                for lanes in &mut slope {
+                    for a in lanes {
+                        *a = S::activation_slope(*a);
+                    }
+                }
                 // ∂Φ/∂bⱼ = a′(H)·wⱼ
-                let mut delta = [[S::ZERO; L]; MAX_WIDTH];
-                let below = delta.get_mut(..width).unwrap_or(&mut []);
-                transposed(params, &layout.output, &slope, (below, &mut []));
-                delta
+                transposed::<S, L, N, EXACT>(params, &layout.output, (0, width), &slope)
             };
-            model.reverse(self.module, points, MAX_HEIGHT, &mut gradient, root);
+            model.reverse::<L, N, EXACT>(self.module, points, MAX_HEIGHT, &mut gradient, root);
         }
         let [g0, g1, g2] = gradient.map(|lanes| lanes.map(S::from_acc));
         core::array::from_fn(|lane| {
@@ -64,58 +81,91 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     /// The forward pass through module `index` and its subtree, `above` for everything higher,
     /// then the transposed pass back down, adding each leaf's share of ∇Φ to `gradient`.
-    /// `budget` bounds the recursion (validated tree heights never exhaust it).
-    fn reverse<const L: usize>(
+    /// Layers have capacity `N` (see [`width`]). `budget` bounds the recursion (validated tree
+    /// heights never exhaust it).
+    fn reverse<const L: usize, const N: usize, const EXACT: bool>(
         &self,
         index: usize,
         points: &[[S; 3]; L],
         budget: usize,
         gradient: &mut Gradient<S, L>,
-        above: &mut Above<'_, S, L>,
+        above: &mut Above<'_, S, L, N>,
     ) {
         let (Some(entry), Some(budget)) = (self.modules.get(index), budget.checked_sub(1)) else {
             return;
         };
-        let width = self.width;
-        let layout = ModuleLayout::new(entry.kind, width);
-        let params = self.module_parameters(entry.offset, layout.len);
         match entry.kind {
             ModuleKind::Leaf => {
-                let input = normalized_input(params, points);
-                let mut delta_input = [[S::ZERO; L]; 3];
-                let pass = Pass { params, layout };
-                pass.run((&input, &[]), gradient, above, (&mut delta_input, &mut []));
-                add_normalization_transpose(params, &delta_input, gradient);
+                let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Leaf);
+                let input = normalized_input(pass.params, points);
+                let delta_a = pass.run::<L, N, EXACT>((&input, &[]), gradient, above);
+                let delta_a = delta_a.get(..pass.width).unwrap_or(&[]);
+                let hidden_a = &pass.layout.hidden_a;
+                let delta_input =
+                    transposed::<S, L, 3, EXACT>(pass.params, hidden_a, (0, 3), delta_a);
+                add_normalization_transpose(pass.params, &delta_input, gradient);
             }
             ModuleKind::Node => {
                 let right_child = index.saturating_sub(1);
-                self.reverse(
+                self.reverse::<L, N, EXACT>(
                     entry.left,
                     points,
                     budget,
                     gradient,
                     &mut |left, gradient| {
-                        let mut delta_left = [[S::ZERO; L]; MAX_WIDTH];
-                        self.reverse(
+                        let mut delta_left = None;
+                        self.reverse::<L, N, EXACT>(
                             right_child,
                             points,
                             budget,
                             gradient,
                             &mut |right, gradient| {
-                                let mut delta_right = [[S::ZERO; L]; MAX_WIDTH];
-                                let pass = Pass { params, layout };
-                                let out = (
-                                    delta_left.get_mut(..width).unwrap_or(&mut []),
-                                    delta_right.get_mut(..width).unwrap_or(&mut []),
+                                let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Node);
+                                let (params, width) = (pass.params, pass.width);
+                                let inputs = (
+                                    left.get(..width).unwrap_or(&[]),
+                                    right.get(..width).unwrap_or(&[]),
                                 );
-                                pass.run((left, right), gradient, &mut *above, out);
-                                delta_right
+                                let delta_a =
+                                    pass.run::<L, N, EXACT>(inputs, gradient, &mut *above);
+                                let delta_a = delta_a.get(..width).unwrap_or(&[]);
+                                let hidden_a = &pass.layout.hidden_a;
+                                delta_left = Some(transposed::<S, L, N, EXACT>(
+                                    params,
+                                    hidden_a,
+                                    (0, width),
+                                    delta_a,
+                                ));
+                                transposed::<S, L, N, EXACT>(
+                                    params,
+                                    hidden_a,
+                                    (width, width),
+                                    delta_a,
+                                )
                             },
                         );
-                        delta_left
+                        delta_left.unwrap_or([[S::ZERO; L]; N])
                     },
                 );
             }
+        }
+    }
+
+    /// The module whose parameters start at `offset`, with layers of capacity `N` (see
+    /// [`width`]). Called where the pass runs, with a constant `kind` wherever the caller knows
+    /// it, so that the layout's shapes are constants there (never captured by a closure).
+    #[inline(always)]
+    fn pass<const N: usize, const EXACT: bool>(
+        &self,
+        offset: usize,
+        kind: ModuleKind,
+    ) -> Pass<'_, S> {
+        let width = width::<N, EXACT>(self.width);
+        let layout = ModuleLayout::new(kind, width);
+        Pass {
+            params: self.module_parameters(offset, layout.len),
+            layout,
+            width,
         }
     }
 }
@@ -124,33 +174,31 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
 struct Pass<'p, S> {
     params: &'p [S],
     layout: ModuleLayout,
+    width: usize,
 }
 
 impl<S: Scalar> Pass<'_, S> {
-    /// Forward through layers a and b on `inputs`, `above` for the rest, then ∂Φ/∂inputs into
-    /// `out`.
-    #[inline]
-    fn run<const L: usize>(
+    /// Forward through layers a and b on `inputs`, `above` for the rest, then back through b:
+    /// returns ∂Φ/∂Hₐ, the gradient at layer a's pre-activations (its transpose gives
+    /// ∂Φ/∂inputs).
+    #[inline(always)]
+    fn run<const L: usize, const N: usize, const EXACT: bool>(
         &self,
         inputs: (&[[S; L]], &[[S; L]]),
         gradient: &mut Gradient<S, L>,
-        above: &mut Above<'_, S, L>,
-        out: (&mut [[S; L]], &mut [[S; L]]),
-    ) {
-        let (params, layout, width) = (self.params, &self.layout, self.layout.width);
-        let (mut a, mut b) = ([[S::ZERO; L]; MAX_WIDTH], [[S::ZERO; L]; MAX_WIDTH]);
-        forward(params, &layout.hidden_a, inputs, &mut a);
+        above: &mut Above<'_, S, L, N>,
+    ) -> [[S; L]; N] {
+        let (params, layout, width) = (self.params, &self.layout, self.width);
+        let a: [[S; L]; N] = forward(params, &layout.hidden_a, inputs);
         let a = a.get(..width).unwrap_or(&[]);
-        forward(params, &layout.hidden_b, (a, &[]), &mut b);
-        let b = b.get(..width).unwrap_or(&[]);
-        let mut delta_b = above(b, gradient);
-        through_activation(&mut delta_b, b);
-        let mut delta_a = [[S::ZERO; L]; MAX_WIDTH];
+        let b: [[S; L]; N] = forward(params, &layout.hidden_b, (a, &[]));
+        let mut delta_b = above(&b, gradient);
+        through_activation(&mut delta_b, &b);
         let delta_b = delta_b.get(..width).unwrap_or(&[]);
-        let below = delta_a.get_mut(..width).unwrap_or(&mut []);
-        transposed(params, &layout.hidden_b, delta_b, (below, &mut []));
+        let mut delta_a: [[S; L]; N] =
+            transposed::<S, L, N, EXACT>(params, &layout.hidden_b, (0, width), delta_b);
         through_activation(&mut delta_a, a);
-        transposed(params, &layout.hidden_a, &delta_a, out);
+        delta_a
     }
 }
 
