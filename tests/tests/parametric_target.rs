@@ -213,6 +213,24 @@ fn same_on_target(
         let rows: Vec<Geometry> = run.geometry().into_iter().map(Geometry::from).collect();
         assert_eq!(bits(&rows), bits(&expected), "{name} {scalar:?} {mode:?}");
         assert!(run.instructions_per_point() > 0.0);
+        // The position alone: the same outputs, without the direction.
+        let job = Job {
+            op: Op::Position,
+            mode,
+            ..Job::position_direction(bytes, scalar, &inputs, arity)
+        };
+        let run = sim
+            .run(&job)
+            .unwrap_or_else(|e| panic!("{name} position: {e}"));
+        let outputs: Vec<u64> = run.rows().iter().flatten().map(|v| v.to_bits()).collect();
+        let expected_outputs: Vec<u64> = expected
+            .iter()
+            .flat_map(|g| g.output.iter().map(|v| v.to_bits()))
+            .collect();
+        assert_eq!(
+            outputs, expected_outputs,
+            "{name} {scalar:?} {mode:?} position"
+        );
     }
     expected
 }

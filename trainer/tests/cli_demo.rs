@@ -31,6 +31,7 @@ fn the_demo_writes_every_model_and_reports_their_accuracy() {
     let cao_en = &parametric[1];
     assert!(cao_en["quality"][0][1].as_f64().unwrap() < 1e-9, "{cao_en}");
     for demo in parametric {
+        assert_eq!(demo["deviation"].as_array().unwrap().len(), 2, "{demo}");
         for (precision, deviation) in demo["deviation"]
             .as_array()
             .unwrap()

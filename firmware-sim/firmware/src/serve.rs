@@ -422,31 +422,62 @@ fn serve_caoen<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
             io,
             p + 3,
             x,
-            |x, out| each(x, out, |x| (network.eval(x), network.normal(x))),
+            |x, out| each(x, out, |x| caoen_single(network, x)),
             caoen_words(p),
         ),
     }
 }
 
-/// Every output and the unit normal of every source point, through the network's batch calls.
+/// Every output and the unit normal of every source point, through the network's batch calls:
+/// one pass with the Jacobian for a shape (p = 3, whose position comes with the normal), one
+/// without for other networks (which have no normal).
 fn caoen_batch<S: Scalar>(
     network: &CaoEnModel<S>,
     x: &[[S; MAX_ARITY]],
     out: &mut [CaoEnResult<S>],
 ) -> bool {
-    let mut outputs = [[S::ZERO; MAX_TARGET_DIMENSION]; CHUNK_POINTS];
-    let mut points = [CaoEnPoint::default(); CHUNK_POINTS];
-    let (Some(outputs), Some(points)) = (outputs.get_mut(..x.len()), points.get_mut(..x.len()))
-    else {
-        return false;
-    };
-    if network.eval_batch(x, outputs).is_err() || network.eval_normal_batch(x, points).is_err() {
-        return false;
-    }
-    for ((slot, &y), point) in out.iter_mut().zip(outputs.iter()).zip(points.iter()) {
-        *slot = (y, point.normal);
+    if network.target_dimension() == 3 {
+        let mut points = [CaoEnPoint::default(); CHUNK_POINTS];
+        let Some(points) = points.get_mut(..x.len()) else {
+            return false;
+        };
+        if network.eval_normal_batch(x, points).is_err() {
+            return false;
+        }
+        for (slot, point) in out.iter_mut().zip(points.iter()) {
+            *slot = caoen_result(point);
+        }
+    } else {
+        let mut outputs = [[S::ZERO; MAX_TARGET_DIMENSION]; CHUNK_POINTS];
+        let Some(outputs) = outputs.get_mut(..x.len()) else {
+            return false;
+        };
+        if network.eval_batch(x, outputs).is_err() {
+            return false;
+        }
+        for (slot, &y) in out.iter_mut().zip(outputs.iter()) {
+            *slot = (y, None);
+        }
     }
     true
+}
+
+/// One source point, as [`caoen_batch`] computes it.
+fn caoen_single<S: Scalar>(network: &CaoEnModel<S>, x: &[S; MAX_ARITY]) -> CaoEnResult<S> {
+    if network.target_dimension() == 3 {
+        caoen_result(&network.eval_normal(x))
+    } else {
+        (network.eval(x), None)
+    }
+}
+
+/// A shape's position and normal as the eight-output result.
+fn caoen_result<S: Scalar>(point: &CaoEnPoint<S>) -> CaoEnResult<S> {
+    let mut y = [S::ZERO; MAX_TARGET_DIMENSION];
+    for (slot, &v) in y.iter_mut().zip(&point.position) {
+        *slot = v;
+    }
+    (y, point.normal)
 }
 
 /// A Cao En network's outputs and unit normal at one source point.

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Subcommand, ValueEnum};
-use neurosurf_core::caoen::{Blending, Domain};
+use neurosurf_core::caoen::{Blending, CaoEnModel, DEFAULT_KEY_POINTS, Domain};
 use serde::Serialize;
 
 use neurosurf_trainer::caoen::{
@@ -78,7 +78,7 @@ pub struct FitArgs {
     no_fit: bool,
     /// Also choose q per key point from these candidates (comma-separated), scored between the
     /// key points.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', conflicts_with = "no_fit")]
     fit_sharpness: Vec<f64>,
     /// How the blob stores the network: `f32` or `q16.16`.
     #[arg(long, default_value = "f32")]
@@ -175,6 +175,16 @@ fn fit(args: &FitArgs) -> Result<()> {
         (false, false) => fit_sharpness(&built, &on_domain, &targets, &args.fit_sharpness)?.0,
     };
     let blob = caoen::to_blob(&network, scalar, b"neurosurf caoen fit")?;
+    // What the firmware, eval and sim load: the core's default capacity.
+    CaoEnModel::<f32>::from_blob(&blob).map_err(|e| {
+        anyhow::anyhow!(
+            "{} key points: the core (and the firmware) hold at most {DEFAULT_KEY_POINTS}: {e}",
+            network.key_count()
+        )
+    })?;
+    if args.mesh.is_some() && !matches!(network.source_dimension(), 3 | 4) {
+        bail!("--mesh maps sphere (m = 3) and torus (m = 4) networks, this one has m = {m}");
+    }
     write_atomic(&args.out, &blob)?;
     if let Some(path) = &args.mesh {
         write_network_mesh(&network, path, 4, [48, 24])?;

@@ -22,11 +22,12 @@ use super::target;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The model blob: modular implicit, curve or spline surface.
+    /// The model blob: modular implicit, curve, spline surface or Cao En network.
     model: PathBuf,
     /// Query points: PLY, or text with 3 (or 6) numbers per line. Default: points on the
     /// model's own surface (see above). For a curve: t per line (default: 1001 uniform
-    /// values); for a spline surface: `u v` per line (default: a 33 × 33 grid).
+    /// values); for a spline surface: `u v` per line (default: a 33 × 33 grid); for a Cao En
+    /// network: its m source coordinates (default: points spread over its sphere or torus).
     #[arg(long)]
     points: Option<PathBuf>,
     /// Print the report as JSON instead of the table.

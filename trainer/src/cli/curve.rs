@@ -215,6 +215,9 @@ fn fit(args: &FitArgs) -> Result<()> {
         seconds,
     };
     let blob = curve_to_blob(curve, Some(&summary), scalar)?;
+    if let Some(path) = &args.plot {
+        check_picture_path(path)?;
+    }
     write_atomic(&args.blob.out, &blob)?;
     if let Some(path) = &args.plot {
         let layers = PlotLayers {
@@ -287,6 +290,18 @@ fn fit(args: &FitArgs) -> Result<()> {
     );
     if let Some(path) = &args.plot {
         println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// Refuses a picture path the plot writer cannot write, before anything else is written.
+fn check_picture_path(path: &Path) -> Result<()> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(extension.as_deref(), Some("svg" | "png")) {
+        anyhow::bail!("{}: pictures are written as .svg or .png", path.display());
     }
     Ok(())
 }
@@ -382,11 +397,12 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         seconds,
     };
     let blob = surface_to_blob(&fit.surface, Some(&summary), scalar)?;
-    write_atomic(&args.blob.out, &blob)?;
+    // Mesh first: a mesh that cannot be made or written leaves no new blob behind.
     if let Some(path) = &args.mesh {
         let mesh = surface_mesh(&fit.surface, args.resolution, args.resolution)?;
         write_mesh(path, &mesh.mesh, Some(&mesh.normals))?;
     }
+    write_atomic(&args.blob.out, &blob)?;
     let report = SurfaceReport {
         out: &args.blob.out,
         stored_as: scalar.name(),
@@ -448,14 +464,8 @@ fn plot(args: &PlotArgs) -> Result<()> {
         Some(path) => read_scattered_points(path)?.1,
         None => Vec::new(),
     };
-    // Without points, the spline's own control points frame the picture.
-    let anchor = if points.is_empty() {
-        &decoded.curve.control
-    } else {
-        &points
-    };
     let layers = PlotLayers {
-        points: anchor,
+        points: &points,
         curve: Some(&decoded.curve),
         control_polygon: args.control_polygon,
         ..PlotLayers::default()

@@ -16,7 +16,8 @@ pub struct Args {
     /// The model blob.
     model: PathBuf,
     /// Query points: PLY, or text with 3 (or 6) numbers per line. For a curve, text with one
-    /// parameter t ∈ [0, 1] per line; for a spline surface, two (u v).
+    /// parameter t ∈ [0, 1] per line; for a spline surface, two (u v); for a Cao En network,
+    /// its m source coordinates.
     #[arg(long)]
     points: PathBuf,
     /// `f64` (the trainer's reference), `f32` or `q16.16` (through neurosurf-core).

@@ -75,7 +75,7 @@ pub fn run(args: &Args) -> Result<()> {
             let curve = &decoded.curve;
             let core = neurosurf_core::curve::BSplineCurve::<f32>::from_blob(bytes).ok();
             Info {
-                kind: "curve",
+                kind: ModelKind::Curve.name(),
                 stored_as: decoded.stored_as.name(),
                 blob_bytes: bytes.len(),
                 parameters: curve.control.len() * 3,
@@ -95,11 +95,16 @@ pub fn run(args: &Args) -> Result<()> {
             let surface = &decoded.surface;
             let core = neurosurf_core::curve::BSplineSurface::<f32>::from_blob(bytes).ok();
             Info {
-                kind: "spline surface",
+                kind: ModelKind::SplineSurface.name(),
                 stored_as: decoded.stored_as.name(),
                 blob_bytes: bytes.len(),
                 parameters: surface.control.len() * 3,
-                macs: core.map(|c| (c.mac_count(false), c.normal_mac_count())),
+                macs: core.map(|c| {
+                    (
+                        c.mac_count(false),
+                        c.mac_count(false) + c.normal_mac_count(),
+                    )
+                }),
                 control: Some(format!(
                     "{} × {} points, {} × {}",
                     surface.count_u,
@@ -115,7 +120,7 @@ pub fn run(args: &Args) -> Result<()> {
             let network = &decoded.network;
             let core = neurosurf_core::caoen::CaoEnModel::<f32>::from_blob(bytes).ok();
             Info {
-                kind: "cao-en",
+                kind: ModelKind::CaoEn.name(),
                 stored_as: decoded.stored_as.name(),
                 blob_bytes: bytes.len(),
                 parameters: network.key_count()
@@ -165,7 +170,7 @@ pub fn run(args: &Args) -> Result<()> {
                 println!("  MACs         {value} per position, {derivative} per position+tangent")
             }
             ModelKind::SplineSurface | ModelKind::CaoEn => {
-                println!("  MACs         {value} per position, {derivative} per normal")
+                println!("  MACs         {value} per position, {derivative} per position+normal")
             }
             _ => println!("  MACs         {value} per field, {derivative} per field+gradient"),
         }

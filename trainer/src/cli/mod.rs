@@ -45,7 +45,8 @@ enum Command {
     ///
     /// Curves read one parameter t ∈ [0, 1] per line and print `t,x,y,z,tx,ty,tz` (position
     /// and tangent dC/dt); spline surfaces read `u v` and print `u,v,x,y,z,nx,ny,nz` (position
-    /// and unit normal, 0,0,0 where it does not exist).
+    /// and unit normal, 0,0,0 where it does not exist); Cao En networks read their m source
+    /// coordinates and print `s1..sm`, their outputs (`x,y,z`, or `y1..yp`) and `nx,ny,nz`.
     Eval(eval::Args),
     /// Describe a blob: kind, tree, parameters, size, training summary.
     Info(info::Args),

@@ -16,10 +16,11 @@ use super::target::{self, ModeArg};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The model blob: modular implicit, curve or spline surface (RBF models are host-only).
+    /// The model blob: modular implicit, curve, spline surface or Cao En network (RBF models
+    /// are host-only).
     model: PathBuf,
     /// Query points: PLY, or text with 3 (or 6) numbers per line; t per line for a curve,
-    /// `u v` for a spline surface.
+    /// `u v` for a spline surface, the m source coordinates for a Cao En network.
     #[arg(long)]
     points: PathBuf,
     /// `f32` or `q16.16` (the target has no `f64`).

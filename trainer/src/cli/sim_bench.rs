@@ -1,6 +1,7 @@
 //! `neurosurf sim-bench`: what an evaluation costs on the simulated Cortex-M4F — instructions
 //! per evaluation against multiply–accumulates, for f32 and Q16.16, field and field+gradient
-//! (position and position+tangent for curves), single points and lane batches, with the
+//! (position and position+direction for parametric models), single points and lane batches,
+//! with the
 //! firmware's flash, RAM and stack.
 
 use std::path::PathBuf;
@@ -302,7 +303,7 @@ fn ratios(rows: &[Row]) -> Vec<Ratio> {
 
 fn print(bench: &Bench) {
     println!(
-        "cost of one evaluation on the simulated Cortex-M4F ({}), {POINTS} surface points per run\n",
+        "cost of one evaluation on the simulated Cortex-M4F ({}), {POINTS} points (or parameters) per run\n",
         bench.machine
     );
     let mut table = Table::new([

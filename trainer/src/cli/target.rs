@@ -75,8 +75,8 @@ pub fn read_blob(path: &Path) -> Result<Vec<u8>> {
         && header.model == ModelKind::Rbf
     {
         bail!(
-            "{}: {} is a host-only model kind: the target evaluates implicit models, curves and \
-             spline surfaces (use `neurosurf eval`)",
+            "{}: {} is a host-only model kind: the target evaluates implicit models, curves, \
+             spline surfaces and Cao En networks (use `neurosurf eval`)",
             path.display(),
             header.model.name()
         );

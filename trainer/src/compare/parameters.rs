@@ -1,7 +1,7 @@
 //! Where to compare a parametric model when the user gives no points: its whole parameter
 //! domain, covered evenly and deterministically.
 
-use neurosurf_core::caoen::{CaoEnModel, Domain};
+use neurosurf_core::caoen::Domain;
 
 use crate::evaluate::LoadedModel;
 
@@ -38,10 +38,9 @@ impl ParameterSet {
                 points: grid(|u, v| vec![u * step, v * step]),
                 description: format!("a {SURFACE_GRID} × {SURFACE_GRID} grid of (u, v)"),
             }),
-            LoadedModel::CaoEn { bytes, decoded } => {
+            LoadedModel::CaoEn { decoded, .. } => {
                 let m = decoded.network.source_dimension();
-                let torus = CaoEnModel::<f32>::from_blob(bytes)
-                    .is_ok_and(|core| core.domain() == Domain::Torus);
+                let torus = decoded.network.domain == Domain::Torus.code();
                 let turn = std::f64::consts::TAU / SURFACE_GRID as f64;
                 Some(if torus {
                     ParameterSet {
@@ -95,7 +94,8 @@ pub fn fibonacci_sphere(n: usize) -> Vec<Vec<f64>> {
 /// n unit vectors of ℝᵐ from a fixed low-discrepancy sequence pushed through the Gaussian
 /// quantile (Box–Muller on Halton coordinates), so the same m always gives the same points.
 fn hypersphere(n: usize, m: usize) -> Vec<Vec<f64>> {
-    const PRIMES: [usize; 8] = [2, 3, 5, 7, 11, 13, 17, 19];
+    // Two distinct bases per coordinate, for up to 8 coordinates.
+    const PRIMES: [usize; 16] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53];
     let halton = |mut i: usize, base: usize| {
         let (mut f, mut r) = (1.0, 0.0);
         while i > 0 {
@@ -109,8 +109,8 @@ fn hypersphere(n: usize, m: usize) -> Vec<Vec<f64>> {
         .map(|i| {
             let mut v: Vec<f64> = (0..m)
                 .map(|k| {
-                    let u1 = halton(i, PRIMES[(2 * k) % 8]).max(1e-12);
-                    let u2 = halton(i, PRIMES[(2 * k + 1) % 8]);
+                    let u1 = halton(i, PRIMES[(2 * k) % 16]).max(1e-12);
+                    let u2 = halton(i, PRIMES[(2 * k + 1) % 16]);
                     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
                 })
                 .collect();
@@ -141,5 +141,13 @@ mod tests {
             assert!((length - 1.0).abs() < 1e-12 && p.len() == 5);
         }
         assert_eq!(hypersphere(10, 5), hypersphere(10, 5));
+        // Every coordinate varies on its own: no two coordinates coincide over the set.
+        let eight = hypersphere(200, 8);
+        for a in 0..8 {
+            for b in a + 1..8 {
+                let same = eight.iter().filter(|p| (p[a] - p[b]).abs() < 1e-12).count();
+                assert!(same < 5, "coordinates {a} and {b} coincide {same} times");
+            }
+        }
     }
 }

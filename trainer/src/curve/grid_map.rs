@@ -177,7 +177,7 @@ impl som::Neighbourhood for Grid {
         self.columns.max(self.rows)
     }
 
-    fn pull(&self, c: usize, rate: f64, table: &[f64], pull: &mut dyn FnMut(usize, f64)) {
+    fn pull(&self, c: usize, rate: f64, table: &[f64], mut pull: impl FnMut(usize, f64)) {
         let (columns, rows) = (self.columns, self.rows);
         let (cu, cv) = (c % columns, c / columns);
         let reach = table.len() - 1;

@@ -12,8 +12,8 @@
 //! neurons once the chain has formed) plus an update of ≤ 2⌈3σ(t)⌉ + 1 neurons; with the
 //! geometric radius the mean update is about 6(σ₀ − σ_T)/ln(σ₀/σ_T) neurons, O(m / log m).
 //! So O(n · m / log m) in all, memory O(n + m). Measured with the defaults (release build,
-//! one core, training + ordering + refinement + both fits): 20 points 4 ms, 200 points
-//! 70 ms, 2 000 points 0.6 s.
+//! one core, training + ordering + refinement + both fits; `neurosurf curve bench`): 20 points
+//! 5 ms, 200 points 45 ms, 2 000 points 0.6 s.
 
 use serde::{Deserialize, Serialize};
 
@@ -253,7 +253,7 @@ impl som::Neighbourhood for Chain<'_> {
         }
     }
 
-    fn pull(&self, c: usize, rate: f64, table: &[f64], pull: &mut dyn FnMut(usize, f64)) {
+    fn pull(&self, c: usize, rate: f64, table: &[f64], mut pull: impl FnMut(usize, f64)) {
         let m = self.m;
         for (d, &h) in table.iter().enumerate() {
             let gain = rate * h;

@@ -80,11 +80,11 @@ pub struct PlotLayers<'a> {
 /// The picture as a [`Scene`], for [`crate::plot`] to write as SVG or PNG.
 ///
 /// # Errors
-/// [`Error::InvalidInput`] for no points, a non-finite coordinate, an order index out of
-/// range, or a zero width or height.
+/// [`Error::InvalidInput`] for neither points nor a curve, a non-finite coordinate, an order
+/// index out of range, or a zero width or height.
 pub fn plot_scene(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<Scene> {
-    if layers.points.is_empty() {
-        return Err(Error::invalid("nothing to plot: no points"));
+    if layers.points.is_empty() && layers.curve.is_none() {
+        return Err(Error::invalid("nothing to plot: no points and no curve"));
     }
     if options.width == 0 || options.height == 0 {
         return Err(Error::invalid(format!(
@@ -103,11 +103,27 @@ pub fn plot_scene(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<Scen
     let spline = layers
         .curve
         .map(|c| c.polyline(c.segments().max(1) * options.samples_per_segment.max(1)));
-    let frame = Frame::fit(layers.points, options.projection)?;
-    let mut all: Vec<[f64; 2]> = layers.points.iter().map(|&p| frame.flatten(p)).collect();
-    for line in [layers.truth, spline.as_deref()].into_iter().flatten() {
-        all.extend(line.iter().map(|&p| frame.flatten(p)));
-    }
+    // Everything drawn is framed: points, truth, spline, and the control polygon and chain
+    // when they are drawn (an approximating spline's control points often lie outside it).
+    let control = layers
+        .curve
+        .filter(|_| layers.control_polygon)
+        .map(|c| c.control.as_slice());
+    let chain = layers.chain.map(|c| c.neurons.as_slice());
+    let drawn: Vec<[f64; 3]> = [
+        Some(layers.points),
+        layers.truth,
+        spline.as_deref(),
+        control,
+        chain,
+    ]
+    .into_iter()
+    .flatten()
+    .flatten()
+    .copied()
+    .collect();
+    let frame = Frame::fit(&drawn, options.projection)?;
+    let all: Vec<[f64; 2]> = drawn.iter().map(|&p| frame.flatten(p)).collect();
     if all.iter().any(|p| !(p[0].is_finite() && p[1].is_finite())) {
         return Err(Error::invalid(
             "a plotted point has a non-finite coordinate",

@@ -29,7 +29,7 @@ pub(crate) trait Neighbourhood {
     fn reach_limit(&self) -> usize;
     /// Calls `pull(j, gain)` for every neuron j of winner `c`'s neighbourhood, with the
     /// Gaussian weights `table` (index = offset) and the learning rate `rate`.
-    fn pull(&self, c: usize, rate: f64, table: &[f64], pull: &mut dyn FnMut(usize, f64));
+    fn pull(&self, c: usize, rate: f64, table: &[f64], pull: impl FnMut(usize, f64));
     /// At the end of each epoch: whether training may stop here.
     fn converged(&mut self, _som: &Som, _total: usize) -> bool {
         false
@@ -83,7 +83,7 @@ pub(crate) fn train(
                 )));
             };
             let Som { neurons, grid, .. } = &mut som;
-            shape.pull(c, schedule.rate(t), &table, &mut |j, gain| {
+            shape.pull(c, schedule.rate(t), &table, |j, gain| {
                 let w = &mut neurons[j];
                 for k in 0..3 {
                     w[k] += gain * (x[k] - w[k]);

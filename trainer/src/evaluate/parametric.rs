@@ -198,18 +198,28 @@ fn caoen_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Ge
         .iter()
         .map(|point| std::array::from_fn(|k| coordinate(point, k)))
         .collect();
+    // As the firmware does: one pass with the Jacobian for a shape (p = 3: position and
+    // normal), one without for other networks (no normal).
+    if p == 3 {
+        let mut points = vec![CaoEnPoint::<S>::default(); x.len()];
+        network
+            .eval_normal_batch(&x, &mut points)
+            .map_err(batch_error)?;
+        return Ok(points
+            .iter()
+            .map(|point| Geometry {
+                output: point.position.iter().map(|v| v.to_f64()).collect(),
+                direction: point.normal.unwrap_or([S::ZERO; 3]).map(S::to_f64),
+            })
+            .collect());
+    }
     let mut outputs = vec![[S::ZERO; MAX_TARGET_DIMENSION]; x.len()];
-    let mut points = vec![CaoEnPoint::<S>::default(); x.len()];
-    network
-        .eval_batch(&x, &mut outputs)
-        .and_then(|()| network.eval_normal_batch(&x, &mut points))
-        .map_err(batch_error)?;
+    network.eval_batch(&x, &mut outputs).map_err(batch_error)?;
     Ok(outputs
         .iter()
-        .zip(&points)
-        .map(|(y, point)| Geometry {
+        .map(|y| Geometry {
             output: y.iter().take(p).map(|v| v.to_f64()).collect(),
-            direction: point.normal.unwrap_or([S::ZERO; 3]).map(S::to_f64),
+            direction: [0.0; 3],
         })
         .collect())
 }

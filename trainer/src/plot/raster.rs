@@ -7,6 +7,9 @@ use image::{ImageEncoder, RgbImage};
 use super::scene::{Rgb, Scene, Stroke};
 use crate::error::{Error, Result};
 
+/// Most dashes one stroke is cut into.
+const MAX_DASHES: f64 = 1e6;
+
 /// Largest side of a rasterized scene.
 pub const MAX_SIDE: u32 = 16_384;
 
@@ -62,8 +65,18 @@ fn dashed(stroke: &Stroke) -> Vec<([f64; 2], [f64; 2])> {
     let Some([on, off]) = stroke.dash.filter(|[on, off]| *on > 0.0 && *off >= 0.0) else {
         return stroke.segments().collect();
     };
-    let mut out = Vec::new();
     let period = on + off;
+    // A stroke far longer than any canvas (absurd coordinates) is drawn solid rather than cut
+    // into unbounded dashes; the rasterizer clips each segment to the canvas anyway.
+    let length: f64 = stroke
+        .segments()
+        .map(|(a, b)| (b[0] - a[0]).hypot(b[1] - a[1]))
+        .sum();
+    let dashes = length / period;
+    if dashes.is_nan() || dashes > MAX_DASHES {
+        return stroke.segments().collect();
+    }
+    let mut out = Vec::new();
     let mut phase = 0.0_f64;
     for (a, b) in stroke.segments() {
         let length = (b[0] - a[0]).hypot(b[1] - a[1]);
@@ -215,5 +228,12 @@ mod tests {
             1.0,
         ));
         assert!(rasterize(&scene).is_ok());
+        let mut huge = Stroke::new(vec![[-1e300, 5.0], [1e300, 5.0]], Rgb(0, 0, 0), 1.0);
+        huge.dash = Some([4.0, 4.0]);
+        assert_eq!(
+            dashed(&huge).len(),
+            1,
+            "drawn solid, not cut into 1e300 dashes"
+        );
     }
 }
