@@ -4,7 +4,7 @@
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench render`. Prints the punctual render (core
 //! f32, the paper's method) and the guaranteed render (f64 intervals), each the median of 3
-//! runs on all cores, writes both PNGs under `target/`, then the mesh at resolution 128 and
+//! runs on all cores, writes both PNGs under `target/tmp/`, then the mesh at resolution 128 and
 //! the punctual-vs-guaranteed comparison on a 96×96 hit map.
 
 use std::time::Instant;
@@ -67,8 +67,10 @@ fn main() {
         }
         times.sort_by(f64::total_cmp);
         let r = last.expect("rendered");
-        let file = format!("target/head-{}.png", format!("{method:?}").to_lowercase());
-        write_png(std::path::Path::new(&file), &r.image).expect("png");
+        let file = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("head-{}.png", format!("{method:?}").to_lowercase()));
+        write_png(&file, &r.image).expect("png");
+        let file = file.display();
         println!(
             "render 256×256 ×4 rays ({name}): median {:.3} s (min {:.3}), {:.0}× faster than the \
              paper; {} of {} rays hit, {} voxels; wrote {file}",
