@@ -16,6 +16,7 @@ pub mod io;
 pub mod plot;
 pub mod points;
 pub mod rbf;
+pub mod render;
 pub mod sample;
 pub mod table;
 

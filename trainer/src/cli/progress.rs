@@ -38,3 +38,20 @@ pub fn update(bar: &ProgressBar, event: Progress) {
         Progress::Finished { .. } => bar.inc(1),
     }
 }
+
+/// A bar counting finished pieces of work (image tiles, mesh blocks), hidden when `quiet`.
+/// Its length is set by the first [`ProgressBar::set_length`] call from the work's callback.
+pub fn work_bar(prefix: &str, unit: &str, quiet: bool) -> ProgressBar {
+    let target = if quiet {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    };
+    let bar = ProgressBar::with_draw_target(Some(0), target);
+    let template = format!("{{prefix}} [{{bar:30}}] {{pos}}/{{len}} {unit} [{{elapsed}}]");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        bar.set_style(style);
+    }
+    bar.set_prefix(prefix.to_string());
+    bar
+}

@@ -57,7 +57,7 @@ mod surface_fit;
 mod surface_mesh;
 mod tour;
 mod tridiagonal;
-mod vector;
+pub(crate) mod vector;
 
 pub use basis::{cubic_basis, cubic_basis_derivative, locate};
 pub use bench::{BENCHMARK_SIZES, BenchmarkRow, benchmark};

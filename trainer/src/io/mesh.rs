@@ -4,7 +4,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-use super::{obj, ply};
+use super::{obj, ply, stl};
 
 /// An indexed triangle mesh. Triangles wind counter-clockwise seen from outside, so
 /// `(b - a) × (c - a)` points outward.
@@ -108,9 +108,10 @@ pub fn read_mesh(path: &Path) -> Result<Mesh> {
     })
 }
 
-/// Writes `mesh` to `path` atomically, as Wavefront OBJ or binary little-endian PLY depending
-/// on the extension (`.obj` or `.ply`). When `normals` is given (one per vertex) it is
-/// written too (`vn` lines, or `nx ny nz` vertex properties).
+/// Writes `mesh` to `path` atomically, as Wavefront OBJ, binary little-endian PLY or binary
+/// STL depending on the extension (`.obj`, `.ply` or `.stl`). When `normals` is given (one per
+/// vertex) it is written too (`vn` lines, or `nx ny nz` vertex properties; STL stores facet
+/// normals only).
 ///
 /// Use [`ply::write_mesh_ply`](super::write_mesh_ply) to choose the PLY encoding.
 ///
@@ -123,8 +124,12 @@ pub fn write_mesh(path: &Path, mesh: &Mesh, normals: Option<&[[f64; 3]]>) -> Res
         Some("ply") => {
             ply::write_mesh_ply(path, mesh, normals, ply::PlyEncoding::BinaryLittleEndian)
         }
+        Some("stl") => {
+            check_writable(mesh, normals)?;
+            stl::write_stl_mesh(path, mesh)
+        }
         _ => Err(Error::invalid(format!(
-            "{}: unsupported mesh format (expected .obj or .ply)",
+            "{}: unsupported mesh format (expected .obj, .ply or .stl)",
             path.display()
         ))),
     }

@@ -1,5 +1,5 @@
-//! Files in and out: PLY (ascii and binary, via `ply-rs-bw`), OBJ (read via `tobj`), whitespace
-//! point lists; atomic writes.
+//! Files in and out: PLY (ascii and binary, via `ply-rs-bw`), OBJ (read via `tobj`), binary STL
+//! (written), whitespace point lists; atomic writes.
 //!
 //! Readers name the file, and where known the line, element, vertex or property, in every
 //! [`Error::Format`]; writers go through [`write_atomic_with`] so a failed write never leaves
@@ -12,6 +12,7 @@ mod data;
 mod mesh;
 mod obj;
 mod ply;
+mod stl;
 mod text;
 
 pub use atomic::{write_atomic, write_atomic_with};

@@ -20,7 +20,7 @@ mod svg;
 
 use std::path::Path;
 
-pub use raster::{MAX_SIDE, rasterize, to_png};
+pub use raster::{MAX_SIDE, png_bytes, rasterize, to_png};
 pub use scene::{Dot, Rgb, Scene, Stroke};
 pub use svg::to_svg;
 

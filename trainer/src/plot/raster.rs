@@ -47,7 +47,14 @@ pub fn rasterize(scene: &Scene) -> Result<RgbImage> {
 /// # Errors
 /// As [`rasterize`].
 pub fn to_png(scene: &Scene) -> Result<Vec<u8>> {
-    let image = rasterize(scene)?;
+    png_bytes(&rasterize(scene)?)
+}
+
+/// An RGB image as a PNG file's bytes.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the encoder fails.
+pub fn png_bytes(image: &RgbImage) -> Result<Vec<u8>> {
     let mut bytes = Vec::new();
     image::codecs::png::PngEncoder::new(&mut bytes)
         .write_image(

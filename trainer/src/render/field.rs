@@ -1,0 +1,290 @@
+//! What the renderer and the mesher evaluate: a field Φ (> 0 inside, < 0 outside), its
+//! gradient, the regions the surface is assumed to lie in, and optionally interval bounds.
+//!
+//! Three fields implement [`Field`]:
+//! - [`CoreField`]: the core in `f32` — what a microcontroller computes, and the fastest
+//!   (reverse-mode gradient, batches of 8 for the mesher). The punctual renderer uses it.
+//! - [`NetworkField`]: the trainer's `f64` reference, with interval bounds through the module
+//!   tree ([`super::interval`]); the guaranteed renderer needs those bounds, so it uses it.
+//! - [`SphereField`]: Φ = s·(r − |x − c|), analytic, for tests.
+
+use neurosurf_core::implicit::ImplicitModel;
+
+use super::interval::{self, Interval};
+use super::region::Region;
+use crate::curve::vector::{dot, norm, sub};
+use crate::error::{Error, Result};
+use crate::implicit::ImplicitNetwork;
+
+/// The normalization box side H the trainer uses by default (`ImplicitOptions::box_size`).
+pub const DEFAULT_BOX_SIZE: f64 = 2.0;
+/// How much the leaf boxes are grown for rendering (Carcenac: "slightly inflated").
+pub const DEFAULT_INFLATE: f64 = 1.25;
+
+/// A scalar field whose zero set is a surface.
+pub trait Field: Sync {
+    /// Φ at `p`.
+    fn value(&self, p: [f64; 3]) -> f64;
+
+    /// Φ and ∇Φ at `p`.
+    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]);
+
+    /// Where the surface is assumed to lie; nothing outside is searched.
+    fn regions(&self) -> &[Region];
+
+    /// Φ at many points (the core's batch API where available).
+    fn values(&self, points: &[[f64; 3]], out: &mut [f64]) {
+        for (p, o) in points.iter().zip(out) {
+            *o = self.value(*p);
+        }
+    }
+
+    /// Φ and ∇Φ at many points.
+    fn value_gradients(&self, points: &[[f64; 3]], out: &mut [(f64, [f64; 3])]) {
+        for (p, o) in points.iter().zip(out) {
+            *o = self.value_gradient(*p);
+        }
+    }
+
+    /// Bounds of Φ and dΦ/dt over the segment `origin + t·direction`, t ∈ [t]; `None` when
+    /// the field has no interval evaluation.
+    fn segment_bounds(
+        &self,
+        _origin: [f64; 3],
+        _direction: [f64; 3],
+        _t: Interval,
+    ) -> Option<(Interval, Interval)> {
+        None
+    }
+
+    /// Bounds of Φ over the box `center ± half`; `None` without interval evaluation.
+    fn box_bounds(&self, _center: [f64; 3], _half: [f64; 3]) -> Option<Interval> {
+        None
+    }
+}
+
+/// The core's `f32` evaluation of a blob.
+#[derive(Debug)]
+pub struct CoreField {
+    model: Box<ImplicitModel<f32>>,
+    regions: Vec<Region>,
+}
+
+impl CoreField {
+    /// Loads `blob` into the core (any stored scalar; parameters become `f32`) with the
+    /// regions `regions` (see [`Region::of_network`]).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the core rejects the blob or there is no region.
+    pub fn new(blob: &[u8], regions: Vec<Region>) -> Result<Self> {
+        let model = ImplicitModel::<f32>::from_blob(blob)
+            .map_err(|e| Error::invalid(format!("the core rejects the blob: {e}")))?;
+        check_regions(&regions)?;
+        Ok(CoreField {
+            model: Box::new(model),
+            regions,
+        })
+    }
+}
+
+fn check_regions(regions: &[Region]) -> Result<()> {
+    if regions.is_empty() {
+        return Err(Error::invalid(
+            "the model has no usable leaf normalization box to render in",
+        ));
+    }
+    Ok(())
+}
+
+fn to_f32(p: [f64; 3]) -> [f32; 3] {
+    p.map(|v| v as f32)
+}
+
+impl Field for CoreField {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        f64::from(self.model.field(to_f32(p)))
+    }
+
+    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let fg = self.model.field_gradient(to_f32(p));
+        (f64::from(fg.value), fg.gradient.map(f64::from))
+    }
+
+    fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+
+    fn values(&self, points: &[[f64; 3]], out: &mut [f64]) {
+        let input: Vec<[f32; 3]> = points.iter().map(|&p| to_f32(p)).collect();
+        let mut result = vec![0.0_f32; input.len()];
+        if self.model.field_batch(&input, &mut result).is_ok() {
+            for (o, r) in out.iter_mut().zip(result) {
+                *o = f64::from(r);
+            }
+        }
+    }
+
+    fn value_gradients(&self, points: &[[f64; 3]], out: &mut [(f64, [f64; 3])]) {
+        let input: Vec<[f32; 3]> = points.iter().map(|&p| to_f32(p)).collect();
+        let mut result = vec![Default::default(); input.len()];
+        if self.model.field_gradient_batch(&input, &mut result).is_ok() {
+            for (o, r) in out.iter_mut().zip(result) {
+                *o = (f64::from(r.value), r.gradient.map(f64::from));
+            }
+        }
+    }
+}
+
+/// The trainer's `f64` network, with interval bounds.
+#[derive(Debug)]
+pub struct NetworkField<'a> {
+    network: &'a ImplicitNetwork,
+    regions: Vec<Region>,
+}
+
+impl<'a> NetworkField<'a> {
+    /// The network with its leaf boxes of side `box_size` inflated by `inflate`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when no leaf has a usable box.
+    pub fn new(network: &'a ImplicitNetwork, box_size: f64, inflate: f64) -> Result<Self> {
+        let regions = Region::of_network(network, box_size, inflate);
+        check_regions(&regions)?;
+        Ok(NetworkField { network, regions })
+    }
+}
+
+impl Field for NetworkField<'_> {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        self.network.eval(p).0
+    }
+
+    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        self.network.eval(p)
+    }
+
+    fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+
+    fn segment_bounds(
+        &self,
+        origin: [f64; 3],
+        direction: [f64; 3],
+        t: Interval,
+    ) -> Option<(Interval, Interval)> {
+        Some(interval::segment_bounds(self.network, origin, direction, t))
+    }
+
+    fn box_bounds(&self, center: [f64; 3], half: [f64; 3]) -> Option<Interval> {
+        Some(interval::box_bounds(self.network, center, half))
+    }
+}
+
+/// Φ = s·(r − |x − c|): a sphere of radius r, slope s at the surface, region a cube of side
+/// 2.5·r around it.
+#[derive(Clone, Debug)]
+pub struct SphereField {
+    center: [f64; 3],
+    radius: f64,
+    slope: f64,
+    regions: Vec<Region>,
+}
+
+impl SphereField {
+    /// The sphere; `None` unless radius and slope are positive and everything is finite.
+    pub fn new(center: [f64; 3], radius: f64, slope: f64) -> Option<Self> {
+        let ok = radius > 0.0 && slope > 0.0 && center.iter().all(|c| c.is_finite());
+        let normalization = crate::implicit::Normalization {
+            center,
+            matrix: [
+                [1.0 / radius, 0.0, 0.0],
+                [0.0, 1.0 / radius, 0.0],
+                [0.0, 0.0, 1.0 / radius],
+            ],
+        };
+        let region = Region::new(normalization, 2.0, 1.25)?;
+        ok.then(|| SphereField {
+            center,
+            radius,
+            slope,
+            regions: vec![region],
+        })
+    }
+
+    /// The exact first intersection of a ray (unit `direction`) with the sphere, t ≥ 0.
+    pub fn exact_hit(&self, origin: [f64; 3], direction: [f64; 3]) -> Option<f64> {
+        let oc = sub(origin, self.center);
+        let b = dot(oc, direction);
+        let c = dot(oc, oc) - self.radius * self.radius;
+        let disc = b * b - c;
+        if disc < 0.0 {
+            return None;
+        }
+        let root = disc.sqrt();
+        [-b - root, -b + root].into_iter().find(|&t| t >= 0.0)
+    }
+}
+
+impl Field for SphereField {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        self.slope * (self.radius - norm(sub(p, self.center)))
+    }
+
+    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let d = sub(p, self.center);
+        let r = norm(d);
+        let g = if r > 0.0 {
+            d.map(|v| -self.slope * v / r)
+        } else {
+            [0.0; 3]
+        };
+        (self.slope * (self.radius - r), g)
+    }
+
+    fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+
+    fn segment_bounds(
+        &self,
+        origin: [f64; 3],
+        direction: [f64; 3],
+        t: Interval,
+    ) -> Option<(Interval, Interval)> {
+        // |x(t) − c| over a segment: the endpoints bound the maximum, the closest point of
+        // the segment the minimum.
+        let oc = sub(origin, self.center);
+        let dd = dot(direction, direction);
+        let closest = if dd > 0.0 {
+            -dot(oc, direction) / dd
+        } else {
+            t.lo
+        };
+        let at = |s: f64| norm([0, 1, 2].map(|k| oc[k] + s * direction[k]));
+        let near = at(closest.clamp(t.lo, t.hi));
+        let far = at(t.lo).max(at(t.hi));
+        let speed = dd.sqrt() * self.slope;
+        Some((
+            Interval::new(
+                self.slope * (self.radius - far),
+                self.slope * (self.radius - near),
+            )
+            .widen(interval::ROUNDING_MARGIN),
+            Interval::new(-speed, speed),
+        ))
+    }
+
+    fn box_bounds(&self, center: [f64; 3], half: [f64; 3]) -> Option<Interval> {
+        let gap: [f64; 3] = std::array::from_fn(|k| (center[k] - self.center[k]).abs());
+        let near = norm(std::array::from_fn(|k| (gap[k] - half[k]).max(0.0)));
+        let far = norm(std::array::from_fn(|k| gap[k] + half[k]));
+        Some(
+            Interval::new(
+                self.slope * (self.radius - far),
+                self.slope * (self.radius - near),
+            )
+            .widen(interval::ROUNDING_MARGIN),
+        )
+    }
+}

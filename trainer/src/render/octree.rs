@@ -1,0 +1,230 @@
+//! The octree of §6: the scene's bounding cube subdivided where the surface may be, and the
+//! front-to-back walk of a ray through its leaf voxels.
+//!
+//! Two ways to decide where the surface may be:
+//! - [`Octree::regions`] (the paper's): a voxel is kept while it meets an inflated leaf box
+//!   and split until it is smaller than `ratio` × the smallest box it meets;
+//! - [`Octree::bounded`] (guaranteed): a voxel is kept only if it meets a box *and* the interval
+//!   bound of Φ over it contains 0, split to a fixed depth.
+
+use super::field::Field;
+use super::region::{Aabb, Region, bounds_of};
+
+/// Deepest subdivision accepted.
+pub const MAX_DEPTH: u32 = 10;
+
+#[derive(Clone, Debug)]
+struct Node {
+    bounds: Aabb,
+    /// Kept children (empty for a leaf voxel).
+    children: Vec<u32>,
+}
+
+/// An octree of kept voxels.
+#[derive(Clone, Debug)]
+pub struct Octree {
+    nodes: Vec<Node>,
+    leaves: usize,
+}
+
+impl Octree {
+    /// The paper's octree over `regions`: voxels meeting a region, split while larger than
+    /// `ratio` times the smallest side of the regions they meet (and at most [`MAX_DEPTH`]
+    /// times). `None` without regions.
+    pub fn regions(regions: &[Region], ratio: f64) -> Option<Octree> {
+        let cube = cube_around(&bounds_of(regions)?);
+        Some(Octree::build(cube, &|voxel: &Aabb, depth: u32| {
+            let meeting: Vec<&Region> = regions.iter().filter(|r| r.may_overlap(voxel)).collect();
+            let smallest = meeting
+                .iter()
+                .map(|r| r.smallest_side())
+                .fold(f64::INFINITY, f64::min);
+            if meeting.is_empty() {
+                Decision::Drop
+            } else if depth < MAX_DEPTH && voxel.longest_side() > ratio * smallest {
+                Decision::Split
+            } else {
+                Decision::Leaf
+            }
+        }))
+    }
+
+    /// The guaranteed octree: voxels meeting a region whose interval bound of Φ contains 0,
+    /// split `depth` times. Fields without interval bounds keep every voxel meeting a region.
+    pub fn bounded<F: Field + ?Sized>(field: &F, depth: u32) -> Option<Octree> {
+        let regions = field.regions();
+        let cube = cube_around(&bounds_of(regions)?);
+        let depth = depth.min(MAX_DEPTH);
+        Some(Octree::build(cube, &|voxel: &Aabb, level: u32| {
+            let meets = regions.iter().any(|r| r.may_overlap(voxel));
+            let may_cross = field
+                .box_bounds(voxel.center(), voxel.half())
+                .is_none_or(|b| b.contains_zero());
+            if !(meets && may_cross) {
+                Decision::Drop
+            } else if level < depth {
+                Decision::Split
+            } else {
+                Decision::Leaf
+            }
+        }))
+    }
+
+    fn build(cube: Aabb, decide: &dyn Fn(&Aabb, u32) -> Decision) -> Octree {
+        let mut tree = Octree {
+            nodes: vec![Node {
+                bounds: cube,
+                children: Vec::new(),
+            }],
+            leaves: 0,
+        };
+        match decide(&cube, 0) {
+            Decision::Drop => tree.nodes.clear(),
+            Decision::Leaf => tree.leaves = 1,
+            Decision::Split => tree.split(0, 0, decide),
+        }
+        tree
+    }
+
+    fn split(&mut self, index: usize, depth: u32, decide: &dyn Fn(&Aabb, u32) -> Decision) {
+        let parent = self.nodes[index].bounds;
+        let mid = parent.center();
+        for octant in 0..8 {
+            let pick = |k: usize| octant >> k & 1 == 1;
+            let child = Aabb {
+                lo: std::array::from_fn(|k| if pick(k) { mid[k] } else { parent.lo[k] }),
+                hi: std::array::from_fn(|k| if pick(k) { parent.hi[k] } else { mid[k] }),
+            };
+            let decision = decide(&child, depth + 1);
+            if decision == Decision::Drop {
+                continue;
+            }
+            let id = self.nodes.len();
+            self.nodes.push(Node {
+                bounds: child,
+                children: Vec::new(),
+            });
+            self.nodes[index].children.push(id as u32);
+            match decision {
+                Decision::Split => self.split(id, depth + 1, decide),
+                _ => self.leaves += 1,
+            }
+        }
+        if self.nodes[index].children.is_empty() {
+            // Every child was dropped: the node holds nothing; make it an empty interior node
+            // by giving it no leaf status (walks skip it).
+            self.nodes[index].bounds = Aabb {
+                lo: [f64::NAN; 3],
+                hi: [f64::NAN; 3],
+            };
+        }
+    }
+
+    /// Number of leaf voxels.
+    pub fn leaf_count(&self) -> usize {
+        self.leaves
+    }
+
+    /// The leaf voxels' boxes.
+    pub fn leaf_boxes(&self) -> Vec<Aabb> {
+        self.nodes
+            .iter()
+            .filter(|n| n.children.is_empty() && n.bounds.lo[0].is_finite())
+            .map(|n| n.bounds)
+            .collect()
+    }
+
+    /// Walks the leaf voxels the ray `origin + t·direction` (t ≥ 0) crosses, front to back,
+    /// calling `search(voxel, [t_in, t_out])`; returns the first hit `search` reports. Leaves
+    /// are disjoint, so when `search` only reports hits inside `[t_in, t_out]` the first is
+    /// the nearest.
+    pub fn first_hit(
+        &self,
+        origin: [f64; 3],
+        direction: [f64; 3],
+        search: &mut dyn FnMut(&Aabb, [f64; 2]) -> Option<f64>,
+    ) -> Option<f64> {
+        let root = self.nodes.first()?;
+        let span = root.bounds.ray_span(origin, direction, 0.0)?;
+        self.walk(0, span, origin, direction, search)
+    }
+
+    fn walk(
+        &self,
+        index: usize,
+        span: [f64; 2],
+        origin: [f64; 3],
+        direction: [f64; 3],
+        search: &mut dyn FnMut(&Aabb, [f64; 2]) -> Option<f64>,
+    ) -> Option<f64> {
+        let node = &self.nodes[index];
+        if node.children.is_empty() {
+            return if node.bounds.lo[0].is_finite() {
+                search(&node.bounds, span)
+            } else {
+                None
+            };
+        }
+        let mut order: Vec<(usize, [f64; 2])> = node
+            .children
+            .iter()
+            .filter_map(|&c| {
+                let c = c as usize;
+                self.nodes[c]
+                    .bounds
+                    .ray_span(origin, direction, 0.0)
+                    .map(|s| (c, s))
+            })
+            .collect();
+        order.sort_by(|a, b| a.1[0].total_cmp(&b.1[0]));
+        order
+            .into_iter()
+            .find_map(|(c, s)| self.walk(c, s, origin, direction, search))
+    }
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+enum Decision {
+    Drop,
+    Leaf,
+    Split,
+}
+
+/// The cube sharing `b`'s center whose side is `b`'s longest side.
+fn cube_around(b: &Aabb) -> Aabb {
+    let c = b.center();
+    let h = 0.5 * b.longest_side();
+    Aabb {
+        lo: c.map(|v| v - h),
+        hi: c.map(|v| v + h),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::field::SphereField;
+
+    #[test]
+    fn leaves_cover_the_region_and_walk_in_order() {
+        let sphere = SphereField::new([0.5, 0.0, 0.0], 1.0, 5.0).unwrap();
+        let tree = Octree::regions(sphere.regions(), 0.25).unwrap();
+        assert!(tree.leaf_count() >= 64, "{}", tree.leaf_count());
+        let mut entries = Vec::new();
+        let hit = tree.first_hit([-5.0, 0.1, 0.05], [1.0, 0.0, 0.0], &mut |_, span| {
+            entries.push(span[0]);
+            None
+        });
+        assert!(hit.is_none());
+        assert!(entries.len() >= 4);
+        assert!(entries.windows(2).all(|w| w[0] <= w[1]), "{entries:?}");
+        // Interval pruning keeps only voxels near the sphere: fewer than the regions' tree
+        // at the same depth.
+        let bounded = Octree::bounded(&sphere, 4).unwrap();
+        assert!(
+            bounded.leaf_count() < 8_usize.pow(4) / 2,
+            "{}",
+            bounded.leaf_count()
+        );
+    }
+}
