@@ -46,7 +46,7 @@ pub trait Field: Sync {
         }
     }
 
-    /// Bounds of Φ and dΦ/dt over the segment `origin + t·direction`, t ∈ [t]; `None` when
+    /// Bounds of Φ and dΦ/dt over the segment `origin + t·direction`, t ∈ `t`; `None` when
     /// the field has no interval evaluation.
     fn segment_bounds(
         &self,

@@ -2,7 +2,7 @@
 //! the ray prune segments that cannot hold a crossing, so no sign change of Φ is ever missed.
 //!
 //! A segment [a, b] is processed front to back:
-//! - 0 ∉ [Φ]([a, b]): no zero, dropped;
+//! - 0 ∉ \[Φ\]([a, b]): no zero, dropped;
 //! - 0 ∉ [φ′]([a, b]): φ is monotone, so it has a zero iff φ(a) and φ(b) differ in sign
 //!   (or one is 0); the zero is then refined by regula falsi (Illinois), bisecting when the
 //!   secant leaves the bracket;

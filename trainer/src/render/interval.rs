@@ -2,11 +2,11 @@
 //! ray) over a ray segment or an axis-aligned box.
 //!
 //! Every layer is affine followed by the activation a(H) = 1.7159·tanh(2H/3), which is
-//! monotone, so an interval [H] maps to [a(H.lo), a(H.hi)]; affine maps are bounded in
+//! monotone, so an interval \[H\] maps to [a(H.lo), a(H.hi)]; affine maps are bounded in
 //! center–radius form (center W·m + b, radius |W|·r), which is exact for one layer. The
 //! derivative along the ray is carried as a second interval (forward mode: O′ = a′(H)·H′, with
 //! a′ even and decreasing in |H|). Over a segment the mean-value form
-//! Φ(t_m) + [Φ′]·([t] − t_m) is intersected with the direct bound: it shrinks quadratically
+//! Φ(t_m) + [Φ′]·(\[t\] − t_m) is intersected with the direct bound: it shrinks quadratically
 //! with the segment, where the direct bound suffers from the wrapping effect the paper
 //! complains about (§6).
 //!
@@ -92,7 +92,7 @@ impl Layer {
     };
 }
 
-/// Where the network is bounded: a ray segment `origin + t·direction`, t ∈ [t], or a box.
+/// Where the network is bounded: a ray segment `origin + t·direction`, t ∈ \[t\], or a box.
 #[derive(Copy, Clone, Debug)]
 pub enum Domain {
     /// A segment of a ray.
@@ -121,7 +121,7 @@ fn propagate(network: &ImplicitNetwork, domain: &Domain) -> (Interval, Interval)
 }
 
 /// Bounds of Φ and dΦ/dt over a ray segment (mean-value form intersected with the direct
-/// bound, widened by [`ROUNDING_MARGIN`]). `direction` need not be unit; t ∈ [t].
+/// bound, widened by [`ROUNDING_MARGIN`]). `direction` need not be unit; t ∈ \[t\].
 pub fn segment_bounds(
     network: &ImplicitNetwork,
     origin: [f64; 3],
