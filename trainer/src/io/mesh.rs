@@ -234,7 +234,7 @@ pub(crate) mod tests {
     #[test]
     fn unknown_extensions_are_rejected() {
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("mesh.stl");
+        let path = dir.path().join("mesh.gltf");
         let e = write_mesh(&path, &unit_cube(), None).unwrap_err();
         assert!(matches!(e, Error::InvalidInput(_)), "{e}");
         assert!(!path.exists());
