@@ -18,6 +18,9 @@ use crate::semihosting::HostFile;
 use crate::slot::Slot;
 use crate::stack;
 
+// A request point is a Cao En source point at its widest, and a result fits `stream`'s buffer.
+const _: () = assert!(MAX_ARITY == neurosurf_core::caoen::MAX_SOURCE_DIMENSION);
+
 static BLOB: Slot<[u8; MAX_BLOB_BYTES]> = Slot::new([0; MAX_BLOB_BYTES]);
 static IMPLICIT_F32: Slot<MaybeUninit<ImplicitModel<f32>>> = Slot::new(MaybeUninit::uninit());
 static IMPLICIT_Q16: Slot<MaybeUninit<ImplicitModel<Q16>>> = Slot::new(MaybeUninit::uninit());

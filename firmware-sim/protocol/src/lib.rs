@@ -246,7 +246,7 @@ impl RequestHeader {
             op: Op::from_code(header[6]).ok_or(RequestError::Op(header[6]))?,
             mode: Mode::from_code(header[7]).ok_or(RequestError::Mode(header[7]))?,
             arity: match header[12] {
-                a @ 1..=8 => a,
+                a if a >= 1 && usize::from(a) <= MAX_ARITY => a,
                 other => return Err(RequestError::Arity(other)),
             },
             count: u32::from_le_bytes([header[8], header[9], header[10], header[11]]),

@@ -66,7 +66,7 @@ fn parse_text_points(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
 }
 
 /// Most coordinates of a parameter point (a Cao En network's source dimension).
-pub const MAX_PARAMETERS: usize = 8;
+pub const MAX_PARAMETERS: usize = neurosurf_core::caoen::MAX_SOURCE_DIMENSION;
 
 /// Reads the parameters of a parametric model, one point per line with exactly `arity`
 /// numbers — 1 (t) for curves, 2 (u v) for spline surfaces, m for a Cao En network's source
