@@ -7,8 +7,9 @@
 //!    the anchors and the two inner control points by least squares (chord-length
 //!    parameters).
 //! 3. Q(s, t) = (1−t)·C₀(s) + t·C₁(s) + (1−s)·D₀(t) + s·D₁(t) − the bilinear corner term,
-//!    sampled on a uniform (s, t) grid; each quad is split into two triangles, so the mesh has
-//!    the grid's topology (vertex (i, j) at index j·columns + i).
+//!    sampled on a uniform (s, t) grid; each quad is split into two triangles (diagonals
+//!    mirrored across the middle, so no corner is a one-triangle ear), so the mesh has the
+//!    grid's topology (vertex (i, j) at index j·columns + i).
 
 use nalgebra::{Matrix2, SymmetricEigen, Vector2};
 
@@ -194,8 +195,16 @@ pub fn coons_grid(boundary: &CoonsBoundary, columns: usize, rows: usize) -> Resu
     for j in 0..rows - 1 {
         for i in 0..columns - 1 {
             let v = |i: usize, j: usize| (j * columns + i) as u32;
-            triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
-            triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+            // Diagonals mirror across the middle, so every corner vertex has two triangles
+            // (a one-triangle "ear" at a corner would weld onto a neighbour's ear when
+            // stitching).
+            if (2 * i < columns - 1) == (2 * j < rows - 1) {
+                triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+                triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+            } else {
+                triangles.push([v(i, j), v(i + 1, j), v(i, j + 1)]);
+                triangles.push([v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
+            }
         }
     }
     Ok(PlanarMesh {

@@ -45,6 +45,7 @@ mod embedding;
 mod fit;
 mod folds;
 mod grid;
+mod laplacian;
 mod mesh_graph;
 mod neighbors;
 mod network;
@@ -54,6 +55,7 @@ mod quality;
 mod samples;
 mod sparse;
 mod split;
+mod stitch;
 mod synthesis;
 mod topology;
 mod train;
@@ -71,6 +73,7 @@ pub use folds::{
     COLLAPSE_RATIO, FoldReport, MAX_COLLAPSE_FRACTION, MAX_FLIP_FRACTION, check_flat, fold_report,
 };
 pub use grid::{delaunay_grid, fill_polygon, grid_inside};
+pub use laplacian::cotangent_laplacian;
 pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
 pub use network::{Layer, SurfaceNetwork, SurfacePoint};
@@ -82,6 +85,10 @@ pub use quality::{align_affine, distance_correlation, neighborhood_preservation,
 pub use samples::{SampleSurface, SurfaceSample, sample_surface};
 pub use sparse::{Cholesky, CompressedMatrix, SymmetricMatrix};
 pub use split::{Split, stratified_split};
+pub use stitch::{
+    ANCHOR_WEIGHT, CONSTRAINT_WEIGHT, Seam, Stitched, boundary_seam, face_outward,
+    orient_consistently, signed_volume, stitch,
+};
 pub use synthesis::{SynthesizedSurface, synthesize};
 pub use topology::{Candidate, TopologyOptions, TopologySearch};
 pub use train::{Samples, TrainReport, TrainSettings, mean_square, randomize, train};
