@@ -45,6 +45,7 @@ mod embedding;
 mod fit;
 mod folds;
 mod grid;
+mod hole;
 mod laplacian;
 mod mesh_graph;
 mod neighbors;
@@ -73,6 +74,7 @@ pub use folds::{
     COLLAPSE_RATIO, FoldReport, MAX_COLLAPSE_FRACTION, MAX_FLIP_FRACTION, check_flat, fold_report,
 };
 pub use grid::{delaunay_grid, fill_polygon, grid_inside};
+pub use hole::{HoleFill, HoleOptions, fill_hole, point_triangle_distance, punch_hole};
 pub use laplacian::cotangent_laplacian;
 pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};

@@ -296,3 +296,59 @@ fn stitched_pillow_is_watertight_with_no_seam_gap() {
     assert!((volume - 1.0667).abs() < 0.06, "{volume}");
     assert!(stitched.max_displacement < 2.0 * stitched.gap_before);
 }
+
+#[test]
+fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
+    let Ok(path) = io::data_file("fandisk.obj") else {
+        eprintln!("fandisk.obj not found: skipped");
+        return;
+    };
+    let original = io::read_mesh(&path).unwrap();
+    assert!(edge_report(&original).is_watertight());
+    let (lo, hi) =
+        crate::parametric::fit::bounds(original.positions.iter().map(|p| p.as_slice()), 3);
+    let diagonal = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt();
+    // Measured over seeds 100, 500, …, 6000: 8 of 11 holes filled, all watertight, worst new
+    // vertex 0.0196 from the removed triangles (0.26 % of the 7.62 diagonal); 1500, 2000 and
+    // 4000 lie across sharp creases whose rings fold in the embedding and are refused.
+    for seed in [100u32, 1000, 3500, 6000] {
+        let (holed, removed) = punch_hole(&original, seed, 3).unwrap();
+        let hole = boundary_loops(&holed.triangles).unwrap();
+        assert_eq!(hole.len(), 1);
+        let filled = fill_hole(&holed, &hole[0], &HoleOptions::default()).unwrap();
+        let report = edge_report(&filled.mesh);
+        let worst = filled
+            .new_vertices
+            .iter()
+            .map(|&v| {
+                let p = filled.mesh.positions[v as usize];
+                removed
+                    .iter()
+                    .map(|t| {
+                        let [a, b, c] = t.map(|i| original.positions[i as usize]);
+                        point_triangle_distance(p, a, b, c)
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max);
+        eprintln!(
+            "seed {seed}: {} new vertices, {} new triangles, region {}, {report:?}, worst {worst:.4}",
+            filled.new_vertices.len(),
+            filled.new_triangles,
+            filled.region_vertices
+        );
+        assert!(report.is_watertight(), "{report:?}");
+        assert!(!filled.new_vertices.is_empty());
+        assert!(worst < 0.005 * diagonal, "{worst}");
+    }
+    let (holed, _) = punch_hole(&original, 1500, 3).unwrap();
+    let hole = boundary_loops(&holed.triangles).unwrap();
+    let e = fill_hole(&holed, &hole[0], &HoleOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cannot flatten"), "{e}");
+    let e = fill_hole(&holed, &[0, 1, 2], &HoleOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a boundary loop"), "{e}");
+}
