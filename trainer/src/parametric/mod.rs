@@ -39,6 +39,7 @@
 
 mod activation;
 mod boundary;
+mod compare;
 mod coons;
 mod eigen;
 mod embedding;
@@ -64,6 +65,7 @@ mod weights;
 
 pub use activation::Activation;
 pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
+pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
     Bezier, CoonsBoundary, bezier_point, coons_boundary, coons_grid, coons_point, fit_bezier,
 };
@@ -78,7 +80,7 @@ pub use hole::{HoleFill, HoleOptions, fill_hole, point_triangle_distance, punch_
 pub use laplacian::cotangent_laplacian;
 pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
-pub use network::{Layer, SurfaceNetwork, SurfacePoint};
+pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};
 pub use pipeline::{ReconstructOptions, Reconstruction, Tessellation, reconstruct};
 pub use planar::{
     PlanarMesh, delaunay, distance_to_polygon, inside_polygon, signed_area, triangulate_polygon,

@@ -78,18 +78,22 @@ pub struct SurfacePoint {
 impl SurfacePoint {
     /// The unit normal ∂p/∂u × ∂p/∂v / |…| (zero where the partials are parallel).
     pub fn normal(&self) -> [f64; 3] {
-        let (a, b) = (self.du, self.dv);
-        let n = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        if len > 0.0 {
-            n.map(|c| c / len)
-        } else {
-            [0.0; 3]
-        }
+        unit_cross(self.du, self.dv)
+    }
+}
+
+/// a × b / |a × b| (zero when a and b are parallel).
+pub fn unit_cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    let n = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len > 0.0 {
+        n.map(|c| c / len)
+    } else {
+        [0.0; 3]
     }
 }
 

@@ -352,3 +352,22 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
         .to_string();
     assert!(e.contains("not a boundary loop"), "{e}");
 }
+
+#[test]
+fn comparison_network_is_smoother_than_interpolation() {
+    let rows = compare_methods(SampleSurface::Wavy, 400, 0.01, 5).unwrap();
+    for r in &rows {
+        eprintln!(
+            "{:>9} mse {:.2e} rms-truth {:.4} dihedral var {:.2e} v {} {:.3}s",
+            r.method, r.mse_points, r.rms_truth, r.dihedral_variance, r.vertices, r.seconds
+        );
+    }
+    let get = |m: &str| rows.iter().find(|r| r.method == m).unwrap();
+    let (net, high, tri) = (get("network"), get("rbf-high"), get("delaunay"));
+    assert_eq!(tri.mse_points, 0.0);
+    assert!(
+        net.dihedral_variance < tri.dihedral_variance
+            && net.dihedral_variance < high.dihedral_variance
+    );
+    assert!(net.rms_truth < 0.02);
+}
