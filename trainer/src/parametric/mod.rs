@@ -38,6 +38,7 @@
 //! ```
 
 mod activation;
+mod bench;
 mod boundary;
 mod compare;
 mod coons;
@@ -64,6 +65,9 @@ mod train;
 mod weights;
 
 pub use activation::Activation;
+pub use bench::{
+    BACK_SEED, BENCHMARK_SIZES, BenchmarkRow, PATCH_VERTICES, back_patch_points, benchmark,
+};
 pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{

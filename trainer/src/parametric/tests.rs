@@ -371,3 +371,49 @@ fn comparison_network_is_smoother_than_interpolation() {
     );
     assert!(net.rms_truth < 0.02);
 }
+
+#[test]
+#[ignore = "timing run: cargo test --release -p neurosurf-trainer --lib parametric::tests::benchmark_table -- --ignored --nocapture"]
+fn benchmark_table() {
+    let mesh = io::read_mesh(&io::data_file("stanford-bunny.obj").unwrap()).unwrap();
+    let rows = benchmark(
+        &mesh,
+        BACK_SEED,
+        &BENCHMARK_SIZES,
+        &LleOptions::default(),
+        &TopologyOptions::default(),
+    )
+    .unwrap();
+    eprintln!(
+        "| points | source | embedding (s) | fitting (s) | total (s) | eigen it. | network | rel. RMS |"
+    );
+    for r in rows {
+        eprintln!(
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {} | {}×{} | {:.2e} |",
+            r.points,
+            r.source,
+            r.embedding_seconds,
+            r.fitting_seconds,
+            r.embedding_seconds + r.fitting_seconds,
+            r.eigen_iterations,
+            r.layers,
+            r.neurons,
+            r.relative_rms_error
+        );
+    }
+}
+
+#[test]
+fn bunny_back_patch_flattens() {
+    let Ok(path) = io::data_file("stanford-bunny.obj") else {
+        eprintln!("stanford-bunny.obj not found: skipped");
+        return;
+    };
+    let mesh = io::read_mesh(&path).unwrap();
+    let (points, source) = back_patch_points(&mesh, BACK_SEED, 2_000).unwrap();
+    assert_eq!((points.len(), source), (2_000, "vertices"));
+    let e = embed_points(&points, &LleOptions::default()).unwrap();
+    assert!(e.folds.is_flat(), "{:?}", e.folds);
+    let (samples, source) = back_patch_points(&mesh, BACK_SEED, 12_000).unwrap();
+    assert_eq!((samples.len(), source), (12_000, "samples"));
+}
