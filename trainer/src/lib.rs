@@ -13,6 +13,7 @@ pub mod evaluate;
 pub mod fidelity;
 pub mod implicit;
 pub mod io;
+pub mod parametric;
 pub mod plot;
 pub mod points;
 pub mod rbf;

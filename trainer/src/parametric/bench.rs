@@ -1,0 +1,157 @@
+//! The timing benchmark of Table 2: embedding and fitting time against the number of points,
+//! on a patch of the Stanford bunny.
+//!
+//! The scan is closed except for holes at the bottom and cannot be flattened whole, so the
+//! points come from one patch on the bunny's back: the [`PATCH_VERTICES`] vertices nearest
+//! (Euclidean) to the seed vertex [`BACK_SEED`]. A row of n ≤ [`PATCH_VERTICES`] points uses
+//! the n vertices nearest to the seed; a larger n (the 35 947 of the whole scan) samples n
+//! points uniformly by area on the patch's triangles, since more vertices than the patch has
+//! would reach round the body.
+
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::embedding::{LleOptions, embed_points};
+use super::fit::fit_network;
+use super::topology::TopologyOptions;
+use crate::error::{Error, Result};
+use crate::io::Mesh;
+
+/// Point counts of the benchmark (Table 2's plus the bunny's vertex count).
+pub const BENCHMARK_SIZES: [usize; 4] = [100, 1_000, 10_000, 35_947];
+/// Vertices of the back patch.
+pub const PATCH_VERTICES: usize = 10_000;
+/// The seed vertex on the bunny's back (`stanford-bunny.obj` indexing): 12 676, the rearmost
+/// vertex (largest x). Its 10 000-vertex patch embeds with 0.1 % flipped neighbour pairs; the
+/// extreme vertices in the other five axis directions (ears, face, feet) give patches that
+/// fold.
+pub const BACK_SEED: u32 = 12_676;
+
+/// One size.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BenchmarkRow {
+    /// Points embedded and fitted.
+    pub points: usize,
+    /// `"vertices"` or `"samples"` (see the module docs).
+    pub source: &'static str,
+    /// LLE time (s).
+    pub embedding_seconds: f64,
+    /// Topology search and training time (s).
+    pub fitting_seconds: f64,
+    /// Eigen-solver iterations.
+    pub eigen_iterations: usize,
+    /// Chosen hidden layers.
+    pub layers: usize,
+    /// Chosen neurons per layer.
+    pub neurons: usize,
+    /// RMS fitting error over the bounding-box diagonal.
+    pub relative_rms_error: f64,
+}
+
+/// `count` points of the bunny's back patch around vertex `seed` (see the module docs).
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the mesh has fewer than [`PATCH_VERTICES`] vertices or `seed`
+/// is out of range.
+pub fn back_patch_points(
+    mesh: &Mesh,
+    seed: u32,
+    count: usize,
+) -> Result<(Vec<[f64; 3]>, &'static str)> {
+    let n = mesh.positions.len();
+    if (seed as usize) >= n || n < PATCH_VERTICES {
+        return Err(Error::invalid(format!(
+            "the benchmark needs a mesh of at least {PATCH_VERTICES} vertices and a seed below {n}"
+        )));
+    }
+    let s = mesh.positions[seed as usize];
+    let d2 = |p: &[f64; 3]| (p[0] - s[0]).powi(2) + (p[1] - s[1]).powi(2) + (p[2] - s[2]).powi(2);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| d2(&mesh.positions[a]).total_cmp(&d2(&mesh.positions[b])));
+    if count <= PATCH_VERTICES {
+        return Ok((
+            order[..count].iter().map(|&i| mesh.positions[i]).collect(),
+            "vertices",
+        ));
+    }
+    let mut inside = vec![false; n];
+    for &i in &order[..PATCH_VERTICES] {
+        inside[i] = true;
+    }
+    let triangles: Vec<[[f64; 3]; 3]> = mesh
+        .triangles
+        .iter()
+        .filter(|t| t.iter().all(|&v| inside[v as usize]))
+        .map(|t| t.map(|v| mesh.positions[v as usize]))
+        .collect();
+    let area = |t: &[[f64; 3]; 3]| {
+        let (u, v) = (
+            [0, 1, 2].map(|k| t[1][k] - t[0][k]),
+            [0, 1, 2].map(|k| t[2][k] - t[0][k]),
+        );
+        let c = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+    };
+    let mut cumulative = Vec::with_capacity(triangles.len());
+    let mut total = 0.0;
+    for t in &triangles {
+        total += area(t);
+        cumulative.push(total);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(35_947);
+    let points = (0..count)
+        .map(|_| {
+            let k = cumulative
+                .partition_point(|&c| c < rng.random::<f64>() * total)
+                .min(triangles.len() - 1);
+            let (mut a, mut b) = (rng.random::<f64>(), rng.random::<f64>());
+            if a + b > 1.0 {
+                (a, b) = (1.0 - a, 1.0 - b);
+            }
+            let t = &triangles[k];
+            std::array::from_fn(|c| t[0][c] + a * (t[1][c] - t[0][c]) + b * (t[2][c] - t[0][c]))
+        })
+        .collect();
+    Ok((points, "samples"))
+}
+
+/// Times embedding and fitting for each size.
+///
+/// # Errors
+/// Any error of [`back_patch_points`], [`embed_points`] or [`fit_network`].
+pub fn benchmark(
+    mesh: &Mesh,
+    seed: u32,
+    sizes: &[usize],
+    embedding: &LleOptions,
+    topology: &TopologyOptions,
+) -> Result<Vec<BenchmarkRow>> {
+    let mut rows = Vec::new();
+    for &size in sizes {
+        let (points, source) = back_patch_points(mesh, seed, size)?;
+        let start = Instant::now();
+        let lle = embed_points(&points, embedding)?;
+        let embedding_seconds = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let fit = fit_network(&points, &lle.parameters, topology)?;
+        let fitting_seconds = start.elapsed().as_secs_f64();
+        let best = fit.search.best();
+        rows.push(BenchmarkRow {
+            points: size,
+            source,
+            embedding_seconds,
+            fitting_seconds,
+            eigen_iterations: lle.iterations,
+            layers: best.layers,
+            neurons: best.neurons,
+            relative_rms_error: fit.relative_rms_error,
+        });
+    }
+    Ok(rows)
+}

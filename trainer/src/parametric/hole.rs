@@ -1,0 +1,273 @@
+//! Hole filling (§7.3): the vertices around a hole are embedded with one-ring LLE (§4.2), a
+//! network is trained on them alone, new vertices are placed on a grid inside the hole's
+//! boundary in the parameter plane, the boundary and the new vertices are triangulated by
+//! constrained Delaunay there, and the new vertices go through the network. The boundary
+//! keeps its vertices, so the filled mesh is watertight when the rest of it was.
+//!
+//! The region is every vertex within [`HoleOptions::rings`] edges of the hole boundary. The
+//! grid step in the parameter plane is the mean parameter-plane length of the region's
+//! edges, so the new triangles match the surrounding mesh density.
+
+use std::collections::VecDeque;
+
+use super::embedding::{LleOptions, embed_mesh};
+use super::fit::{SurfaceFit, fit_network};
+use super::grid::grid_inside;
+use super::mesh_graph::{boundary_loops, one_rings};
+use super::planar::triangulate_polygon;
+use super::topology::TopologyOptions;
+use crate::error::{Error, Result};
+use crate::io::Mesh;
+
+/// Hole-filling settings.
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct HoleOptions {
+    /// Rings of vertices around the hole that train the network (4).
+    pub rings: usize,
+    /// Embedding (its `neighbors` is unused: one-rings are the neighbourhoods).
+    pub embedding: LleOptions,
+    /// Regression.
+    pub topology: TopologyOptions,
+}
+
+impl Default for HoleOptions {
+    fn default() -> Self {
+        HoleOptions {
+            rings: 4,
+            embedding: LleOptions::default(),
+            topology: TopologyOptions::default(),
+        }
+    }
+}
+
+/// A filled hole.
+#[derive(Clone, Debug)]
+pub struct HoleFill {
+    /// The mesh with the hole closed.
+    pub mesh: Mesh,
+    /// Indices of the vertices created inside the hole.
+    pub new_vertices: Vec<u32>,
+    /// Triangles added.
+    pub new_triangles: usize,
+    /// Vertices that trained the network.
+    pub region_vertices: usize,
+    /// The network fitted to the region.
+    pub fit: SurfaceFit,
+}
+
+/// Fills the hole bounded by `hole` (a boundary loop of `mesh`, as [`boundary_loops`]
+/// returns it).
+///
+/// # Errors
+/// [`Error::InvalidInput`] when `hole` is not a boundary loop of the mesh, the region is too
+/// small, the embedding fails or folds, or the hole's boundary is not a simple polygon in the
+/// parameter plane.
+pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<HoleFill> {
+    let loops = boundary_loops(&mesh.triangles)?;
+    if hole.len() < 3 || !loops.iter().any(|l| same_cycle(l, hole)) {
+        return Err(Error::invalid(
+            "the hole is not a boundary loop of the mesh",
+        ));
+    }
+    let n = mesh.positions.len();
+    let rings = one_rings(n, &mesh.triangles);
+    let depth = ring_depths(&rings, hole, options.rings);
+    let mut local = vec![u32::MAX; n];
+    let mut region = Mesh::default();
+    for v in 0..n {
+        if depth[v] != usize::MAX {
+            local[v] = region.positions.len() as u32;
+            region.positions.push(mesh.positions[v]);
+        }
+    }
+    region.triangles = mesh
+        .triangles
+        .iter()
+        .filter(|t| t.iter().all(|&v| local[v as usize] != u32::MAX))
+        .map(|t| t.map(|v| local[v as usize]))
+        .collect();
+    // Drop region vertices that belong to no region triangle (reached only through an edge).
+    let used = one_rings(region.positions.len(), &region.triangles);
+    if used.iter().any(Vec::is_empty) {
+        let keep: Vec<bool> = used.iter().map(|r| !r.is_empty()).collect();
+        let mut remap = vec![u32::MAX; region.positions.len()];
+        let mut positions = Vec::new();
+        for (i, &k) in keep.iter().enumerate() {
+            if k {
+                remap[i] = positions.len() as u32;
+                positions.push(region.positions[i]);
+            }
+        }
+        for l in local.iter_mut().filter(|l| **l != u32::MAX) {
+            *l = remap[*l as usize];
+        }
+        region.positions = positions;
+        region.triangles = region
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| remap[v as usize]))
+            .collect();
+    }
+    if hole.iter().any(|&v| local[v as usize] == u32::MAX) {
+        return Err(Error::invalid(
+            "a hole vertex belongs to no triangle of the region",
+        ));
+    }
+    let embedding = embed_mesh(&region, &options.embedding)?;
+    let fit = fit_network(&region.positions, &embedding.parameters, &options.topology)?;
+    let uv = &embedding.parameters;
+    let polygon: Vec<[f64; 2]> = hole
+        .iter()
+        .map(|&v| uv[local[v as usize] as usize])
+        .collect();
+    let mut total = 0.0;
+    let mut count = 0usize;
+    for t in &region.triangles {
+        for e in 0..3 {
+            let (a, b) = (uv[t[e] as usize], uv[t[(e + 1) % 3] as usize]);
+            total += ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+            count += 1;
+        }
+    }
+    let step = total / count.max(1) as f64;
+    let interior = grid_inside(&polygon, step);
+    let planar = triangulate_polygon(&polygon, &interior)?;
+
+    let m = hole.len();
+    let mut out = mesh.clone();
+    let base = out.positions.len() as u32;
+    let mut new_vertices = Vec::with_capacity(interior.len());
+    for (k, p) in interior.iter().enumerate() {
+        out.positions.push(fit.network.position(p[0], p[1]));
+        new_vertices.push(base + k as u32);
+    }
+    let to_mesh = |i: u32| -> u32 {
+        if (i as usize) < m {
+            hole[i as usize]
+        } else {
+            base + (i - m as u32)
+        }
+    };
+    let mut fill: Vec<[u32; 3]> = planar.triangles.iter().map(|t| t.map(to_mesh)).collect();
+    // The mesh traverses hole[0] → hole[1]; the fill must traverse it the other way.
+    let directed = |t: &[u32; 3], a: u32, b: u32| (0..3).any(|e| t[e] == a && t[(e + 1) % 3] == b);
+    let mesh_forward = mesh.triangles.iter().any(|t| directed(t, hole[0], hole[1]));
+    let fill_forward = fill.iter().any(|t| directed(t, hole[0], hole[1]));
+    if mesh_forward == fill_forward {
+        for t in fill.iter_mut() {
+            t.swap(1, 2);
+        }
+    }
+    let new_triangles = fill.len();
+    out.triangles.extend(fill);
+    Ok(HoleFill {
+        mesh: out,
+        new_vertices,
+        new_triangles,
+        region_vertices: region.positions.len(),
+        fit,
+    })
+}
+
+/// Edge hops from the nearest of `sources`, up to `max` (usize::MAX beyond).
+fn ring_depths(rings: &[Vec<usize>], sources: &[u32], max: usize) -> Vec<usize> {
+    let mut depth = vec![usize::MAX; rings.len()];
+    let mut queue = VecDeque::new();
+    for &v in sources {
+        depth[v as usize] = 0;
+        queue.push_back(v as usize);
+    }
+    while let Some(v) = queue.pop_front() {
+        if depth[v] >= max {
+            continue;
+        }
+        for &w in &rings[v] {
+            if depth[w] == usize::MAX {
+                depth[w] = depth[v] + 1;
+                queue.push_back(w);
+            }
+        }
+    }
+    depth
+}
+
+/// Whether two vertex lists are the same cycle (any rotation, either direction).
+fn same_cycle(a: &[u32], b: &[u32]) -> bool {
+    if a.len() != b.len() || a.is_empty() {
+        return false;
+    }
+    let Some(start) = a.iter().position(|&v| v == b[0]) else {
+        return false;
+    };
+    let m = a.len();
+    (0..m).all(|k| a[(start + k) % m] == b[k]) || (0..m).all(|k| a[(start + m - k) % m] == b[k])
+}
+
+/// Removes every triangle with a vertex within `rings` edges of `seed` (for tests and
+/// demonstrations), returning the holed mesh (same vertices) and the removed triangles.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when `seed` is not a vertex.
+pub fn punch_hole(mesh: &Mesh, seed: u32, rings: usize) -> Result<(Mesh, Vec<[u32; 3]>)> {
+    let n = mesh.positions.len();
+    if seed as usize >= n {
+        return Err(Error::invalid(format!("vertex {seed} does not exist")));
+    }
+    let depth = ring_depths(&one_rings(n, &mesh.triangles), &[seed], rings);
+    let (removed, kept): (Vec<[u32; 3]>, Vec<[u32; 3]>) = mesh
+        .triangles
+        .iter()
+        .partition(|t| t.iter().any(|&v| depth[v as usize] < rings));
+    Ok((
+        Mesh {
+            positions: mesh.positions.clone(),
+            triangles: kept,
+        },
+        removed,
+    ))
+}
+
+/// Distance from `p` to triangle (a, b, c) (Ericson's closest-point regions).
+pub fn point_triangle_distance(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
+    let (d1, d2) = (dot(ab, ap), dot(ac, ap));
+    let at = |v: f64, w: f64| -> [f64; 3] { std::array::from_fn(|k| a[k] + v * ab[k] + w * ac[k]) };
+    let closest = if d1 <= 0.0 && d2 <= 0.0 {
+        a
+    } else {
+        let bp = sub(p, b);
+        let (d3, d4) = (dot(ab, bp), dot(ac, bp));
+        if d3 >= 0.0 && d4 <= d3 {
+            b
+        } else {
+            let vc = d1 * d4 - d3 * d2;
+            if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+                at(d1 / (d1 - d3), 0.0)
+            } else {
+                let cp = sub(p, c);
+                let (d5, d6) = (dot(ab, cp), dot(ac, cp));
+                if d6 >= 0.0 && d5 <= d6 {
+                    c
+                } else {
+                    let vb = d5 * d2 - d1 * d6;
+                    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+                        at(0.0, d2 / (d2 - d6))
+                    } else {
+                        let va = d3 * d6 - d5 * d4;
+                        if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+                            let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+                            std::array::from_fn(|k| b[k] + w * (c[k] - b[k]))
+                        } else {
+                            let denom = 1.0 / (va + vb + vc);
+                            at(vb * denom, vc * denom)
+                        }
+                    }
+                }
+            }
+        }
+    };
+    let d = sub(p, closest);
+    dot(d, d).sqrt()
+}

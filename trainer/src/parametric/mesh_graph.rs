@@ -1,0 +1,127 @@
+//! Connectivity of triangle meshes: one-rings (the mesh variant of LLE, §4.2), edge use
+//! counts, boundary loops and the watertightness test every stitched or filled mesh must pass.
+
+use std::collections::HashMap;
+
+use crate::error::{Error, Result};
+use crate::io::Mesh;
+
+/// The one-ring neighbours of every vertex (vertices sharing an edge), sorted.
+pub fn one_rings(vertex_count: usize, triangles: &[[u32; 3]]) -> Vec<Vec<usize>> {
+    let mut rings = vec![Vec::new(); vertex_count];
+    for t in triangles {
+        for e in 0..3 {
+            let (a, b) = (t[e] as usize, t[(e + 1) % 3] as usize);
+            if a < vertex_count && b < vertex_count {
+                rings[a].push(b);
+                rings[b].push(a);
+            }
+        }
+    }
+    for r in rings.iter_mut() {
+        r.sort_unstable();
+        r.dedup();
+    }
+    rings
+}
+
+/// How many triangles use each undirected edge (keys with the smaller index first).
+pub fn edge_uses(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), usize> {
+    let mut uses = HashMap::new();
+    for t in triangles {
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    uses
+}
+
+/// Edge statistics of a mesh: the watertightness test.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct EdgeReport {
+    /// Undirected edges.
+    pub edges: usize,
+    /// Edges used by exactly one triangle (holes, open boundaries).
+    pub boundary: usize,
+    /// Edges used by three or more triangles.
+    pub non_manifold: usize,
+    /// Directed edges used twice in the same direction (inconsistent orientation).
+    pub misoriented: usize,
+}
+
+impl EdgeReport {
+    /// Every edge shared by exactly two triangles, consistently oriented.
+    pub fn is_watertight(&self) -> bool {
+        self.boundary == 0 && self.non_manifold == 0 && self.misoriented == 0 && self.edges > 0
+    }
+}
+
+/// Counts boundary, non-manifold and misoriented edges of `mesh`.
+pub fn edge_report(mesh: &Mesh) -> EdgeReport {
+    let uses = edge_uses(&mesh.triangles);
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    for t in &mesh.triangles {
+        for e in 0..3 {
+            *directed.entry((t[e], t[(e + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    EdgeReport {
+        edges: uses.len(),
+        boundary: uses.values().filter(|&&u| u == 1).count(),
+        non_manifold: uses.values().filter(|&&u| u > 2).count(),
+        misoriented: directed.values().filter(|&&u| u > 1).count(),
+    }
+}
+
+/// The boundary loops of a mesh: closed vertex cycles along edges used by one triangle, each
+/// in the direction the triangles traverse them (so the mesh lies to the left).
+///
+/// # Errors
+/// [`Error::InvalidInput`] when a boundary vertex has more than one outgoing boundary edge
+/// (the boundary is not a set of simple loops).
+pub fn boundary_loops(triangles: &[[u32; 3]]) -> Result<Vec<Vec<u32>>> {
+    let uses = edge_uses(triangles);
+    let mut next: HashMap<u32, u32> = HashMap::new();
+    for t in triangles {
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            if uses.get(&(a.min(b), a.max(b))) == Some(&1) && next.insert(a, b).is_some() {
+                return Err(Error::invalid(format!(
+                    "vertex {a} has two outgoing boundary edges: the boundary is not simple"
+                )));
+            }
+        }
+    }
+    let mut starts: Vec<u32> = next.keys().copied().collect();
+    starts.sort_unstable();
+    let mut seen = std::collections::HashSet::new();
+    let mut loops = Vec::new();
+    for s in starts {
+        if seen.contains(&s) {
+            continue;
+        }
+        let mut cycle = vec![s];
+        seen.insert(s);
+        let mut v = s;
+        loop {
+            let Some(&w) = next.get(&v) else {
+                return Err(Error::invalid(format!(
+                    "the boundary through vertex {v} is open"
+                )));
+            };
+            if w == s {
+                break;
+            }
+            if !seen.insert(w) {
+                return Err(Error::invalid(format!(
+                    "the boundary revisits vertex {w}: not a simple loop"
+                )));
+            }
+            cycle.push(w);
+            v = w;
+        }
+        loops.push(cycle);
+    }
+    Ok(loops)
+}

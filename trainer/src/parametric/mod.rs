@@ -1,0 +1,106 @@
+//! Parametric surfaces from unstructured points (Yumer & Kara 2012): a locally linear
+//! embedding flattens the points to (u, v), a small multilayer network learns (u, v) → (x, y,
+//! z), and a grid in the parameter plane pushed through the network is the surface.
+//!
+//! The pipeline, one file per step:
+//!
+//! 1. **Embedding** (§4, `embedding`): k nearest neighbours from a `kiddo` k-d tree
+//!    (`neighbors`, which also rejects duplicate and collinear input), reconstruction weights
+//!    with a regularized local Gram matrix (`weights`), the sparse M = (I − W)ᵀ(I − W) and its
+//!    2nd and 3rd smallest eigenvectors by shift-and-invert subspace iteration on a `faer`
+//!    sparse Cholesky (`eigen`, `sparse`); [`embed_mesh`] uses mesh one-rings instead (§4.2).
+//!    `folds` rejects embeddings that fold or collapse; `quality` scores one against a known
+//!    parameterization.
+//! 2. **Regression** (§5.1–5.2): [`SurfaceNetwork`] (`network`: the exact forward formula, the
+//!    `f64` reference with ∂p/∂u, ∂p/∂v and the normal) with the four activations
+//!    (`activation`); the stratified 85/10/5 split (`split`); Levenberg–Marquardt with early
+//!    stopping (`train`); the topology search (`topology`); [`fit_network`] (`fit`) ties them.
+//! 3. **Tessellation** (§5.3): the boundary loop of the parameter points (`boundary`, a carved
+//!    Delaunay triangulation), the Coons quad grid between four Bézier sides (`coons`) or the
+//!    resampled loop filled with grid points and triangulated by constrained Delaunay (`grid`,
+//!    `planar` on `spade`). **Synthesis** (§5.4, `synthesis`): the grid through the network.
+//!    [`reconstruct`] (`pipeline`) runs 1–3.
+//!
+//! `samples` makes test surfaces with known parameters.
+//!
+//! Crates: `kiddo` (k-d tree, k-NN), `faer` (sparse Cholesky with AMD ordering; no dense n × n
+//! matrix is ever formed), `spade` (Delaunay and constrained Delaunay with exact predicates).
+//!
+//! ```
+//! use neurosurf_trainer::parametric::{
+//!     ReconstructOptions, SampleSurface, reconstruct, sample_surface,
+//! };
+//! let sample = sample_surface(SampleSurface::Wavy, 400, 0.0, 3)?;
+//! let result = reconstruct(&sample.points, &ReconstructOptions::default())?;
+//! assert_eq!(result.surface.mesh.vertex_count(), 30 * 30);
+//! assert!(result.fit.relative_rms_error < 0.02);
+//! # Ok::<(), neurosurf_trainer::Error>(())
+//! ```
+
+mod activation;
+mod bench;
+mod boundary;
+mod compare;
+mod coons;
+mod eigen;
+mod embedding;
+mod fit;
+mod folds;
+mod grid;
+mod hole;
+mod laplacian;
+mod mesh_graph;
+mod neighbors;
+mod network;
+mod pipeline;
+mod planar;
+mod quality;
+mod samples;
+mod sparse;
+mod split;
+mod stitch;
+mod synthesis;
+mod topology;
+mod train;
+mod weights;
+
+pub use activation::Activation;
+pub use bench::{
+    BACK_SEED, BENCHMARK_SIZES, BenchmarkRow, PATCH_VERTICES, back_patch_points, benchmark,
+};
+pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
+pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
+pub use coons::{
+    Bezier, CoonsBoundary, bezier_point, coons_boundary, coons_grid, coons_point, fit_bezier,
+};
+pub use eigen::{Eigenpairs, MAX_EIGEN_ITERATIONS, smallest_nonconstant};
+pub use embedding::{Embedding, LleOptions, embed_mesh, embed_points, embed_with_neighbors};
+pub use fit::{MIN_FIT_POINTS, SurfaceFit, fit_network};
+pub use folds::{
+    COLLAPSE_RATIO, FoldReport, MAX_COLLAPSE_FRACTION, MAX_FLIP_FRACTION, check_flat, fold_report,
+};
+pub use grid::{delaunay_grid, fill_polygon, grid_inside};
+pub use hole::{HoleFill, HoleOptions, fill_hole, point_triangle_distance, punch_hole};
+pub use laplacian::cotangent_laplacian;
+pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
+pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
+pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};
+pub use pipeline::{ReconstructOptions, Reconstruction, Tessellation, reconstruct};
+pub use planar::{
+    PlanarMesh, delaunay, distance_to_polygon, inside_polygon, signed_area, triangulate_polygon,
+};
+pub use quality::{align_affine, distance_correlation, neighborhood_preservation, pearson};
+pub use samples::{SampleSurface, SurfaceSample, sample_surface};
+pub use sparse::{Cholesky, CompressedMatrix, SymmetricMatrix};
+pub use split::{Split, stratified_split};
+pub use stitch::{
+    ANCHOR_WEIGHT, CONSTRAINT_WEIGHT, Seam, Stitched, boundary_seam, face_outward,
+    orient_consistently, signed_volume, stitch,
+};
+pub use synthesis::{SynthesizedSurface, synthesize};
+pub use topology::{Candidate, TopologyOptions, TopologySearch};
+pub use train::{Samples, TrainReport, TrainSettings, mean_square, randomize, train};
+pub use weights::{embedding_matrix, reconstruction_weights};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,194 @@
+//! Network topology search, §5.2: grow the hidden layers and neurons until the test error
+//! converges, then keep the best configuration.
+//!
+//! For n_L = 1 … [`TopologyOptions::max_layers`] hidden layers (each of n_N neurons), n_N grows
+//! from 1; each configuration is trained by Levenberg–Marquardt until the validation error
+//! converges ([`super::train`], best of [`TopologyOptions::restarts`] random starts by
+//! validation error) and its test error P_T recorded. n_N stops growing when P_T has not
+//! improved by more than [`TopologyOptions::tolerance`] (relative) for
+//! [`TopologyOptions::patience`] consecutive steps, when it is below
+//! [`TopologyOptions::floor`] (an exact fit), or at [`TopologyOptions::max_neurons`].
+//!
+//! The paper reports "the configuration with the best P_T"; test errors within `tolerance`
+//! of the best (or below `floor`) are treated as ties and the tie with the fewest weights
+//! wins, so a plane is not given a big network for a 10⁻¹² gain. Errors are normalized MSEs
+//! (see [`super::SurfaceNetwork`]).
+//!
+//! Large sets: candidates are trained on a stratified subsample of at most
+//! [`TopologyOptions::max_search_points`] training points (the networks have at most a few
+//! hundred weights, so a couple of thousand points determine them), and the chosen network is
+//! then refined on the whole training set.
+
+use super::activation::Activation;
+use super::network::SurfaceNetwork;
+use super::split::Split;
+use super::train::{Samples, TrainSettings, mean_square, randomize, train};
+
+/// Search settings.
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TopologyOptions {
+    /// Hidden activation (tan-sig).
+    pub activation: Activation,
+    /// n_Lmax (2).
+    pub max_layers: usize,
+    /// Largest n_N tried (12).
+    pub max_neurons: usize,
+    /// Random starts per configuration (2).
+    pub restarts: usize,
+    /// Relative P_T improvement that counts as progress (0.1).
+    pub tolerance: f64,
+    /// Non-improving steps before P_T counts as converged (2).
+    pub patience: usize,
+    /// P_T below this normalized MSE is an exact fit (10⁻⁶: an RMS of 0.1 % of the
+    /// half-extent s_p per coordinate).
+    pub floor: f64,
+    /// Training points used per candidate (2 000).
+    pub max_search_points: usize,
+    /// LM settings.
+    pub train: TrainSettings,
+    /// Seed of the initial weights.
+    pub seed: u64,
+}
+
+impl Default for TopologyOptions {
+    fn default() -> Self {
+        TopologyOptions {
+            activation: Activation::TanSig,
+            max_layers: 2,
+            max_neurons: 12,
+            restarts: 2,
+            tolerance: 0.1,
+            patience: 2,
+            floor: 1e-6,
+            max_search_points: 2000,
+            train: TrainSettings::default(),
+            seed: 1,
+        }
+    }
+}
+
+/// One trained configuration.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Candidate {
+    /// n_L.
+    pub layers: usize,
+    /// n_N per hidden layer.
+    pub neurons: usize,
+    /// Weights and biases.
+    pub parameters: usize,
+    /// Training MSE (normalized).
+    pub training_mse: f64,
+    /// Validation MSE (normalized).
+    pub validation_mse: f64,
+    /// Test MSE P_T (normalized).
+    pub test_mse: f64,
+    /// LM steps of the kept start.
+    pub iterations: usize,
+}
+
+/// Every configuration tried and the one chosen.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct TopologySearch {
+    /// In the order tried.
+    pub candidates: Vec<Candidate>,
+    /// Index of the chosen one in `candidates`.
+    pub chosen: usize,
+}
+
+impl TopologySearch {
+    /// The chosen configuration.
+    pub fn best(&self) -> &Candidate {
+        &self.candidates[self.chosen]
+    }
+}
+
+/// Runs the search on normalized samples; `template` carries the normalization. `None` when no
+/// configuration could be built.
+pub(crate) fn search(
+    template: &SurfaceNetwork,
+    samples: &Samples,
+    split: &Split,
+    search_training: &[usize],
+    options: &TopologyOptions,
+) -> Option<(SurfaceNetwork, TopologySearch)> {
+    let mut candidates = Vec::new();
+    let mut networks = Vec::new();
+    let mut seed = options.seed;
+    for layers in 1..=options.max_layers.max(1) {
+        let mut best_pt = f64::INFINITY;
+        let mut stale = 0;
+        for neurons in 1..=options.max_neurons.max(1) {
+            let hidden = vec![neurons; layers];
+            let mut kept: Option<(SurfaceNetwork, f64, usize, f64)> = None;
+            for _ in 0..options.restarts.max(1) {
+                seed = seed.wrapping_add(0x9e37_79b9);
+                let Ok(mut net) = SurfaceNetwork::zeros(
+                    &hidden,
+                    options.activation,
+                    template.input_center,
+                    template.input_scale,
+                    template.output_center,
+                    template.output_scale,
+                ) else {
+                    continue;
+                };
+                randomize(&mut net, seed);
+                let report = train(
+                    &mut net,
+                    samples,
+                    search_training,
+                    &split.validation,
+                    &options.train,
+                );
+                if kept.as_ref().is_none_or(|k| report.validation_mse < k.1) {
+                    kept = Some((
+                        net,
+                        report.validation_mse,
+                        report.iterations,
+                        report.training_mse,
+                    ));
+                }
+            }
+            let Some((net, validation_mse, iterations, training_mse)) = kept else {
+                continue;
+            };
+            let test_mse = mean_square(&net, samples, &split.test);
+            candidates.push(Candidate {
+                layers,
+                neurons,
+                parameters: net.parameter_count(),
+                training_mse,
+                validation_mse,
+                test_mse,
+                iterations,
+            });
+            networks.push(net);
+            if test_mse < best_pt * (1.0 - options.tolerance) && best_pt > options.floor {
+                stale = 0;
+            } else {
+                stale += 1;
+            }
+            best_pt = best_pt.min(test_mse);
+            if stale >= options.patience || best_pt <= options.floor && stale > 0 {
+                break;
+            }
+        }
+    }
+    let clamp = |e: f64| e.max(options.floor);
+    let best = candidates
+        .iter()
+        .map(|c| clamp(c.test_mse))
+        .fold(f64::INFINITY, f64::min);
+    let chosen = candidates
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| clamp(c.test_mse) <= best * (1.0 + options.tolerance))
+        .min_by_key(|(_, c)| c.parameters)
+        .map(|(i, _)| i)
+        .unwrap_or(0);
+    if chosen >= networks.len() {
+        return None;
+    }
+    let network = networks.swap_remove(chosen);
+    Some((network, TopologySearch { candidates, chosen }))
+}

@@ -1,0 +1,296 @@
+//! Levenberg–Marquardt training of one [`SurfaceNetwork`] with early stopping on the
+//! validation set (§5.2 step 3: "train until the validation performance converges").
+//!
+//! The residuals are the 3·N normalized coordinate errors y(xᵢ) − tᵢ of the training points;
+//! J's rows come from one forward pass and three backward passes per point and are multiplied
+//! into JᵀJ a block at a time by the implicit trainer's [`NormalEquations`] (AVX2/FMA SYRK).
+//! Each step solves (JᵀJ + μI)Δ = −Jᵀe by dense Cholesky (the networks have at most a few
+//! hundred weights); μ is divided by 10 after a step that lowers the training error and
+//! multiplied by 10 otherwise (MATLAB's `trainlm`, which the paper used). After every
+//! accepted step the validation error is measured; training stops after
+//! [`TrainSettings::max_fail`] steps without a new best, and the best-validation weights are
+//! kept.
+
+use nalgebra::{DMatrix, DVector};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::network::SurfaceNetwork;
+use crate::implicit::NormalEquations;
+
+/// Levenberg–Marquardt settings.
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TrainSettings {
+    /// Iteration cap (accepted steps) (100).
+    pub max_iterations: usize,
+    /// Stop after this many accepted steps without a better validation error (6).
+    pub max_fail: usize,
+    /// Initial damping μ (10⁻³).
+    pub mu0: f64,
+    /// Give up when μ exceeds this (10¹⁰).
+    pub mu_max: f64,
+    /// Stop when the training MSE (normalized units) falls below this (10⁻¹⁴).
+    pub goal: f64,
+    /// Relative validation gain below which a step counts as a failure (10⁻²).
+    pub min_gain: f64,
+}
+
+impl Default for TrainSettings {
+    fn default() -> Self {
+        TrainSettings {
+            max_iterations: 100,
+            max_fail: 6,
+            mu0: 1e-3,
+            mu_max: 1e10,
+            goal: 1e-14,
+            min_gain: 1e-2,
+        }
+    }
+}
+
+/// What one training run did; errors are mean squares per coordinate in normalized units
+/// (divide by s_p² to undo, see [`SurfaceNetwork`]).
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize)]
+pub struct TrainReport {
+    /// Accepted LM steps.
+    pub iterations: usize,
+    /// Training MSE of the kept weights.
+    pub training_mse: f64,
+    /// Validation MSE of the kept weights.
+    pub validation_mse: f64,
+}
+
+/// Normalized training pairs.
+#[derive(Clone, Debug)]
+pub struct Samples {
+    /// x⁰ of each point.
+    pub inputs: Vec<[f64; 2]>,
+    /// y targets of each point.
+    pub targets: Vec<[f64; 3]>,
+}
+
+/// Random initial weights: U(−1, 1) for hidden layers (inputs lie in [−1, 1]), U(−0.5, 0.5)
+/// for the output layer.
+pub fn randomize(network: &mut SurfaceNetwork, seed: u64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let last = network.layers.len() - 1;
+    for (li, l) in network.layers.iter_mut().enumerate() {
+        let scale = if li == last { 0.5 } else { 1.0 };
+        for w in l.weights.iter_mut().chain(l.biases.iter_mut()) {
+            *w = scale * (2.0 * rng.random::<f64>() - 1.0);
+        }
+    }
+}
+
+/// Mean squared coordinate error of `network` over the listed samples (0 for none).
+pub fn mean_square(network: &SurfaceNetwork, samples: &Samples, indices: &[usize]) -> f64 {
+    if indices.is_empty() {
+        return 0.0;
+    }
+    let sum: f64 = indices
+        .iter()
+        .map(|&i| {
+            let y = network.forward_normalized(samples.inputs[i]);
+            (0..3)
+                .map(|a| (y[a] - samples.targets[i][a]).powi(2))
+                .sum::<f64>()
+        })
+        .sum();
+    sum / (3 * indices.len()) as f64
+}
+
+/// Trains `network` in place on `training`, stopping early on `validation` (see the module
+/// docs). An empty validation set falls back to the training error.
+pub fn train(
+    network: &mut SurfaceNetwork,
+    samples: &Samples,
+    training: &[usize],
+    validation: &[usize],
+    settings: &TrainSettings,
+) -> TrainReport {
+    let p = network.parameter_count();
+    let mut params = network.parameters();
+    let mut normal = NormalEquations::new(p);
+    let stride = normal.stride();
+    let validation = if validation.is_empty() {
+        training
+    } else {
+        validation
+    };
+    let mut train_error = mean_square(network, samples, training);
+    let mut best = (
+        mean_square(network, samples, validation),
+        params.clone(),
+        train_error,
+    );
+    let mut mu = settings.mu0;
+    let mut fails = 0;
+    let mut iterations = 0;
+    let mut trial = network.clone();
+    let mut scratch = Backprop::new(network);
+    while iterations < settings.max_iterations
+        && train_error > settings.goal
+        && fails < settings.max_fail
+    {
+        normal.clear();
+        for chunk in training.chunks(NormalEquations::MAX_ROWS / 3) {
+            let (rows, residuals) = normal.rows_mut(3 * chunk.len());
+            for (c, &i) in chunk.iter().enumerate() {
+                scratch.rows(
+                    network,
+                    samples.inputs[i],
+                    samples.targets[i],
+                    &mut rows[3 * c * stride..3 * (c + 1) * stride],
+                    stride,
+                    &mut residuals[3 * c..3 * c + 3],
+                );
+            }
+        }
+        normal.finish();
+        let gram = DMatrix::from_fn(p, p, |i, j| normal.gram(i, j));
+        let gradient = DVector::from_fn(p, |i, _| normal.gradient(i));
+        let mut accepted = false;
+        while mu <= settings.mu_max {
+            let mut system = gram.clone();
+            for i in 0..p {
+                system[(i, i)] += mu;
+            }
+            let Some(ch) = system.cholesky() else {
+                mu *= 10.0;
+                continue;
+            };
+            let step = ch.solve(&(-&gradient));
+            let candidate: Vec<f64> = params.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            if trial.set_parameters(&candidate).is_err() {
+                break;
+            }
+            let error = mean_square(&trial, samples, training);
+            if error.is_finite() && error < train_error {
+                params = candidate;
+                std::mem::swap(network, &mut trial);
+                train_error = error;
+                mu = (mu / 10.0).max(1e-20);
+                accepted = true;
+                break;
+            }
+            mu *= 10.0;
+        }
+        if !accepted {
+            break;
+        }
+        iterations += 1;
+        let validation_error = mean_square(network, samples, validation);
+        // A new best resets the count only when it is a real gain: a validation error that
+        // creeps down by less than `min_gain` per step has converged.
+        if validation_error < best.0 * (1.0 - settings.min_gain) {
+            fails = 0;
+        } else {
+            fails += 1;
+        }
+        if validation_error < best.0 {
+            best = (validation_error, params.clone(), train_error);
+        }
+    }
+    // Keep the best-validation weights (the count always matches).
+    let _ = network.set_parameters(&best.1);
+    TrainReport {
+        iterations,
+        training_mse: best.2,
+        validation_mse: best.0,
+    }
+}
+
+/// Per-layer buffers of one forward/backward pass.
+struct Backprop {
+    activations: Vec<Vec<f64>>,
+    pre: Vec<Vec<f64>>,
+    offsets: Vec<usize>,
+}
+
+impl Backprop {
+    fn new(network: &SurfaceNetwork) -> Self {
+        let mut offsets = Vec::new();
+        let mut at = 0;
+        for l in &network.layers {
+            offsets.push(at);
+            at += l.parameter_count();
+        }
+        Backprop {
+            activations: network.layers.iter().map(|l| vec![0.0; l.inputs]).collect(),
+            pre: network
+                .layers
+                .iter()
+                .map(|l| vec![0.0; l.outputs])
+                .collect(),
+            offsets,
+        }
+    }
+
+    /// Writes the three Jacobian rows (∂yₖ/∂params, stride apart) and residuals yₖ − tₖ.
+    fn rows(
+        &mut self,
+        network: &SurfaceNetwork,
+        input: [f64; 2],
+        target: [f64; 3],
+        rows: &mut [f64],
+        stride: usize,
+        residuals: &mut [f64],
+    ) {
+        let last = network.layers.len() - 1;
+        self.activations[0].copy_from_slice(&input);
+        let mut output = [0.0; 3];
+        for (li, l) in network.layers.iter().enumerate() {
+            for o in 0..l.outputs {
+                let row = &l.weights[o * l.inputs..(o + 1) * l.inputs];
+                let z = l.biases[o]
+                    + row
+                        .iter()
+                        .zip(&self.activations[li])
+                        .map(|(w, x)| w * x)
+                        .sum::<f64>();
+                self.pre[li][o] = z;
+                if li < last {
+                    self.activations[li + 1][o] = network.activation.value(z);
+                } else {
+                    output[o] = z;
+                }
+            }
+        }
+        for k in 0..3 {
+            residuals[k] = output[k] - target[k];
+            let row = &mut rows[k * stride..(k + 1) * stride];
+            row.fill(0.0);
+            let mut delta = vec![0.0; 3];
+            delta[k] = 1.0;
+            for li in (0..=last).rev() {
+                let l = &network.layers[li];
+                if li < last {
+                    for (o, d) in delta.iter_mut().enumerate() {
+                        *d *= network.activation.derivative(self.pre[li][o]);
+                    }
+                }
+                let base = self.offsets[li];
+                let x = &self.activations[li];
+                for (o, &d) in delta.iter().enumerate() {
+                    if d == 0.0 {
+                        continue;
+                    }
+                    let w = &mut row[base + o * l.inputs..base + (o + 1) * l.inputs];
+                    for (wi, &xi) in w.iter_mut().zip(x) {
+                        *wi = d * xi;
+                    }
+                    row[base + l.weights.len() + o] = d;
+                }
+                if li > 0 {
+                    let mut previous = vec![0.0; l.inputs];
+                    for (o, &d) in delta.iter().enumerate() {
+                        for (i, pv) in previous.iter_mut().enumerate() {
+                            *pv += l.weights[o * l.inputs + i] * d;
+                        }
+                    }
+                    delta = previous;
+                }
+            }
+        }
+    }
+}
