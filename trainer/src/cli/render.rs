@@ -34,6 +34,10 @@ pub struct Args {
     /// Rays per pixel (a square number; the paper casts 4).
     #[arg(long, default_value_t = 4)]
     aa: u32,
+    /// Cast every pixel's sub-pixel rays; by default only pixels at edges and creases get
+    /// them (one ray elsewhere).
+    #[arg(long)]
+    full_aa: bool,
     /// Never miss a crossing: interval bounds through the module tree, in f64 (slower).
     /// Without it, the paper's punctual Newton search runs on the core in f32.
     #[arg(long)]
@@ -113,6 +117,7 @@ pub fn run(args: &Args) -> Result<()> {
             Method::Punctual
         },
         samples: args.aa,
+        adaptive: !args.full_aa,
         ..RenderOptions::default()
     };
     let bar = progress::work_bar("render", "tiles", args.json);
@@ -141,12 +146,13 @@ pub fn run(args: &Args) -> Result<()> {
         });
     }
     println!(
-        "wrote {} ({}×{}, {} rays/pixel, {:?} search on the {evaluation}): {} of {} rays hit, \
-         {} voxels, {:.3} s",
+        "wrote {} ({}×{}, {} rays/pixel in {} pixels, {:?} search on the {evaluation}): {} of \
+         {} rays hit, {} voxels, {:.3} s",
         args.out.display(),
         stats.width,
         stats.height,
         stats.samples,
+        stats.supersampled,
         stats.method,
         stats.hits,
         stats.rays,

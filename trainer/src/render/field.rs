@@ -87,6 +87,9 @@ impl CoreField {
     }
 }
 
+/// Points per call of the core's batch API.
+const BATCH: usize = neurosurf_core::implicit::LANES;
+
 fn check_regions(regions: &[Region]) -> Result<()> {
     if regions.is_empty() {
         return Err(Error::invalid(
@@ -115,11 +118,21 @@ impl Field for CoreField {
     }
 
     fn values(&self, points: &[[f64; 3]], out: &mut [f64]) {
-        let input: Vec<[f32; 3]> = points.iter().map(|&p| to_f32(p)).collect();
-        let mut result = vec![0.0_f32; input.len()];
-        if self.model.field_batch(&input, &mut result).is_ok() {
-            for (o, r) in out.iter_mut().zip(result) {
-                *o = f64::from(r);
+        for (points, out) in points.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            let mut input = [[0.0_f32; 3]; BATCH];
+            let mut result = [0.0_f32; BATCH];
+            let n = points.len().min(out.len());
+            for (i, p) in input.iter_mut().zip(points) {
+                *i = to_f32(*p);
+            }
+            if self
+                .model
+                .field_batch(&input[..n], &mut result[..n])
+                .is_ok()
+            {
+                for (o, r) in out.iter_mut().zip(result) {
+                    *o = f64::from(r);
+                }
             }
         }
     }

@@ -4,8 +4,12 @@
 //! Two ways to decide where the surface may be:
 //! - [`Octree::regions`] (the paper's): a voxel is kept while it meets an inflated leaf box
 //!   and split until it is smaller than `ratio` × the smallest box it meets;
+//!   [`Octree::regions_probed`] also drops leaf voxels where samples of Φ stay away from 0
+//!   (the punctual renderer's tree: rays then skip empty space);
 //! - [`Octree::bounded`] (guaranteed): a voxel is kept only if it meets a box *and* the interval
 //!   bound of Φ over it contains 0, split to a fixed depth.
+
+use rayon::prelude::*;
 
 use super::field::Field;
 use super::region::{Aabb, Region, bounds_of};
@@ -47,6 +51,30 @@ impl Octree {
                 Decision::Leaf
             }
         }))
+    }
+
+    /// [`Octree::regions`] without the voxels the surface does not seem to cross: Φ is
+    /// sampled on a [`PROBE_GRID`]³ grid over each leaf voxel (the core's batches, voxels in
+    /// parallel), and a voxel is kept when the samples change sign or when the smallest |Φ|
+    /// is within [`PROBE_REACH`] grid steps of zero at the largest change of Φ between
+    /// neighbouring samples. Like the punctual search this may miss surface thinner than a grid
+    /// step; the guaranteed octree never does.
+    pub fn regions_probed<F: Field + ?Sized>(field: &F, ratio: f64) -> Option<Octree> {
+        let mut tree = Octree::regions(field.regions(), ratio)?;
+        let leaves: Vec<usize> = (0..tree.nodes.len())
+            .filter(|&i| {
+                tree.nodes[i].children.is_empty() && tree.nodes[i].bounds.lo[0].is_finite()
+            })
+            .collect();
+        let dropped: Vec<usize> = leaves
+            .into_par_iter()
+            .filter(|&i| !may_hold_surface(field, &tree.nodes[i].bounds))
+            .collect();
+        for i in dropped {
+            tree.nodes[i].bounds = EMPTY;
+            tree.leaves -= 1;
+        }
+        Some(tree)
     }
 
     /// The guaranteed octree: voxels meeting a region whose interval bound of Φ contains 0,
@@ -113,10 +141,7 @@ impl Octree {
         if self.nodes[index].children.is_empty() {
             // Every child was dropped: the node holds nothing; make it an empty interior node
             // by giving it no leaf status (walks skip it).
-            self.nodes[index].bounds = Aabb {
-                lo: [f64::NAN; 3],
-                hi: [f64::NAN; 3],
-            };
+            self.nodes[index].bounds = EMPTY;
         }
     }
 
@@ -138,25 +163,25 @@ impl Octree {
     /// calling `search(voxel, [t_in, t_out])`; returns the first hit `search` reports. Leaves
     /// are disjoint, so when `search` only reports hits inside `[t_in, t_out]` the first is
     /// the nearest.
-    pub fn first_hit(
+    pub fn first_hit<T>(
         &self,
         origin: [f64; 3],
         direction: [f64; 3],
-        search: &mut dyn FnMut(&Aabb, [f64; 2]) -> Option<f64>,
-    ) -> Option<f64> {
+        search: &mut dyn FnMut(&Aabb, [f64; 2]) -> Option<T>,
+    ) -> Option<T> {
         let root = self.nodes.first()?;
         let span = root.bounds.ray_span(origin, direction, 0.0)?;
         self.walk(0, span, origin, direction, search)
     }
 
-    fn walk(
+    fn walk<T>(
         &self,
         index: usize,
         span: [f64; 2],
         origin: [f64; 3],
         direction: [f64; 3],
-        search: &mut dyn FnMut(&Aabb, [f64; 2]) -> Option<f64>,
-    ) -> Option<f64> {
+        search: &mut dyn FnMut(&Aabb, [f64; 2]) -> Option<T>,
+    ) -> Option<T> {
         let node = &self.nodes[index];
         if node.children.is_empty() {
             return if node.bounds.lo[0].is_finite() {
@@ -165,22 +190,73 @@ impl Octree {
                 None
             };
         }
-        let mut order: Vec<(usize, [f64; 2])> = node
-            .children
-            .iter()
-            .filter_map(|&c| {
-                let c = c as usize;
-                self.nodes[c]
-                    .bounds
-                    .ray_span(origin, direction, 0.0)
-                    .map(|s| (c, s))
-            })
-            .collect();
-        order.sort_by(|a, b| a.1[0].total_cmp(&b.1[0]));
+        // At most 8 children: sorted by entry on the stack, no allocation per ray.
+        let mut order = [(0_usize, [0.0_f64; 2]); 8];
+        let mut count = 0;
+        for &c in &node.children {
+            let c = c as usize;
+            if let Some(s) = self.nodes[c].bounds.ray_span(origin, direction, 0.0)
+                && let Some(slot) = order.get_mut(count)
+            {
+                *slot = (c, s);
+                count += 1;
+            }
+        }
+        let order = &mut order[..count];
+        order.sort_unstable_by(|a, b| a.1[0].total_cmp(&b.1[0]));
         order
-            .into_iter()
-            .find_map(|(c, s)| self.walk(c, s, origin, direction, search))
+            .iter()
+            .find_map(|&(c, s)| self.walk(c, s, origin, direction, search))
     }
+}
+
+/// Samples per axis of a voxel's probe grid ([`Octree::regions_probed`]).
+pub const PROBE_GRID: usize = 4;
+/// How many grid steps away from zero a probed voxel may be and still be kept.
+pub const PROBE_REACH: f64 = 1.5;
+
+/// The bounds of a node that holds nothing (walks skip it).
+const EMPTY: Aabb = Aabb {
+    lo: [f64::NAN; 3],
+    hi: [f64::NAN; 3],
+};
+
+/// Whether Φ sampled over `voxel` changes sign or comes within reach of zero.
+fn may_hold_surface<F: Field + ?Sized>(field: &F, voxel: &Aabb) -> bool {
+    const G: usize = PROBE_GRID;
+    let at =
+        |k: usize, i: usize| voxel.lo[k] + (voxel.hi[k] - voxel.lo[k]) * i as f64 / (G - 1) as f64;
+    let points: Vec<[f64; 3]> = (0..G * G * G)
+        .map(|i| [at(0, i % G), at(1, i / G % G), at(2, i / (G * G))])
+        .collect();
+    let mut phi = vec![f64::NAN; points.len()];
+    field.values(&points, &mut phi);
+    if phi.iter().any(|v| !v.is_finite()) {
+        return true;
+    }
+    let (lo, hi) = phi
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    if lo <= 0.0 && hi >= 0.0 {
+        return true;
+    }
+    let mut largest_step = 0.0_f64;
+    for i in 0..phi.len() {
+        for stride in [1, G, G * G] {
+            let neighbour = i + stride;
+            let same_line = match stride {
+                1 => i % G + 1 < G,
+                s if s == G => i / G % G + 1 < G,
+                _ => neighbour < phi.len(),
+            };
+            if same_line {
+                largest_step = largest_step.max((phi[i] - phi[neighbour]).abs());
+            }
+        }
+    }
+    lo.abs().min(hi.abs()) <= PROBE_REACH * largest_step
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -213,7 +289,7 @@ mod tests {
         let mut entries = Vec::new();
         let hit = tree.first_hit([-5.0, 0.1, 0.05], [1.0, 0.0, 0.0], &mut |_, span| {
             entries.push(span[0]);
-            None
+            None::<f64>
         });
         assert!(hit.is_none());
         assert!(entries.len() >= 4);

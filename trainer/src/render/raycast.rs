@@ -16,7 +16,7 @@ use super::interval::Interval;
 use super::octree::Octree;
 use super::punctual;
 use super::shade::{Shading, to_srgb8};
-use crate::curve::vector::{add, scale};
+use crate::curve::vector::{add, dot, scale};
 use crate::error::{Error, Result};
 
 /// Side of the square image tiles rendered in parallel.
@@ -41,9 +41,15 @@ pub struct RenderOptions {
     pub method: Method,
     /// Rays per pixel on a square sub-pixel grid: 1, 4 (the paper's), 9, …
     pub samples: u32,
+    /// Cast the sub-pixel rays only where the image changes (see [`render`]); `false` casts
+    /// them through every pixel.
+    pub adaptive: bool,
     /// Punctual octree: voxels are split while larger than this fraction of the smallest
     /// leaf box they meet.
     pub voxel_ratio: f64,
+    /// Punctual octree: drop the voxels where samples of Φ stay away from zero
+    /// ([`Octree::regions_probed`]), so rays skip empty space.
+    pub probe: bool,
     /// Guaranteed octree: subdivision depth of the interval-pruned voxels.
     pub bounded_depth: u32,
     /// Colours and lights.
@@ -55,7 +61,9 @@ impl Default for RenderOptions {
         RenderOptions {
             method: Method::Punctual,
             samples: 4,
+            adaptive: true,
             voxel_ratio: 0.25,
+            probe: true,
             bounded_depth: 5,
             shading: Shading::default(),
         }
@@ -70,6 +78,7 @@ pub struct Tracer<'a, F: ?Sized> {
     method: Method,
     tolerance: f64,
     min_length: f64,
+    size: f64,
 }
 
 impl<'a, F: Field + ?Sized> Tracer<'a, F> {
@@ -98,6 +107,7 @@ impl<'a, F: Field + ?Sized> Tracer<'a, F> {
             )));
         }
         let octree = match method {
+            Method::Punctual if options.probe => Octree::regions_probed(field, options.voxel_ratio),
             Method::Punctual => Octree::regions(field.regions(), options.voxel_ratio),
             Method::Guaranteed => Octree::bounded(field, options.bounded_depth),
         }
@@ -111,6 +121,7 @@ impl<'a, F: Field + ?Sized> Tracer<'a, F> {
             method,
             tolerance: 1e-6 * size,
             min_length: 1e-5 * size,
+            size,
         })
     }
 
@@ -122,32 +133,41 @@ impl<'a, F: Field + ?Sized> Tracer<'a, F> {
     /// The ray parameter of the first surface point along `origin + t·direction` (unit
     /// direction, t ≥ 0), or `None`.
     pub fn hit(&self, origin: [f64; 3], direction: [f64; 3]) -> Option<f64> {
+        self.hit_gradient(origin, direction).map(|(t, _)| t)
+    }
+
+    /// [`Tracer::hit`] with ∇Φ at the hit (from the punctual search's last Newton step, which
+    /// lies within the tolerance of the hit; evaluated at the hit by the guaranteed search).
+    pub fn hit_gradient(&self, origin: [f64; 3], direction: [f64; 3]) -> Option<(f64, [f64; 3])> {
         let field = self.field;
-        let mut search = |voxel: &super::region::Aabb, span: [f64; 2]| match self.method {
-            Method::Punctual => {
-                punctual::newton_in_voxel(field, origin, direction, voxel, span, self.tolerance)
-            }
+        match self.method {
+            Method::Punctual => self.octree.first_hit(origin, direction, &mut |_, span| {
+                punctual::newton_in_voxel(field, origin, direction, span, self.tolerance)
+            }),
             Method::Guaranteed => {
-                // Only the part of the voxel inside a region is searched.
-                field
-                    .regions()
-                    .iter()
-                    .filter_map(|r| r.ray_span(origin, direction, span[0]))
-                    .filter_map(|[a, b]| (a <= span[1]).then_some([a, b.min(span[1])]))
-                    .filter_map(|s| {
-                        guaranteed::first_root(
-                            field,
-                            origin,
-                            direction,
-                            s,
-                            self.min_length,
-                            self.tolerance,
-                        )
-                    })
-                    .min_by(f64::total_cmp)
+                let mut search = |_: &super::region::Aabb, span: [f64; 2]| {
+                    // Only the part of the voxel inside a region is searched.
+                    field
+                        .regions()
+                        .iter()
+                        .filter_map(|r| r.ray_span(origin, direction, span[0]))
+                        .filter_map(|[a, b]| (a <= span[1]).then_some([a, b.min(span[1])]))
+                        .filter_map(|s| {
+                            guaranteed::first_root(
+                                field,
+                                origin,
+                                direction,
+                                s,
+                                self.min_length,
+                                self.tolerance,
+                            )
+                        })
+                        .min_by(f64::total_cmp)
+                        .map(|t| (t, field.value_gradient(add(origin, scale(direction, t))).1))
+                };
+                self.octree.first_hit(origin, direction, &mut search)
             }
-        };
-        self.octree.first_hit(origin, direction, &mut search)
+        }
     }
 }
 
@@ -166,6 +186,8 @@ pub struct RenderStats {
     pub rays: u64,
     /// Rays that hit the surface.
     pub hits: u64,
+    /// Pixels that got every sub-pixel ray (all of them unless adaptive).
+    pub supersampled: u64,
     /// Leaf voxels of the octree.
     pub voxels: usize,
     /// Wall time, seconds (octree included).
@@ -181,8 +203,30 @@ pub struct Rendered {
     pub stats: RenderStats,
 }
 
+/// Depth difference, as a fraction of the scene's size, above which two neighbouring pixel
+/// centres are on different parts of the surface (an occlusion edge).
+pub const EDGE_DEPTH: f64 = 0.01;
+/// Cosine of the angle between neighbouring centres' normals above which the shading is
+/// smooth enough for one ray (about 8°).
+pub const EDGE_COSINE: f64 = 0.99;
+
+/// What the ray through one point of the image found.
+#[derive(Copy, Clone, Debug)]
+struct Sample {
+    /// Ray parameter and ∇Φ of the hit.
+    hit: Option<(f64, [f64; 3])>,
+    /// Linear colour.
+    colour: [f64; 3],
+}
+
 /// Renders `field` seen by `camera`. `progress(done, total)` is called after every tile
 /// (from worker threads).
+///
+/// Anti-aliasing: every pixel gets `samples` rays on a square sub-pixel grid (the paper's 4).
+/// With `adaptive` (the default), one ray first goes through every pixel centre, and only
+/// pixels whose 3 × 3 neighbourhood changes — hit against miss, a depth jump above
+/// [`EDGE_DEPTH`] of the scene, normals further apart than [`EDGE_COSINE`] — get the sub-pixel
+/// rays; elsewhere the shading is smooth and the centre's colour stands for the pixel's mean.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for a rays-per-pixel count that is not a square in
@@ -203,44 +247,82 @@ pub fn render<F: Field + ?Sized>(
     }
     let tracer = Tracer::new(field, options.method, options)?;
     let (width, height) = (camera.width, camera.height);
+    let (right, up) = (camera.right(), camera.up());
+    let shading = &options.shading;
+    let rays = AtomicU64::new(0);
+    let hits = AtomicU64::new(0);
+    let trace = |x: f64, y: f64| {
+        let (o, d) = camera.ray(x, y);
+        rays.fetch_add(1, Ordering::Relaxed);
+        match tracer.hit_gradient(o, d) {
+            Some((t, g)) => {
+                hits.fetch_add(1, Ordering::Relaxed);
+                Sample {
+                    hit: Some((t, g)),
+                    colour: shading.shade(g, d, right, up),
+                }
+            }
+            None => Sample {
+                hit: None,
+                colour: shading.background,
+            },
+        }
+    };
+    let adaptive = options.adaptive && options.samples > 1;
+    let centres: Vec<Sample> = if adaptive {
+        (0..width as usize * height as usize)
+            .into_par_iter()
+            .map(|i| {
+                let (x, y) = (i % width as usize, i / width as usize);
+                trace(x as f64 + 0.5, y as f64 + 0.5)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let depth_jump = EDGE_DEPTH * tracer.size;
+    let smooth = |x: u32, y: u32| -> Option<[f64; 3]> {
+        let at = |x: u32, y: u32| centres.get(y as usize * width as usize + x as usize);
+        let centre = at(x, y)?;
+        let neighbours = (y.saturating_sub(1)..=(y + 1).min(height - 1))
+            .flat_map(|ny| (x.saturating_sub(1)..=(x + 1).min(width - 1)).map(move |nx| (nx, ny)));
+        for (nx, ny) in neighbours {
+            let other = at(nx, ny)?;
+            if !similar(centre.hit, other.hit, depth_jump) {
+                return None;
+            }
+        }
+        Some(centre.colour)
+    };
     let tiles_x = width.div_ceil(TILE);
     let tiles_y = height.div_ceil(TILE);
     let total = u64::from(tiles_x) * u64::from(tiles_y);
     let done = AtomicU64::new(0);
-    let hits = AtomicU64::new(0);
-    let (right, up) = (camera.right(), camera.up());
-    let shading = &options.shading;
+    let supersampled = AtomicU64::new(0);
     let tiles: Vec<(u32, u32, Vec<[u8; 3]>)> = (0..total)
         .into_par_iter()
         .map(|index| {
             let tx = (index % u64::from(tiles_x)) as u32 * TILE;
             let ty = (index / u64::from(tiles_x)) as u32 * TILE;
             let mut pixels = Vec::with_capacity((TILE * TILE) as usize);
-            let mut tile_hits = 0;
             for y in ty..(ty + TILE).min(height) {
                 for x in tx..(tx + TILE).min(width) {
-                    let mut sum = [0.0; 3];
-                    for s in 0..options.samples {
-                        let (sx, sy) = (f64::from(s % k) + 0.5, f64::from(s / k) + 0.5);
-                        let (o, d) = camera.ray(
-                            f64::from(x) + sx / f64::from(k),
-                            f64::from(y) + sy / f64::from(k),
-                        );
-                        let colour = match tracer.hit(o, d) {
-                            Some(t) => {
-                                tile_hits += 1;
-                                let (_, g) = field.value_gradient(add(o, scale(d, t)));
-                                shading.shade(g, d, right, up)
-                            }
-                            None => shading.background,
-                        };
-                        sum = [0, 1, 2].map(|c| sum[c] + colour[c]);
-                    }
-                    let n = f64::from(options.samples);
-                    pixels.push(sum.map(|c| to_srgb8(c / n)));
+                    let colour = smooth(x, y).unwrap_or_else(|| {
+                        supersampled.fetch_add(1, Ordering::Relaxed);
+                        let mut sum = [0.0; 3];
+                        for s in 0..options.samples {
+                            let (sx, sy) = (f64::from(s % k) + 0.5, f64::from(s / k) + 0.5);
+                            let sample = trace(
+                                f64::from(x) + sx / f64::from(k),
+                                f64::from(y) + sy / f64::from(k),
+                            );
+                            sum = [0, 1, 2].map(|c| sum[c] + sample.colour[c]);
+                        }
+                        sum.map(|c| c / f64::from(options.samples))
+                    });
+                    pixels.push(colour.map(to_srgb8));
                 }
             }
-            hits.fetch_add(tile_hits, Ordering::Relaxed);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             (tx, ty, pixels)
         })
@@ -260,12 +342,25 @@ pub fn render<F: Field + ?Sized>(
             width,
             height,
             samples: options.samples,
-            rays: u64::from(width) * u64::from(height) * u64::from(options.samples),
+            rays: rays.into_inner(),
             hits: hits.into_inner(),
+            supersampled: supersampled.into_inner(),
             voxels: tracer.voxel_count(),
             seconds: start.elapsed().as_secs_f64(),
         },
     })
+}
+
+/// Whether two neighbouring pixel centres see the same smooth part of the scene.
+fn similar(a: Option<(f64, [f64; 3])>, b: Option<(f64, [f64; 3])>, depth_jump: f64) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some((ta, ga)), Some((tb, gb))) => {
+            let lengths = (dot(ga, ga) * dot(gb, gb)).sqrt();
+            (ta - tb).abs() <= depth_jump && dot(ga, gb) >= EDGE_COSINE * lengths
+        }
+        _ => false,
+    }
 }
 
 /// The ray parameter of the first hit through every pixel center (row-major), in parallel.

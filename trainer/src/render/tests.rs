@@ -184,9 +184,33 @@ fn png_of_the_torus_decodes() {
     let regions = Region::of_network(&trained.network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE);
     let field = CoreField::new(&blob, regions).unwrap();
     let camera = camera_for(&field, 64, View::default());
+    let full_options = RenderOptions {
+        adaptive: false,
+        ..RenderOptions::default()
+    };
+    let full = render(&field, &camera, &full_options, &|_, _| {}).unwrap();
+    assert_eq!(full.stats.rays, 64 * 64 * 4);
+    assert_eq!(full.stats.supersampled, 64 * 64);
+    assert!(full.stats.hits > 1000, "{:?}", full.stats);
+    // Adaptive: a ray per centre, the 4 sub-pixel rays only at edges; the picture differs
+    // from the full one only where the centre stands for a smooth pixel.
     let rendered = render(&field, &camera, &RenderOptions::default(), &|_, _| {}).unwrap();
-    assert_eq!(rendered.stats.rays, 64 * 64 * 4);
-    assert!(rendered.stats.hits > 1000, "{:?}", rendered.stats);
+    let stats = &rendered.stats;
+    assert_eq!(stats.rays, 64 * 64 + 4 * stats.supersampled, "{stats:?}");
+    assert!(
+        stats.supersampled > 100 && stats.supersampled < 64 * 64 / 2,
+        "{stats:?}"
+    );
+    let differences: Vec<i32> = full
+        .image
+        .as_raw()
+        .iter()
+        .zip(rendered.image.as_raw())
+        .map(|(&a, &b)| (i32::from(a) - i32::from(b)).abs())
+        .collect();
+    let mean = differences.iter().sum::<i32>() as f64 / differences.len() as f64;
+    let worst = differences.iter().max().copied().unwrap_or(0);
+    assert!(mean < 0.5 && worst <= 12, "mean {mean}, worst {worst}");
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("torus.png");
     write_png(&path, &rendered.image).unwrap();
