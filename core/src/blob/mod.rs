@@ -71,6 +71,9 @@ pub enum ModelKind {
     /// A Cao En surface (Wyvill, Cao & Trotman): a two-layer network mapping a sphere, torus or
     /// hypersphere to a surface, see [`crate::caoen::CaoEnModel`].
     CaoEn,
+    /// A parametric surface network (Yumer & Kara): a multilayer perceptron (u, v) → (x, y, z),
+    /// see [`crate::parametric::SurfaceNetworkModel`].
+    SurfaceNetwork,
 }
 
 impl ModelKind {
@@ -82,6 +85,7 @@ impl ModelKind {
             ModelKind::Curve => 3,
             ModelKind::SplineSurface => 4,
             ModelKind::CaoEn => 5,
+            ModelKind::SurfaceNetwork => 6,
         }
     }
 
@@ -93,6 +97,7 @@ impl ModelKind {
             3 => Some(ModelKind::Curve),
             4 => Some(ModelKind::SplineSurface),
             5 => Some(ModelKind::CaoEn),
+            6 => Some(ModelKind::SurfaceNetwork),
             _ => None,
         }
     }
@@ -105,6 +110,7 @@ impl ModelKind {
             ModelKind::Curve => "curve",
             ModelKind::SplineSurface => "spline-surface",
             ModelKind::CaoEn => "cao-en",
+            ModelKind::SurfaceNetwork => "surface-network",
         }
     }
 }
