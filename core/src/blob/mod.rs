@@ -40,7 +40,8 @@ mod words;
 
 pub use crc32::crc32;
 pub(crate) use loader::loader_methods;
-pub(crate) use words::{check_storage, decode_word, stored_value};
+pub use words::stored_value;
+pub(crate) use words::{check_storage, decode_word};
 
 pub use crate::error::BlobError;
 use crate::scalar::ScalarKind;

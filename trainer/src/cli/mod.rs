@@ -8,6 +8,7 @@ mod eval;
 mod info;
 mod mesh;
 mod output;
+mod patch;
 mod progress;
 mod render;
 mod sample;
@@ -43,11 +44,16 @@ enum Command {
     /// bench.
     #[command(subcommand)]
     Curve(curve::Command),
+    /// Parametric surfaces from point sets (Yumer & Kara): sample, embed, fit a surface
+    /// network, tessellate, stitch patches, fill holes, bench.
+    #[command(subcommand)]
+    Patch(patch::Command),
     /// Evaluate a model at query points; CSV `x,y,z,phi,gx,gy,gz` on stdout.
     ///
     /// Curves read one parameter t ∈ [0, 1] per line and print `t,x,y,z,tx,ty,tz` (position
     /// and tangent dC/dt); spline surfaces read `u v` and print `u,v,x,y,z,nx,ny,nz` (position
-    /// and unit normal, 0,0,0 where it does not exist); Cao En networks read their m source
+    /// and unit normal, 0,0,0 where it does not exist), and so do surface networks; Cao En
+    /// networks read their m source
     /// coordinates and print `s1..sm`, their outputs (`x,y,z`, or `y1..yp`) and `nx,ny,nz`.
     Eval(eval::Args),
     /// Describe a blob: kind, tree, parameters, size, training summary.
@@ -105,6 +111,7 @@ pub fn main() -> ExitCode {
         Command::Train(command) => train::run(&command),
         Command::Caoen(command) => caoen::run(&command),
         Command::Curve(command) => curve::run(&command),
+        Command::Patch(command) => patch::run(&command),
         Command::Eval(args) => eval::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Demo(args) => demo::run(&args),

@@ -21,6 +21,10 @@
 //!    `planar` on `spade`). **Synthesis** (§5.4, `synthesis`): the grid through the network.
 //!    [`reconstruct`] (`pipeline`) runs 1–3.
 //!
+//! 4. **Blobs** (`blob`): [`network_to_blob`] / [`network_from_blob`] — the network as the
+//!    core's `parametric::SurfaceNetworkModel` evaluates it, in `f32` or Q16.16, on the host
+//!    and on the microcontroller.
+//!
 //! `samples` makes test surfaces with known parameters.
 //!
 //! Crates: `kiddo` (k-d tree, k-NN), `faer` (sparse Cholesky with AMD ordering; no dense n × n
@@ -39,6 +43,7 @@
 
 mod activation;
 mod bench;
+mod blob;
 mod boundary;
 mod compare;
 mod coons;
@@ -68,6 +73,7 @@ pub use activation::Activation;
 pub use bench::{
     BACK_SEED, BENCHMARK_SIZES, BenchmarkRow, PATCH_VERTICES, back_patch_points, benchmark,
 };
+pub use blob::{DecodedNetwork, NetworkSummary, network_from_blob, network_to_blob};
 pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
