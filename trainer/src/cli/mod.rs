@@ -93,8 +93,9 @@ enum Command {
     /// Trains two models with fixed seeds (a torus, one leaf of width 9; the 3-feature head
     /// with tree ((0,1),2)), stores each as f32 and as Q16.16, and runs 64 points on its
     /// surface for each scalar × op (field, field+gradient) × mode (single, batch); then a
-    /// spiral B-spline curve (position, position+tangent at 64 parameters). Blob paths given
-    /// as arguments are measured too (implicit models, curves, spline surfaces).
+    /// spiral B-spline curve (position, position+tangent at 64 parameters) and a surface
+    /// network fitted to a wavy patch (position, position+normal at 64 (u, v)). Blob paths
+    /// given as arguments are measured too (implicit models and every parametric kind).
     SimBench(sim_bench::Args),
     /// Ray-cast an implicit model to a PNG: octree over the leaf boxes, Newton per voxel on
     /// the core in f32 (Carcenac §6), or `--guaranteed` interval search in f64.
