@@ -17,8 +17,9 @@ use neurosurf_trainer::parametric::{
     Activation, BACK_SEED, BENCHMARK_SIZES, BoundaryOptions, HoleOptions, LleOptions,
     NetworkSummary, SampleSurface, SurfaceNetwork, TopologyOptions, benchmark, boundary_loops,
     boundary_seam, coons_boundary, coons_grid, delaunay_grid, edge_report, embed_points, fill_hole,
-    fit_network, network_to_blob, punch_hole, sample_surface, stitch, synthesize,
+    fit_network, network_to_blob, punch_hole, sample_surface, stitch, synthesize, wireframe,
 };
+use neurosurf_trainer::plot::write_picture;
 use neurosurf_trainer::table::{Align, Table};
 
 use super::output::{self, blob_scalar, wrote_blob};
@@ -386,6 +387,13 @@ pub struct TessellateArgs {
     /// Output mesh (`.obj`, `.ply` or `.stl`), with the network's normals.
     #[arg(long)]
     out: PathBuf,
+    /// Also draw the mesh's edges in an oblique view (`.png` or `.svg`), with the points of
+    /// `--show-points` as dots.
+    #[arg(long, value_name = "FILE")]
+    picture: Option<PathBuf>,
+    /// Points to draw on the picture (text, PLY or OBJ).
+    #[arg(long, value_name = "FILE")]
+    show_points: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -458,6 +466,13 @@ fn tessellate(args: &TessellateArgs) -> Result<()> {
     };
     let surface = synthesize(&decoded.network, &grid);
     write_mesh(&args.out, &surface.mesh, Some(&surface.normals))?;
+    if let Some(path) = &args.picture {
+        let points = match &args.show_points {
+            Some(p) => read_points(p)?,
+            None => Vec::new(),
+        };
+        write_picture(path, &wireframe(&surface.mesh, &points, 640))?;
+    }
     let report = MeshReport::of(&args.out, &surface.mesh);
     if args.json {
         return output::json(&report);

@@ -57,6 +57,7 @@ mod laplacian;
 mod mesh_graph;
 mod neighbors;
 mod network;
+mod picture;
 mod pipeline;
 mod planar;
 mod quality;
@@ -91,6 +92,7 @@ pub use laplacian::cotangent_laplacian;
 pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
 pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};
+pub use picture::wireframe;
 pub use pipeline::{ReconstructOptions, Reconstruction, Tessellation, reconstruct};
 pub use planar::{
     PlanarMesh, delaunay, distance_to_polygon, inside_polygon, signed_area, triangulate_polygon,
