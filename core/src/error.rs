@@ -35,6 +35,11 @@ pub enum Quantity {
     Blending,
     /// The code of a Cao En source domain (the valid maximum is reported as expected).
     Domain,
+    /// Hidden layers of a parametric surface network.
+    Layers,
+    /// The code of a parametric surface network's activation (the valid maximum is reported
+    /// as expected).
+    Activation,
 }
 
 impl fmt::Display for Quantity {
@@ -52,6 +57,8 @@ impl fmt::Display for Quantity {
             Quantity::TargetDimension => "target dimension",
             Quantity::Blending => "blending function code",
             Quantity::Domain => "source domain code",
+            Quantity::Layers => "hidden layer count",
+            Quantity::Activation => "activation code",
         })
     }
 }

@@ -11,7 +11,9 @@
 //!   tangent, partials, normal;
 //! - [`caoen`]: Cao En surfaces (Wyvill, Cao & Trotman) — a two-layer network from a sphere,
 //!   torus or hypersphere: position, exact normal, projections, convex implicit form and
-//!   ray intersections.
+//!   ray intersections;
+//! - [`parametric`]: parametric surface networks (Yumer & Kara) — a multilayer perceptron
+//!   (u, v) → (x, y, z): position, partials ∂/∂u and ∂/∂v, unit normal.
 //!
 //! Load a blob once (that validates everything), then evaluate without failure:
 //!
@@ -36,6 +38,7 @@ mod error;
 pub mod implicit;
 mod lanes;
 mod math;
+pub mod parametric;
 pub mod scalar;
 
 pub use error::{BlobError, LengthMismatch, Quantity};

@@ -1,5 +1,6 @@
-//! Parametric models end to end — B-spline curves and surfaces fitted to scattered points, and
-//! Cao En networks on the sphere, the torus and a 5-D hypersphere: trainer (f64) → blob →
+//! Parametric models end to end — B-spline curves and surfaces fitted to scattered points,
+//! Cao En networks on the sphere, the torus and a 5-D hypersphere, and Yumer & Kara surface
+//! networks (tan-sig and rad-bas) fitted to a wavy patch: trainer (f64) → blob →
 //! core on the host (f32, Q16.16) → the same core on the simulated Cortex-M4F. The target must
 //! compute exactly what the host computes, in both scalars and both modes, and reject a damaged
 //! blob with the core's own error.
@@ -8,6 +9,7 @@ use std::f64::consts::FRAC_PI_2;
 
 use neurosurf_core::caoen::{Blending, CaoEnModel, Domain};
 use neurosurf_core::curve::BSplineCurve;
+use neurosurf_core::parametric::SurfaceNetworkModel;
 use neurosurf_core::scalar::{Q16, ScalarKind};
 use neurosurf_firmware_sim::{Job, Mode, Op, SimError, Simulator, Status};
 use neurosurf_trainer::caoen;
@@ -17,6 +19,9 @@ use neurosurf_trainer::curve::{
     reconstruct_curve, sample_curve, surface_to_blob,
 };
 use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision};
+use neurosurf_trainer::parametric::{
+    Activation, SampleSurface, TopologyOptions, fit_network, network_to_blob, sample_surface,
+};
 
 fn simulator() -> Simulator {
     Simulator::prepare().unwrap_or_else(|e| panic!("simulator not ready: {e}"))
@@ -364,5 +369,66 @@ fn damaged_curve_and_cao_en_blobs_are_rejected_with_the_cores_error_and_ops_must
             assert_eq!(code, i32::from(Status::BadRequest.code()));
         }
         other => panic!("expected a bad request, got {other:?}"),
+    }
+}
+
+/// A surface network fitted to 300 points of the wavy test patch at their true parameters
+/// (a small search: one hidden layer of up to 6 neurons).
+fn wavy_network_blob(activation: Activation, scalar: ScalarKind) -> Vec<u8> {
+    let sample = sample_surface(SampleSurface::Wavy, 300, 0.0, 5).unwrap();
+    let options = TopologyOptions {
+        activation,
+        max_layers: 1,
+        max_neurons: 6,
+        ..TopologyOptions::default()
+    };
+    let fit = fit_network(&sample.points, &sample.parameters, &options).unwrap();
+    network_to_blob(&fit.network, None, scalar).unwrap()
+}
+
+#[test]
+fn surface_networks_on_the_target_equal_the_host_bit_for_bit() {
+    let sim = simulator();
+    // (u, v) over the wavy patch's parameter box [−1, 1]² and a little beyond.
+    let points: Vec<Vec<f64>> = (0..100)
+        .map(|i| {
+            let (a, b) = (f64::from(i % 10), f64::from(i / 10));
+            [a / 4.5 - 1.05, b / 4.5 - 1.0]
+                .map(|c| f64::from(c as f32))
+                .to_vec()
+        })
+        .collect();
+    for activation in [Activation::TanSig, Activation::RadBas] {
+        for (scalar, precision) in SCALARS {
+            let bytes = wavy_network_blob(activation, scalar);
+            let expected = same_on_target(
+                &sim,
+                activation.name(),
+                &bytes,
+                (&points, 2),
+                (scalar, precision),
+            );
+            let reference = host(&bytes, &points, Precision::F64);
+            let error = max_error(&expected, &reference);
+            assert!(
+                error < 5e-4,
+                "{activation:?} {scalar:?}: position error {error}"
+            );
+            let with_normal = expected.iter().filter(|g| g.direction != [0.0; 3]).count();
+            assert_eq!(with_normal, points.len(), "{activation:?} {scalar:?}");
+        }
+    }
+    let good = wavy_network_blob(Activation::TanSig, ScalarKind::Q16_16);
+    let truncated = &good[..good.len() - 5];
+    let host_error = SurfaceNetworkModel::<Q16>::from_blob(truncated).unwrap_err();
+    let uv = [0.25_f32, -0.5];
+    match sim.run(&Job::position_direction(
+        truncated,
+        ScalarKind::Q16_16,
+        &uv,
+        2,
+    )) {
+        Err(SimError::BlobRejected { error }) => assert_eq!(error, host_error),
+        other => panic!("truncated surface network: expected a rejection, got {other:?}"),
     }
 }

@@ -40,7 +40,8 @@ mod words;
 
 pub use crc32::crc32;
 pub(crate) use loader::loader_methods;
-pub(crate) use words::{check_storage, decode_word, stored_value};
+pub use words::stored_value;
+pub(crate) use words::{check_storage, decode_word};
 
 pub use crate::error::BlobError;
 use crate::scalar::ScalarKind;
@@ -71,6 +72,9 @@ pub enum ModelKind {
     /// A Cao En surface (Wyvill, Cao & Trotman): a two-layer network mapping a sphere, torus or
     /// hypersphere to a surface, see [`crate::caoen::CaoEnModel`].
     CaoEn,
+    /// A parametric surface network (Yumer & Kara): a multilayer perceptron (u, v) → (x, y, z),
+    /// see [`crate::parametric::SurfaceNetworkModel`].
+    SurfaceNetwork,
 }
 
 impl ModelKind {
@@ -82,6 +86,7 @@ impl ModelKind {
             ModelKind::Curve => 3,
             ModelKind::SplineSurface => 4,
             ModelKind::CaoEn => 5,
+            ModelKind::SurfaceNetwork => 6,
         }
     }
 
@@ -93,6 +98,7 @@ impl ModelKind {
             3 => Some(ModelKind::Curve),
             4 => Some(ModelKind::SplineSurface),
             5 => Some(ModelKind::CaoEn),
+            6 => Some(ModelKind::SurfaceNetwork),
             _ => None,
         }
     }
@@ -105,6 +111,7 @@ impl ModelKind {
             ModelKind::Curve => "curve",
             ModelKind::SplineSurface => "spline-surface",
             ModelKind::CaoEn => "cao-en",
+            ModelKind::SurfaceNetwork => "surface-network",
         }
     }
 }

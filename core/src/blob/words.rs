@@ -44,8 +44,16 @@ pub(crate) fn decode_word<S: Scalar>(
 }
 
 /// The exact value of a stored word as `f64` (`None` for a non-finite `f32` or a chunk that is
-/// not 4 bytes): for range checks both scalars must agree on, made before conversion.
-pub(crate) fn stored_value(word: &[u8], stored: ScalarKind) -> Option<f64> {
+/// not 4 bytes): for range checks both scalars must agree on, made before conversion, and for
+/// hosts reading a blob back.
+///
+/// ```
+/// use neurosurf_core::blob::stored_value;
+/// use neurosurf_core::scalar::ScalarKind;
+/// assert_eq!(stored_value(&0x0001_8000_i32.to_le_bytes(), ScalarKind::Q16_16), Some(1.5));
+/// assert_eq!(stored_value(&[0; 3], ScalarKind::F32), None);
+/// ```
+pub fn stored_value(word: &[u8], stored: ScalarKind) -> Option<f64> {
     let word: [u8; 4] = word.try_into().ok()?;
     let value = match stored {
         ScalarKind::F32 => f64::from(f32::from_le_bytes(word)),

@@ -7,6 +7,7 @@ use neurosurf_core::blob::{self, ModelKind};
 use neurosurf_core::caoen::{CaoEnModel, CaoEnPoint, MAX_TARGET_DIMENSION};
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface, CurvePoint};
 use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
+use neurosurf_core::parametric::{SurfaceNetworkModel, SurfaceNetworkPoint};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use neurosurf_sim_protocol::{
     CHUNK_POINTS, MAX_ARITY, MAX_BLOB_BYTES, MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE,
@@ -151,7 +152,7 @@ fn serve(out: &mut HostFile) -> Answer {
     let q16 = scalar == Some(ScalarKind::Q16_16);
     let parametric = matches!(
         model,
-        ModelKind::Curve | ModelKind::SplineSurface | ModelKind::CaoEn
+        ModelKind::Curve | ModelKind::SplineSurface | ModelKind::CaoEn | ModelKind::SurfaceNetwork
     );
     let served = parametric || model == ModelKind::Implicit;
     if served && header.op.is_parametric() != parametric {
@@ -176,6 +177,8 @@ fn serve(out: &mut HostFile) -> Answer {
         (ModelKind::SplineSurface, true) => serve_surface::<Q16>(blob, io),
         (ModelKind::CaoEn, false) => serve_caoen::<f32>(blob, io),
         (ModelKind::CaoEn, true) => serve_caoen::<Q16>(blob, io),
+        (ModelKind::SurfaceNetwork, false) => serve_network::<f32>(blob, io),
+        (ModelKind::SurfaceNetwork, true) => serve_network::<Q16>(blob, io),
         (other, _) => reject(
             io.out,
             BlobError::WrongModelKind {
@@ -377,6 +380,54 @@ fn serve_surface<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
             uv,
             |uv, out| each(uv, out, |&uv| (surface.position(uv), surface.normal(uv))),
             surface_words,
+        ),
+    }
+}
+
+/// Loads a surface network (on the stack: at most 5 KiB) and streams the parameters (u, v)
+/// through it: the position, then (for `PositionDirection`) the unit normal.
+#[inline(never)]
+fn serve_network<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
+    let mut network = SurfaceNetworkModel::<S>::new();
+    if let Err(e) = network.load(blob) {
+        return reject(io.out, e);
+    }
+    defmt::info!(
+        "surface network: hidden layers {=[u8]}, {=usize} MACs per position+normal",
+        network.hidden_sizes(),
+        network.mac_count(true)
+    );
+    let network = &network;
+    let uv = |p: [S; MAX_ARITY]| [p[0], p[1]];
+    let words = |p: &SurfaceNetworkPoint<S>| surface_words(&(p.position, p.normal));
+    match (io.header.op, io.header.mode) {
+        (Op::Position, Mode::Batch) => stream(
+            io,
+            3,
+            uv,
+            |uv, out| network.position_batch(uv, out).is_ok(),
+            |p: &[S; 3]| *p,
+        ),
+        (Op::Position, _) => stream(
+            io,
+            3,
+            uv,
+            |uv, out| each(uv, out, |&uv| network.position(uv)),
+            |p: &[S; 3]| *p,
+        ),
+        (_, Mode::Batch) => stream(
+            io,
+            6,
+            uv,
+            |uv, out| network.eval_batch(uv, out).is_ok(),
+            words,
+        ),
+        _ => stream(
+            io,
+            6,
+            uv,
+            |uv, out| each(uv, out, |&uv| network.eval(uv)),
+            words,
         ),
     }
 }

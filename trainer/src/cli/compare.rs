@@ -175,6 +175,7 @@ fn run_parametric(args: &Args, model: &LoadedModel) -> Result<()> {
         LoadedModel::Curve { decoded, .. } => (Quantities::CURVE, decoded.stored_as),
         LoadedModel::SplineSurface { decoded, .. } => (Quantities::SURFACE, decoded.stored_as),
         LoadedModel::CaoEn { decoded, .. } => (Quantities::SURFACE, decoded.stored_as),
+        LoadedModel::SurfaceNetwork { decoded, .. } => (Quantities::SURFACE, decoded.stored_as),
         _ => bail!("not a parametric model"),
     };
     let bytes = model.bytes().unwrap_or_default();

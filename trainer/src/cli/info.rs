@@ -9,6 +9,7 @@ use serde::Serialize;
 use neurosurf_trainer::curve::FitSummary;
 use neurosurf_trainer::evaluate::LoadedModel;
 use neurosurf_trainer::implicit::TrainingSummary;
+use neurosurf_trainer::parametric::NetworkSummary;
 use neurosurf_trainer::rbf::RbfModel;
 
 use super::output;
@@ -39,6 +40,8 @@ struct Info<'a> {
     /// Curves and surfaces: the control net, e.g. `12, closed` or `8 × 6, open × open`.
     control: Option<String>,
     fit: Option<&'a FitSummary>,
+    /// Surface networks: how the network was fitted.
+    network_fit: Option<&'a NetworkSummary>,
 }
 
 pub fn run(args: &Args) -> Result<()> {
@@ -116,6 +119,34 @@ pub fn run(args: &Args) -> Result<()> {
                 ..Info::default()
             }
         }
+        LoadedModel::SurfaceNetwork { bytes, decoded } => {
+            let network = &decoded.network;
+            let core =
+                neurosurf_core::parametric::SurfaceNetworkModel::<f32>::from_blob(bytes).ok();
+            let hidden: Vec<String> = network
+                .hidden_sizes()
+                .iter()
+                .map(usize::to_string)
+                .collect();
+            Info {
+                kind: ModelKind::SurfaceNetwork.name(),
+                stored_as: decoded.stored_as.name(),
+                blob_bytes: bytes.len(),
+                parameters: network.parameter_count(),
+                macs: core.map(|c| (c.mac_count(false), c.mac_count(true))),
+                control: Some(format!(
+                    "hidden layers {} ({}), (u, v) in [{:.4}, {:.4}] × [{:.4}, {:.4}]",
+                    hidden.join(" × "),
+                    network.activation.name(),
+                    network.input_center[0] - network.input_scale[0],
+                    network.input_center[0] + network.input_scale[0],
+                    network.input_center[1] - network.input_scale[1],
+                    network.input_center[1] + network.input_scale[1],
+                )),
+                network_fit: decoded.summary.as_ref(),
+                ..Info::default()
+            }
+        }
         LoadedModel::CaoEn { bytes, decoded } => {
             let network = &decoded.network;
             let core = neurosurf_core::caoen::CaoEnModel::<f32>::from_blob(bytes).ok();
@@ -169,7 +200,7 @@ pub fn run(args: &Args) -> Result<()> {
             ModelKind::Curve => {
                 println!("  MACs         {value} per position, {derivative} per position+tangent")
             }
-            ModelKind::SplineSurface | ModelKind::CaoEn => {
+            ModelKind::SplineSurface | ModelKind::CaoEn | ModelKind::SurfaceNetwork => {
                 println!("  MACs         {value} per position, {derivative} per position+normal")
             }
             _ => println!("  MACs         {value} per field, {derivative} per field+gradient"),
@@ -185,6 +216,12 @@ pub fn run(args: &Args) -> Result<()> {
             fit.rms_residual,
             fit.max_residual,
             fit.seconds
+        );
+    }
+    if let Some(fit) = info.network_fit {
+        println!(
+            "  fit          {} points, {} configurations tried, RMS error {:.3e} ({:.2e} of the diagonal), {:.3} s",
+            fit.points, fit.candidates, fit.rms_error, fit.relative_rms_error, fit.seconds
         );
     }
     if let Some(centers) = info.centers {

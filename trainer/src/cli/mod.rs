@@ -8,6 +8,7 @@ mod eval;
 mod info;
 mod mesh;
 mod output;
+mod patch;
 mod progress;
 mod render;
 mod sample;
@@ -43,11 +44,16 @@ enum Command {
     /// bench.
     #[command(subcommand)]
     Curve(curve::Command),
+    /// Parametric surfaces from point sets (Yumer & Kara): sample, embed, fit a surface
+    /// network, tessellate, stitch patches, fill holes, bench.
+    #[command(subcommand)]
+    Patch(patch::Command),
     /// Evaluate a model at query points; CSV `x,y,z,phi,gx,gy,gz` on stdout.
     ///
     /// Curves read one parameter t ∈ [0, 1] per line and print `t,x,y,z,tx,ty,tz` (position
     /// and tangent dC/dt); spline surfaces read `u v` and print `u,v,x,y,z,nx,ny,nz` (position
-    /// and unit normal, 0,0,0 where it does not exist); Cao En networks read their m source
+    /// and unit normal, 0,0,0 where it does not exist), and so do surface networks; Cao En
+    /// networks read their m source
     /// coordinates and print `s1..sm`, their outputs (`x,y,z`, or `y1..yp`) and `nx,ny,nz`.
     Eval(eval::Args),
     /// Describe a blob: kind, tree, parameters, size, training summary.
@@ -87,8 +93,9 @@ enum Command {
     /// Trains two models with fixed seeds (a torus, one leaf of width 9; the 3-feature head
     /// with tree ((0,1),2)), stores each as f32 and as Q16.16, and runs 64 points on its
     /// surface for each scalar × op (field, field+gradient) × mode (single, batch); then a
-    /// spiral B-spline curve (position, position+tangent at 64 parameters). Blob paths given
-    /// as arguments are measured too (implicit models, curves, spline surfaces).
+    /// spiral B-spline curve (position, position+tangent at 64 parameters) and a surface
+    /// network fitted to a wavy patch (position, position+normal at 64 (u, v)). Blob paths
+    /// given as arguments are measured too (implicit models and every parametric kind).
     SimBench(sim_bench::Args),
     /// Ray-cast an implicit model to a PNG: octree over the leaf boxes, Newton per voxel on
     /// the core in f32 (Carcenac §6), or `--guaranteed` interval search in f64.
@@ -105,6 +112,7 @@ pub fn main() -> ExitCode {
         Command::Train(command) => train::run(&command),
         Command::Caoen(command) => caoen::run(&command),
         Command::Curve(command) => curve::run(&command),
+        Command::Patch(command) => patch::run(&command),
         Command::Eval(args) => eval::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Demo(args) => demo::run(&args),

@@ -20,6 +20,9 @@ use neurosurf_trainer::evaluate::LoadedModel;
 use neurosurf_trainer::implicit::{
     self, FitRequest, ImplicitNetwork, ImplicitOptions, TrainingSummary,
 };
+use neurosurf_trainer::parametric::{
+    SampleSurface, TopologyOptions, fit_network, network_to_blob, sample_surface,
+};
 use neurosurf_trainer::sample::{Shape, sample_shape};
 use neurosurf_trainer::table::{Align, Table};
 
@@ -200,6 +203,7 @@ fn built_in() -> Result<Vec<Subject>> {
         });
     }
     subjects.push(spiral_curve()?);
+    subjects.push(wavy_network()?);
     Ok(subjects)
 }
 
@@ -236,7 +240,44 @@ fn spiral_curve() -> Result<Subject> {
     })
 }
 
-/// A parametric blob (curve, spline surface, Cao En network) as a subject, measured at the
+/// A surface network (Yumer & Kara) fitted to 400 points of the wavy test patch at their
+/// true parameters (fixed seed; the search's pick), in both scalars, at [`POINTS`] parameters
+/// over its (u, v) box.
+fn wavy_network() -> Result<Subject> {
+    let sample = sample_surface(SampleSurface::Wavy, 400, 0.0, 3)?;
+    let fit = fit_network(
+        &sample.points,
+        &sample.parameters,
+        &TopologyOptions::default(),
+    )?;
+    let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
+        .into_iter()
+        .map(|scalar| Ok((scalar, network_to_blob(&fit.network, None, scalar)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let hidden: Vec<String> = fit
+        .network
+        .hidden_sizes()
+        .iter()
+        .map(usize::to_string)
+        .collect();
+    let name = format!("wavy surface network ({}, tan-sig)", hidden.join(" × "));
+    let side = (POINTS as f64).sqrt().ceil() as usize;
+    Ok(Subject {
+        path: PathBuf::from(format!("<built-in {name}>")),
+        name,
+        blobs,
+        points: (0..POINTS)
+            .flat_map(|i| {
+                let t = |k: usize| (2 * k) as f32 / (side - 1) as f32 - 1.0;
+                [t(i % side), t(i / side)]
+            })
+            .collect(),
+        arity: 2,
+        ops: [Op::Position, Op::PositionDirection],
+    })
+}
+
+/// A parametric blob (curve, spline surface, Cao En network, surface network) as a subject, measured at the
 /// first [`POINTS`] parameters of its default covering set; `None` for any other kind.
 fn parametric(path: &std::path::Path, bytes: &[u8]) -> Result<Option<Subject>> {
     let model = LoadedModel::from_bytes(bytes.to_vec(), path)?;

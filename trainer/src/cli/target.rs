@@ -8,6 +8,7 @@ use neurosurf_core::blob::{self, ModelKind};
 use neurosurf_core::caoen::CaoEnModel;
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::implicit::ImplicitModel;
+use neurosurf_core::parametric::SurfaceNetworkModel;
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use neurosurf_firmware_sim::{Job, Mode, Op, Run, Simulator};
 use neurosurf_trainer::evaluate::Precision;
@@ -76,7 +77,7 @@ pub fn read_blob(path: &Path) -> Result<Vec<u8>> {
     {
         bail!(
             "{}: {} is a host-only model kind: the target evaluates implicit models, curves, \
-             spline surfaces and Cao En networks (use `neurosurf eval`)",
+             spline surfaces, Cao En networks and surface networks (use `neurosurf eval`)",
             path.display(),
             header.model.name()
         );
@@ -99,7 +100,7 @@ pub fn run(simulator: &Simulator, job: &Job<'_>, model: &Path) -> Result<Run> {
 
 /// Multiply–accumulates of one evaluation of the blob in `scalar`, as the host's core counts
 /// them: with the gradient or not (implicit models), with the tangent or not (curves), with
-/// the normal or not (spline surfaces, Cao En networks).
+/// the normal or not (spline surfaces, Cao En networks, surface networks).
 pub fn mac_count(
     bytes: &[u8],
     scalar: ScalarKind,
@@ -125,6 +126,12 @@ pub fn mac_count(
         }
         (Ok(ModelKind::CaoEn), _) => {
             CaoEnModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
+        }
+        (Ok(ModelKind::SurfaceNetwork), ScalarKind::Q16_16) => {
+            SurfaceNetworkModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))
+        }
+        (Ok(ModelKind::SurfaceNetwork), _) => {
+            SurfaceNetworkModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
         }
         (_, ScalarKind::Q16_16) => {
             ImplicitModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))

@@ -22,7 +22,8 @@ pub struct ParameterSet {
 }
 
 impl ParameterSet {
-    /// The default set for `model`: uniform t for curves, a grid of [0, 1]² for surfaces, and
+    /// The default set for `model`: uniform t for curves, a grid of [0, 1]² for spline
+    /// surfaces, a grid of the parameter box a surface network was trained on, and
     /// for Cao En networks a Fibonacci sphere (m = 3), a θ × φ grid (torus) or quasi-random
     /// unit vectors (hyperspheres). `None` for field models.
     pub fn covering(model: &LoadedModel) -> Option<ParameterSet> {
@@ -38,6 +39,18 @@ impl ParameterSet {
                 points: grid(|u, v| vec![u * step, v * step]),
                 description: format!("a {SURFACE_GRID} × {SURFACE_GRID} grid of (u, v)"),
             }),
+            LoadedModel::SurfaceNetwork { decoded, .. } => {
+                let net = &decoded.network;
+                let corner = |a: usize, t: f64| {
+                    net.input_center[a] + net.input_scale[a] * (2.0 * t * step - 1.0)
+                };
+                Some(ParameterSet {
+                    points: grid(|i, j| vec![corner(0, i), corner(1, j)]),
+                    description: format!(
+                        "a {SURFACE_GRID} × {SURFACE_GRID} grid of the trained (u, v) box"
+                    ),
+                })
+            }
             LoadedModel::CaoEn { decoded, .. } => {
                 let m = decoded.network.source_dimension();
                 let torus = decoded.network.domain == Domain::Torus.code();

@@ -15,6 +15,7 @@ use crate::curve::{DecodedCurve, DecodedSurface, curve_from_blob, surface_from_b
 use crate::error::{Error, Result};
 
 use crate::implicit::{self, DecodedImplicit};
+use crate::parametric::{DecodedNetwork, network_from_blob};
 use crate::rbf::RbfModel;
 pub use parametric::{Geometry, geometry_columns};
 pub use precision::Precision;
@@ -54,6 +55,13 @@ pub enum LoadedModel {
         bytes: Vec<u8>,
         /// Its `f64` reading.
         decoded: Box<DecodedCaoEn>,
+    },
+    /// A parametric surface network (Yumer & Kara); `bytes` is the blob, for the core.
+    SurfaceNetwork {
+        /// The blob.
+        bytes: Vec<u8>,
+        /// Its `f64` reading.
+        decoded: Box<DecodedNetwork>,
     },
 }
 
@@ -113,6 +121,10 @@ impl LoadedModel {
                 });
                 Ok(LoadedModel::CaoEn { bytes, decoded })
             }
+            ModelKind::SurfaceNetwork => {
+                let decoded = Box::new(network_from_blob(&bytes, path)?);
+                Ok(LoadedModel::SurfaceNetwork { bytes, decoded })
+            }
             other => Err(Error::format(
                 path,
                 format!("{} models cannot be evaluated here", other.name()),
@@ -128,6 +140,7 @@ impl LoadedModel {
             LoadedModel::Curve { .. } => ModelKind::Curve,
             LoadedModel::SplineSurface { .. } => ModelKind::SplineSurface,
             LoadedModel::CaoEn { .. } => ModelKind::CaoEn,
+            LoadedModel::SurfaceNetwork { .. } => ModelKind::SurfaceNetwork,
         }
     }
 
@@ -137,17 +150,18 @@ impl LoadedModel {
             LoadedModel::Implicit { bytes, .. }
             | LoadedModel::Curve { bytes, .. }
             | LoadedModel::SplineSurface { bytes, .. }
-            | LoadedModel::CaoEn { bytes, .. } => Some(bytes),
+            | LoadedModel::CaoEn { bytes, .. }
+            | LoadedModel::SurfaceNetwork { bytes, .. } => Some(bytes),
             LoadedModel::Rbf(_) => None,
         }
     }
 
     /// How many coordinates a query has: 3 (x, y, z) for fields, 1 (t) for curves, 2 (u, v)
-    /// for spline surfaces, the source dimension m for Cao En networks.
+    /// for spline surfaces and surface networks, the source dimension m for Cao En networks.
     pub fn query_arity(&self) -> usize {
         match self {
             LoadedModel::Curve { .. } => 1,
-            LoadedModel::SplineSurface { .. } => 2,
+            LoadedModel::SplineSurface { .. } | LoadedModel::SurfaceNetwork { .. } => 2,
             LoadedModel::CaoEn { decoded, .. } => decoded.network.source_dimension(),
             _ => 3,
         }
@@ -179,7 +193,8 @@ impl LoadedModel {
             (
                 LoadedModel::Curve { .. }
                 | LoadedModel::SplineSurface { .. }
-                | LoadedModel::CaoEn { .. },
+                | LoadedModel::CaoEn { .. }
+                | LoadedModel::SurfaceNetwork { .. },
                 _,
             ) => Err(Error::invalid(format!(
                 "a {} has no field: evaluate its geometry",

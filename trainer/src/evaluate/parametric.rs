@@ -1,9 +1,11 @@
-//! Evaluating parametric models — curves, spline surfaces and Cao En networks: the output
-//! vector and a direction (a curve's tangent dC/dt, a surface's or Cao En shape's unit normal)
+//! Evaluating parametric models — curves, spline surfaces, Cao En networks and surface
+//! networks: the output vector and a direction (a curve's tangent dC/dt, a surface's or Cao En
+//! shape's unit normal)
 //! at parameters, in `f64` (the trainer's reference) or through the core in `f32` or Q16.16.
 
 use neurosurf_core::caoen::{CaoEnModel, CaoEnPoint, MAX_SOURCE_DIMENSION, MAX_TARGET_DIMENSION};
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface, CurvePoint};
+use neurosurf_core::parametric::{SurfaceNetworkModel, SurfaceNetworkPoint};
 use neurosurf_core::scalar::{Q16, Scalar};
 
 use super::{LoadedModel, Precision};
@@ -27,14 +29,15 @@ impl From<(Vec<f64>, [f64; 3])> for Geometry {
 }
 
 /// The CSV columns of `neurosurf eval` for a parametric model, `None` for field models:
-/// `t,x,y,z,tx,ty,tz` for a curve, `u,v,x,y,z,nx,ny,nz` for a spline surface, and for a Cao En
+/// `t,x,y,z,tx,ty,tz` for a curve, `u,v,x,y,z,nx,ny,nz` for a spline surface or a surface
+/// network, and for a Cao En
 /// network its source coordinates `s1…sm`, its outputs (`x,y,z` when p = 3, else `y1…yp`)
 /// and `nx,ny,nz`.
 pub fn geometry_columns(model: &LoadedModel) -> Option<Vec<String>> {
     let names = |list: &[&str]| list.iter().map(|c| (*c).to_string()).collect();
     match model {
         LoadedModel::Curve { .. } => Some(names(&["t", "x", "y", "z", "tx", "ty", "tz"])),
-        LoadedModel::SplineSurface { .. } => {
+        LoadedModel::SplineSurface { .. } | LoadedModel::SurfaceNetwork { .. } => {
             Some(names(&["u", "v", "x", "y", "z", "nx", "ny", "nz"]))
         }
         LoadedModel::CaoEn { decoded, .. } => {
@@ -101,6 +104,19 @@ impl LoadedModel {
             }
             (LoadedModel::SplineSurface { bytes, .. }, Precision::Q16) => {
                 surface_core::<Q16>(bytes, &rounded)
+            }
+            (LoadedModel::SurfaceNetwork { decoded, .. }, Precision::F64) => Ok(rounded
+                .iter()
+                .map(|p| {
+                    let point = decoded.network.evaluate(at(p, 0), at(p, 1));
+                    geometry(point.position, point.normal())
+                })
+                .collect()),
+            (LoadedModel::SurfaceNetwork { bytes, .. }, Precision::F32) => {
+                network_core::<f32>(bytes, &rounded)
+            }
+            (LoadedModel::SurfaceNetwork { bytes, .. }, Precision::Q16) => {
+                network_core::<Q16>(bytes, &rounded)
             }
             (LoadedModel::CaoEn { decoded, .. }, Precision::F64) => {
                 let network = &decoded.network;
@@ -183,6 +199,27 @@ fn surface_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<
         .iter()
         .zip(&normals)
         .map(|(p, n)| geometry(p.map(S::to_f64), n.unwrap_or([S::ZERO; 3]).map(S::to_f64)))
+        .collect())
+}
+
+/// The core's batch evaluation of a surface network in `S`: position and unit normal.
+fn network_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
+    let network = SurfaceNetworkModel::<S>::from_blob(bytes)
+        .map_err(|e| load_error("surface network", S::KIND.name(), e))?;
+    let uv: Vec<[S; 2]> = parameters
+        .iter()
+        .map(|p| [coordinate(p, 0), coordinate(p, 1)])
+        .collect();
+    let mut points = vec![SurfaceNetworkPoint::<S>::default(); uv.len()];
+    network.eval_batch(&uv, &mut points).map_err(batch_error)?;
+    Ok(points
+        .iter()
+        .map(|p| {
+            geometry(
+                p.position.map(S::to_f64),
+                p.normal.unwrap_or([S::ZERO; 3]).map(S::to_f64),
+            )
+        })
         .collect())
 }
 

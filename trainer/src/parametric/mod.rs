@@ -21,6 +21,10 @@
 //!    `planar` on `spade`). **Synthesis** (§5.4, `synthesis`): the grid through the network.
 //!    [`reconstruct`] (`pipeline`) runs 1–3.
 //!
+//! 4. **Blobs** (`blob`): [`network_to_blob`] / [`network_from_blob`] — the network as the
+//!    core's `parametric::SurfaceNetworkModel` evaluates it, in `f32` or Q16.16, on the host
+//!    and on the microcontroller.
+//!
 //! `samples` makes test surfaces with known parameters.
 //!
 //! Crates: `kiddo` (k-d tree, k-NN), `faer` (sparse Cholesky with AMD ordering; no dense n × n
@@ -39,6 +43,7 @@
 
 mod activation;
 mod bench;
+mod blob;
 mod boundary;
 mod compare;
 mod coons;
@@ -52,6 +57,7 @@ mod laplacian;
 mod mesh_graph;
 mod neighbors;
 mod network;
+mod picture;
 mod pipeline;
 mod planar;
 mod quality;
@@ -68,6 +74,7 @@ pub use activation::Activation;
 pub use bench::{
     BACK_SEED, BENCHMARK_SIZES, BenchmarkRow, PATCH_VERTICES, back_patch_points, benchmark,
 };
+pub use blob::{DecodedNetwork, NetworkSummary, network_from_blob, network_to_blob};
 pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
@@ -85,6 +92,7 @@ pub use laplacian::cotangent_laplacian;
 pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
 pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};
+pub use picture::wireframe;
 pub use pipeline::{ReconstructOptions, Reconstruction, Tessellation, reconstruct};
 pub use planar::{
     PlanarMesh, delaunay, distance_to_polygon, inside_polygon, signed_area, triangulate_polygon,

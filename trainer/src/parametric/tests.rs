@@ -426,3 +426,73 @@ fn bunny_back_patch_flattens() {
     let (samples, source) = back_patch_points(&mesh, BACK_SEED, 12_000).unwrap();
     assert_eq!((samples.len(), source), (12_000, "samples"));
 }
+
+#[test]
+fn blobs_round_trip_and_the_core_evaluates_what_the_trainer_does() {
+    use neurosurf_core::parametric::SurfaceNetworkModel;
+    use neurosurf_core::scalar::{Q16, ScalarKind};
+    let mut net = SurfaceNetwork::zeros(
+        &[5, 4],
+        Activation::TanSig,
+        [0.1, -0.2],
+        [1.5, 0.7],
+        [1.0, 2.0, 3.0],
+        2.0,
+    )
+    .unwrap();
+    let path = std::path::Path::new("test.nsb");
+    for act in Activation::ALL {
+        net.activation = act;
+        randomize(&mut net, 9);
+        let summary = NetworkSummary {
+            points: 10,
+            candidates: 1,
+            rms_error: 0.5,
+            relative_rms_error: 0.1,
+            seconds: 0.0,
+        };
+        for (scalar, storage) in [(ScalarKind::F32, 1e-5), (ScalarKind::Q16_16, 5e-3)] {
+            let bytes = network_to_blob(&net, Some(&summary), scalar).unwrap();
+            let decoded = network_from_blob(&bytes, path).unwrap();
+            assert_eq!(decoded.summary.as_ref(), Some(&summary));
+            assert_eq!(
+                (decoded.stored_as, decoded.network.activation),
+                (scalar, act)
+            );
+            let float = SurfaceNetworkModel::<f32>::from_blob(&bytes).unwrap();
+            let fixed = SurfaceNetworkModel::<Q16>::from_blob(&bytes).unwrap();
+            for i in 0..25 {
+                let (u, v) = (-1.0 + 0.09 * i as f64, 0.7 - 0.05 * i as f64);
+                let (u, v) = (f64::from(u as f32), f64::from(v as f32));
+                let trained = net.evaluate(u, v);
+                let read = decoded.network.evaluate(u, v);
+                let f = float.eval([u as f32, v as f32]);
+                let q = fixed.eval([Q16::from_num(u), Q16::from_num(v)]);
+                for a in 0..3 {
+                    // The blob rounds each word once: the read-back network is the trained
+                    // one within that rounding.
+                    assert!((read.position[a] - trained.position[a]).abs() < storage);
+                    assert!((f64::from(f.position[a]) - read.position[a]).abs() < 1e-5);
+                    assert!((f64::from(f.du[a]) - read.du[a]).abs() < 1e-4);
+                    let dq = (q.position[a].to_num::<f64>() - read.position[a]).abs();
+                    assert!(dq < 2e-3, "{act:?} {scalar:?} {dq:e}");
+                }
+            }
+        }
+    }
+    let wide = SurfaceNetwork::zeros(&[40], Activation::TanSig, [0.0; 2], [1.0; 2], [0.0; 3], 1.0)
+        .unwrap();
+    let e = network_to_blob(&wide, None, ScalarKind::F32)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("at most 32"), "{e}");
+    let mut huge = net.clone();
+    huge.output_scale = 5000.0;
+    let e = network_to_blob(&huge, None, ScalarKind::Q16_16)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cannot be stored") || e.contains("would not load"),
+        "{e}"
+    );
+}

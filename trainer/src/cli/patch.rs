@@ -1,0 +1,804 @@
+//! `neurosurf patch`: Yumer & Kara's parametric surfaces from point sets — sample test data,
+//! embed points in the plane, fit a surface network, tessellate it, stitch patches, fill holes,
+//! and time the pipeline (Table 2).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Subcommand, ValueEnum};
+use serde::Serialize;
+
+use neurosurf_trainer::evaluate::{LoadedModel, Precision};
+use neurosurf_trainer::io::{
+    Mesh, data_file, read_mesh, read_parameters, read_query_points, write_atomic, write_mesh,
+};
+use neurosurf_trainer::parametric::{
+    Activation, BACK_SEED, BENCHMARK_SIZES, BoundaryOptions, HoleOptions, LleOptions,
+    NetworkSummary, SampleSurface, SurfaceNetwork, TopologyOptions, benchmark, boundary_loops,
+    boundary_seam, coons_boundary, coons_grid, delaunay_grid, edge_report, embed_points, fill_hole,
+    fit_network, network_to_blob, punch_hole, sample_surface, stitch, synthesize, wireframe,
+};
+use neurosurf_trainer::plot::write_picture;
+use neurosurf_trainer::table::{Align, Table};
+
+use super::output::{self, blob_scalar, wrote_blob};
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Points on a known surface (text, `x y z` per line), shuffled, with optional noise.
+    Sample(SampleArgs),
+    /// Locally linear embedding of unstructured 3-D points to (u, v) (text, `u v` per line).
+    Embed(EmbedArgs),
+    /// Fit a surface network (u, v) → (x, y, z) to points (embedding them first unless
+    /// parameters are given), with the §5.2 topology search; write its blob.
+    Fit(FitArgs),
+    /// Tessellate a surface network: a Coons quad grid or a Delaunay triangulation of the
+    /// parameter region, pushed through the network (OBJ, PLY or STL with normals).
+    Tessellate(TessellateArgs),
+    /// Stitch open patches (meshes with one boundary loop each) into one watertight mesh.
+    Stitch(StitchArgs),
+    /// Fill the holes of a mesh: one-ring embedding of the rings around each hole, a network
+    /// on them, new vertices inside, constrained Delaunay.
+    FillHole(FillHoleArgs),
+    /// Time embedding and fitting on a patch of the Stanford bunny (the paper's Table 2).
+    Bench(BenchArgs),
+}
+
+pub fn run(command: &Command) -> Result<()> {
+    match command {
+        Command::Sample(args) => sample(args),
+        Command::Embed(args) => embed(args),
+        Command::Fit(args) => fit(args),
+        Command::Tessellate(args) => tessellate(args),
+        Command::Stitch(args) => stitch_patches(args),
+        Command::FillHole(args) => fill_holes(args),
+        Command::Bench(args) => bench(args),
+    }
+}
+
+/// The built-in test surfaces.
+#[derive(Copy, Clone, Debug, ValueEnum)]
+pub enum SurfaceName {
+    /// A tilted plane over [−1, 1]².
+    Plane,
+    /// z = 0.25·sin(2.5x)·cos(2y) over [−1, 1]².
+    Wavy,
+    /// An open cylinder (a "C" in plan), radius 1, height 2.5.
+    Cylinder,
+    /// A swiss-roll patch.
+    SwissRoll,
+    /// The unit sphere (closed: cannot be flattened; for trying the error).
+    Sphere,
+}
+
+impl SurfaceName {
+    fn surface(self) -> SampleSurface {
+        match self {
+            SurfaceName::Plane => SampleSurface::Plane,
+            SurfaceName::Wavy => SampleSurface::Wavy,
+            SurfaceName::Cylinder => SampleSurface::OpenCylinder,
+            SurfaceName::SwissRoll => SampleSurface::SwissRoll,
+            SurfaceName::Sphere => SampleSurface::Sphere,
+        }
+    }
+}
+
+/// The hidden activation.
+#[derive(Copy, Clone, Debug, ValueEnum)]
+pub enum ActivationArg {
+    /// 1/(1 + e⁻ᵃ).
+    LogSig,
+    /// 2/(1 + e⁻ᵃ) − 1 (smooth surfaces; the default).
+    TanSig,
+    /// e^(−a²).
+    RadBas,
+    /// max(0, 1 − |a|) (piecewise-planar surfaces).
+    TriBas,
+}
+
+impl ActivationArg {
+    fn activation(self) -> Activation {
+        match self {
+            ActivationArg::LogSig => Activation::LogSig,
+            ActivationArg::TanSig => Activation::TanSig,
+            ActivationArg::RadBas => Activation::RadBas,
+            ActivationArg::TriBas => Activation::TriBas,
+        }
+    }
+}
+
+/// How the parameter region is tessellated.
+#[derive(Copy, Clone, Debug, ValueEnum)]
+pub enum MethodArg {
+    /// A resolution × resolution quad grid of the bilinear Coons patch between four Bézier
+    /// sides of the region.
+    Coons,
+    /// The boundary loop resampled, a uniform grid inside it, constrained Delaunay (about
+    /// resolution² vertices).
+    Delaunay,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct EmbeddingArgs {
+    /// Neighbours per point k.
+    #[arg(long, default_value_t = LleOptions::default().neighbors)]
+    neighbors: usize,
+    /// Gram regularization δ (C + δ·tr(C)·I).
+    #[arg(long, default_value_t = LleOptions::default().regularization)]
+    regularization: f64,
+}
+
+impl EmbeddingArgs {
+    fn options(&self) -> LleOptions {
+        LleOptions {
+            neighbors: self.neighbors,
+            regularization: self.regularization,
+            ..LleOptions::default()
+        }
+    }
+}
+
+#[derive(Debug, clap::Args)]
+pub struct SampleArgs {
+    /// Which surface.
+    #[arg(value_enum)]
+    surface: SurfaceName,
+    /// Number of points.
+    #[arg(long, default_value_t = 800)]
+    points: usize,
+    /// Gaussian noise, as a fraction of the surface's size.
+    #[arg(long, default_value_t = 0.0)]
+    noise: f64,
+    /// Random seed (same seed, same points).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output text file (`x y z` per line).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the true parameters (`s t` per line, same order).
+    #[arg(long, value_name = "FILE")]
+    parameters: Option<PathBuf>,
+}
+
+fn sample(args: &SampleArgs) -> Result<()> {
+    let surface = args.surface.surface();
+    let sample = sample_surface(surface, args.points, args.noise, args.seed)?;
+    let header = format!(
+        "# {surface:?}: {} points, noise {}, seed {}\n",
+        args.points, args.noise, args.seed
+    );
+    write_atomic(
+        &args.out,
+        (header.clone() + &rows(&sample.points)).as_bytes(),
+    )?;
+    println!("wrote {} points to {}", args.points, args.out.display());
+    if let Some(path) = &args.parameters {
+        write_atomic(path, (header + &rows(&sample.parameters)).as_bytes())?;
+        println!("wrote their parameters to {}", path.display());
+    }
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct EmbedArgs {
+    /// Points: text (`x y z` per line), PLY, or OBJ (its vertices).
+    points: PathBuf,
+    #[command(flatten)]
+    embedding: EmbeddingArgs,
+    /// Output text file (`u v` per line, the points' order).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct EmbedReport<'a> {
+    out: &'a Path,
+    points: usize,
+    neighbors: usize,
+    eigenvalues: [f64; 2],
+    eigen_iterations: usize,
+    flipped_fraction: f64,
+    collapsed_fraction: f64,
+    seconds: f64,
+}
+
+fn embed(args: &EmbedArgs) -> Result<()> {
+    let points = read_points(&args.points)?;
+    let start = Instant::now();
+    let embedding = embed_points(&points, &args.embedding.options())
+        .with_context(|| format!("cannot embed {}", args.points.display()))?;
+    let seconds = start.elapsed().as_secs_f64();
+    write_atomic(&args.out, rows(&embedding.parameters).as_bytes())?;
+    let report = EmbedReport {
+        out: &args.out,
+        points: points.len(),
+        neighbors: args.embedding.neighbors,
+        eigenvalues: embedding.eigenvalues,
+        eigen_iterations: embedding.iterations,
+        flipped_fraction: embedding.folds.flipped_pairs,
+        collapsed_fraction: embedding.folds.collapsed_points,
+        seconds,
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "embedded {} points (k = {}) in {seconds:.3} s: λ₂ = {:.3e}, λ₃ = {:.3e}, {} iterations, \
+         {:.2} % of neighbour pairs flipped",
+        report.points,
+        report.neighbors,
+        report.eigenvalues[0],
+        report.eigenvalues[1],
+        report.eigen_iterations,
+        100.0 * report.flipped_fraction
+    );
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct FitArgs {
+    /// Points: text (`x y z` per line), PLY, or OBJ (its vertices).
+    points: PathBuf,
+    /// Their parameters (`u v` per line, same order; e.g. from `patch embed`). Without it the
+    /// points are embedded first.
+    #[arg(long, value_name = "FILE")]
+    parameters: Option<PathBuf>,
+    #[command(flatten)]
+    embedding: EmbeddingArgs,
+    /// Hidden activation.
+    #[arg(long, value_enum, default_value = "tan-sig")]
+    activation: ActivationArg,
+    /// Most hidden layers the search tries.
+    #[arg(long, default_value_t = TopologyOptions::default().max_layers)]
+    max_layers: usize,
+    /// Most neurons per hidden layer the search tries.
+    #[arg(long, default_value_t = TopologyOptions::default().max_neurons)]
+    max_neurons: usize,
+    /// Seed of the split and the initial weights.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// How the blob stores the network: `f32` or `q16.16`.
+    #[arg(long, default_value = "f32")]
+    scalar: Precision,
+    /// Output blob.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the parameters used (`u v` per line), for `patch tessellate`.
+    #[arg(long, value_name = "FILE")]
+    parameters_out: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct FitReport<'a> {
+    out: &'a Path,
+    stored_as: &'static str,
+    blob_bytes: usize,
+    points: usize,
+    embedded: bool,
+    embedding_seconds: f64,
+    fitting_seconds: f64,
+    hidden_layers: Vec<usize>,
+    activation: &'static str,
+    parameters: usize,
+    candidates: usize,
+    rms_error: f64,
+    relative_rms_error: f64,
+}
+
+fn fit(args: &FitArgs) -> Result<()> {
+    let scalar = blob_scalar(args.scalar)?;
+    let points = read_points(&args.points)?;
+    let start = Instant::now();
+    let parameters = match &args.parameters {
+        Some(path) => read_parameters(path, 2)?
+            .into_iter()
+            .map(|p| [p[0], p[1]])
+            .collect(),
+        None => {
+            embed_points(&points, &args.embedding.options())
+                .with_context(|| format!("cannot embed {}", args.points.display()))?
+                .parameters
+        }
+    };
+    let embedding_seconds = start.elapsed().as_secs_f64();
+    let options = TopologyOptions {
+        activation: args.activation.activation(),
+        max_layers: args.max_layers,
+        max_neurons: args.max_neurons,
+        seed: args.seed,
+        ..TopologyOptions::default()
+    };
+    if options.max_layers == 0 || options.max_neurons == 0 {
+        bail!("--max-layers and --max-neurons must be at least 1");
+    }
+    let start = Instant::now();
+    let fit = fit_network(&points, &parameters, &options)
+        .with_context(|| format!("cannot fit a network to {}", args.points.display()))?;
+    let fitting_seconds = start.elapsed().as_secs_f64();
+    let summary = NetworkSummary::of(&fit, points.len(), embedding_seconds + fitting_seconds);
+    let bytes = network_to_blob(&fit.network, Some(&summary), scalar)?;
+    write_atomic(&args.out, &bytes)?;
+    if let Some(path) = &args.parameters_out {
+        write_atomic(path, rows(&parameters).as_bytes())?;
+    }
+    let report = FitReport {
+        out: &args.out,
+        stored_as: scalar.name(),
+        blob_bytes: bytes.len(),
+        points: points.len(),
+        embedded: args.parameters.is_none(),
+        embedding_seconds,
+        fitting_seconds,
+        hidden_layers: fit.network.hidden_sizes(),
+        activation: fit.network.activation.name(),
+        parameters: fit.network.parameter_count(),
+        candidates: summary.candidates,
+        rms_error: fit.rms_error,
+        relative_rms_error: fit.relative_rms_error,
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "{} points{}: hidden layers {:?} ({}, {} parameters) after {} configurations, RMS \
+         error {:.3e} ({:.2e} of the diagonal); {:.3} s embedding, {:.3} s fitting",
+        report.points,
+        if report.embedded { " embedded" } else { "" },
+        report.hidden_layers,
+        report.activation,
+        report.parameters,
+        report.candidates,
+        report.rms_error,
+        report.relative_rms_error,
+        report.embedding_seconds,
+        report.fitting_seconds
+    );
+    wrote_blob(
+        &args.out,
+        bytes.len(),
+        scalar,
+        args.parameters_out.as_deref(),
+    );
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct TessellateArgs {
+    /// A surface-network blob.
+    model: PathBuf,
+    /// The parameters of the points the network was fitted to (`u v` per line): their
+    /// boundary bounds the tessellated region. Without it, the network's trained (u, v) box.
+    #[arg(long, value_name = "FILE")]
+    parameters: Option<PathBuf>,
+    /// Coons quad grid or Delaunay.
+    #[arg(long, value_enum, default_value = "coons")]
+    method: MethodArg,
+    /// Vertices per side (Coons), or about its square in total (Delaunay).
+    #[arg(long, default_value_t = 30)]
+    resolution: usize,
+    /// Output mesh (`.obj`, `.ply` or `.stl`), with the network's normals.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also draw the mesh's edges in an oblique view (`.png` or `.svg`), with the points of
+    /// `--show-points` as dots.
+    #[arg(long, value_name = "FILE")]
+    picture: Option<PathBuf>,
+    /// Points to draw on the picture (text, PLY or OBJ).
+    #[arg(long, value_name = "FILE")]
+    show_points: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct MeshReport<'a> {
+    out: &'a Path,
+    vertices: usize,
+    triangles: usize,
+    boundary_edges: usize,
+    non_manifold_edges: usize,
+    watertight: bool,
+}
+
+impl<'a> MeshReport<'a> {
+    fn of(out: &'a Path, mesh: &Mesh) -> Self {
+        let edges = edge_report(mesh);
+        MeshReport {
+            out,
+            vertices: mesh.vertex_count(),
+            triangles: mesh.triangle_count(),
+            boundary_edges: edges.boundary,
+            non_manifold_edges: edges.non_manifold,
+            watertight: edges.is_watertight(),
+        }
+    }
+
+    fn print(&self) {
+        println!(
+            "wrote {}: {} vertices, {} triangles, {} boundary edges{}",
+            self.out.display(),
+            self.vertices,
+            self.triangles,
+            self.boundary_edges,
+            if self.watertight { " (watertight)" } else { "" }
+        );
+    }
+}
+
+fn tessellate(args: &TessellateArgs) -> Result<()> {
+    let model = LoadedModel::read(&args.model)?;
+    let LoadedModel::SurfaceNetwork { decoded, .. } = &model else {
+        bail!(
+            "{} holds a {} model, not a surface network",
+            args.model.display(),
+            model.kind().name()
+        );
+    };
+    if args.resolution < 2 {
+        bail!("--resolution must be at least 2");
+    }
+    let parameters = match &args.parameters {
+        Some(path) => read_parameters(path, 2)?
+            .into_iter()
+            .map(|p| [p[0], p[1]])
+            .collect(),
+        None => box_samples(&decoded.network),
+    };
+    let boundary = BoundaryOptions::default();
+    let grid = match args.method {
+        MethodArg::Coons => coons_grid(
+            &coons_boundary(&parameters, &boundary)?,
+            args.resolution,
+            args.resolution,
+        )?,
+        MethodArg::Delaunay => {
+            delaunay_grid(&parameters, args.resolution * args.resolution, &boundary)?
+        }
+    };
+    let surface = synthesize(&decoded.network, &grid);
+    write_mesh(&args.out, &surface.mesh, Some(&surface.normals))?;
+    if let Some(path) = &args.picture {
+        let points = match &args.show_points {
+            Some(p) => read_points(p)?,
+            None => Vec::new(),
+        };
+        write_picture(path, &wireframe(&surface.mesh, &points, 640))?;
+    }
+    let report = MeshReport::of(&args.out, &surface.mesh);
+    if args.json {
+        return output::json(&report);
+    }
+    report.print();
+    Ok(())
+}
+
+/// A 21 × 21 grid of the network's trained (u, v) box: its boundary is the box.
+fn box_samples(network: &SurfaceNetwork) -> Vec<[f64; 2]> {
+    let n = 21;
+    (0..n * n)
+        .map(|k| {
+            let t = |i: usize, a: usize| {
+                network.input_center[a]
+                    + network.input_scale[a] * (2.0 * i as f64 / (n - 1) as f64 - 1.0)
+            };
+            [t(k % n, 0), t(k / n, 1)]
+        })
+        .collect()
+}
+
+#[derive(Debug, clap::Args)]
+pub struct StitchArgs {
+    /// Two or more open patches (OBJ or PLY), each with exactly one boundary loop.
+    #[arg(required = true, num_args = 2..)]
+    patches: Vec<PathBuf>,
+    /// A seam between patches A and B (0-based, in argument order): `A,B`. Repeat for more;
+    /// two patches are seamed together by default.
+    #[arg(long = "seam", value_parser = super::output::comma_list::<usize, 2>)]
+    seams: Vec<[usize; 2]>,
+    /// Output mesh (`.obj`, `.ply` or `.stl`).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct StitchReport<'a> {
+    #[serde(flatten)]
+    mesh: MeshReport<'a>,
+    seams: usize,
+    gap_before: f64,
+    gap_solved: f64,
+    gap_after: f64,
+    max_displacement: f64,
+    flipped_triangles: usize,
+}
+
+fn stitch_patches(args: &StitchArgs) -> Result<()> {
+    let mut patches = args
+        .patches
+        .iter()
+        .map(|p| read_mesh(p))
+        .collect::<neurosurf_trainer::Result<Vec<Mesh>>>()?;
+    let pairs = if args.seams.is_empty() {
+        if patches.len() != 2 {
+            bail!(
+                "{} patches: say which to join with --seam A,B",
+                patches.len()
+            );
+        }
+        vec![[0, 1]]
+    } else {
+        args.seams.clone()
+    };
+    let mut seams = Vec::new();
+    for [a, b] in pairs {
+        let seam = boundary_seam(&mut patches, a, b).with_context(|| {
+            format!(
+                "cannot seam patch {a} ({}) to patch {b} ({})",
+                name(&args.patches, a),
+                name(&args.patches, b)
+            )
+        })?;
+        seams.push(seam);
+    }
+    let stitched = stitch(&patches, &seams)?;
+    write_mesh(&args.out, &stitched.mesh, None)?;
+    let report = StitchReport {
+        mesh: MeshReport::of(&args.out, &stitched.mesh),
+        seams: seams.len(),
+        gap_before: stitched.gap_before,
+        gap_solved: stitched.gap_solved,
+        gap_after: stitched.gap_after,
+        max_displacement: stitched.max_displacement,
+        flipped_triangles: stitched.flipped_triangles,
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "{} seams: gap {:.3e} before, {:.3e} after the solve, {} welded; vertices moved at \
+         most {:.3e}",
+        report.seams,
+        report.gap_before,
+        report.gap_solved,
+        report.gap_after,
+        report.max_displacement
+    );
+    report.mesh.print();
+    Ok(())
+}
+
+fn name(paths: &[PathBuf], index: usize) -> String {
+    paths
+        .get(index)
+        .map_or_else(|| "missing".to_string(), |p| p.display().to_string())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct FillHoleArgs {
+    /// A mesh with holes (OBJ or PLY).
+    mesh: PathBuf,
+    /// Rings of vertices around a hole that train its network.
+    #[arg(long, default_value_t = HoleOptions::default().rings)]
+    rings: usize,
+    /// First punch a hole: remove the triangles within RINGS edges of VERTEX (`VERTEX,RINGS`),
+    /// to try the filling on a closed mesh.
+    #[arg(long, value_name = "VERTEX,RINGS", value_parser = super::output::comma_list::<u32, 2>)]
+    punch: Option<[u32; 2]>,
+    /// Also write the holed mesh (with --punch).
+    #[arg(long, value_name = "FILE")]
+    holed: Option<PathBuf>,
+    /// Output mesh (`.obj`, `.ply` or `.stl`).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct FillReport<'a> {
+    #[serde(flatten)]
+    mesh: MeshReport<'a>,
+    holes: usize,
+    new_vertices: usize,
+    new_triangles: usize,
+    region_vertices: usize,
+}
+
+fn fill_holes(args: &FillHoleArgs) -> Result<()> {
+    let mut mesh = read_mesh(&args.mesh)?;
+    if let Some([vertex, rings]) = args.punch {
+        mesh = punch_hole(&mesh, vertex, rings as usize)?.0;
+        if let Some(path) = &args.holed {
+            write_mesh(path, &mesh, None)?;
+        }
+    }
+    let options = HoleOptions {
+        rings: args.rings,
+        ..HoleOptions::default()
+    };
+    let holes = boundary_loops(&mesh.triangles)?;
+    if holes.is_empty() {
+        bail!("{} has no holes (no boundary edges)", args.mesh.display());
+    }
+    let (mut new_vertices, mut new_triangles, mut region_vertices) = (0, 0, 0);
+    for (index, hole) in holes.iter().enumerate() {
+        let filled = fill_hole(&mesh, hole, &options).with_context(|| {
+            format!(
+                "cannot fill hole {index} ({} boundary vertices)",
+                hole.len()
+            )
+        })?;
+        new_vertices += filled.new_vertices.len();
+        new_triangles += filled.new_triangles;
+        region_vertices += filled.region_vertices;
+        mesh = filled.mesh;
+    }
+    write_mesh(&args.out, &mesh, None)?;
+    let report = FillReport {
+        mesh: MeshReport::of(&args.out, &mesh),
+        holes: holes.len(),
+        new_vertices,
+        new_triangles,
+        region_vertices,
+    };
+    if args.json {
+        return output::json(&report);
+    }
+    println!(
+        "filled {} hole(s): {} new vertices, {} new triangles, networks trained on {} vertices",
+        report.holes, report.new_vertices, report.new_triangles, report.region_vertices
+    );
+    report.mesh.print();
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    /// Point counts (default: 100, 1000, 10000, 35947).
+    #[arg(long, value_delimiter = ',')]
+    sizes: Vec<usize>,
+    /// The Stanford bunny (default: `stanford-bunny.obj` in the data folder).
+    #[arg(long)]
+    mesh: Option<PathBuf>,
+    /// Print the rows as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct BenchRow {
+    points: usize,
+    source: &'static str,
+    embedding_seconds: Option<f64>,
+    fitting_seconds: Option<f64>,
+    total_seconds: Option<f64>,
+    eigen_iterations: Option<usize>,
+    hidden_layers: Option<usize>,
+    neurons: Option<usize>,
+    relative_rms_error: Option<f64>,
+    error: Option<String>,
+}
+
+fn bench(args: &BenchArgs) -> Result<()> {
+    let path = match &args.mesh {
+        Some(path) => path.clone(),
+        None => data_file("stanford-bunny.obj")?,
+    };
+    let mesh = read_mesh(&path)?;
+    let sizes = if args.sizes.is_empty() {
+        BENCHMARK_SIZES.to_vec()
+    } else {
+        args.sizes.clone()
+    };
+    let mut rows = Vec::new();
+    for size in sizes {
+        let row = match benchmark(
+            &mesh,
+            BACK_SEED,
+            &[size],
+            &LleOptions::default(),
+            &TopologyOptions::default(),
+        ) {
+            Ok(found) => {
+                let r = &found[0];
+                BenchRow {
+                    points: r.points,
+                    source: r.source,
+                    embedding_seconds: Some(r.embedding_seconds),
+                    fitting_seconds: Some(r.fitting_seconds),
+                    total_seconds: Some(r.embedding_seconds + r.fitting_seconds),
+                    eigen_iterations: Some(r.eigen_iterations),
+                    hidden_layers: Some(r.layers),
+                    neurons: Some(r.neurons),
+                    relative_rms_error: Some(r.relative_rms_error),
+                    error: None,
+                }
+            }
+            Err(e) => BenchRow {
+                points: size,
+                source: if size <= neurosurf_trainer::parametric::PATCH_VERTICES {
+                    "vertices"
+                } else {
+                    "samples"
+                },
+                embedding_seconds: None,
+                fitting_seconds: None,
+                total_seconds: None,
+                eigen_iterations: None,
+                hidden_layers: None,
+                neurons: None,
+                relative_rms_error: None,
+                error: Some(e.to_string()),
+            },
+        };
+        if !args.json {
+            eprintln!("{} points done", row.points);
+        }
+        rows.push(row);
+    }
+    if args.json {
+        return output::json(&rows);
+    }
+    let seconds = |s: Option<f64>| s.map_or("—".to_string(), |s| format!("{s:.3} s"));
+    let mut table = Table::new([
+        ("points", Align::Right),
+        ("source", Align::Left),
+        ("embedding", Align::Right),
+        ("fitting", Align::Right),
+        ("total", Align::Right),
+        ("network", Align::Left),
+        ("rel. RMS", Align::Left),
+    ]);
+    for r in &rows {
+        table.push([
+            r.points.to_string(),
+            r.source.to_string(),
+            seconds(r.embedding_seconds),
+            seconds(r.fitting_seconds),
+            seconds(r.total_seconds),
+            match (r.hidden_layers, r.neurons) {
+                (Some(l), Some(n)) => format!("{l} × {n}"),
+                _ => "—".to_string(),
+            },
+            match (&r.error, r.relative_rms_error) {
+                (Some(e), _) => format!("refused: {e}"),
+                (None, Some(x)) => format!("{x:.2e}"),
+                _ => "—".to_string(),
+            },
+        ]);
+    }
+    print!("{}", table.to_text());
+    Ok(())
+}
+
+/// Points from text, PLY or OBJ (its vertices).
+fn read_points(path: &Path) -> Result<Vec<[f64; 3]>> {
+    if path.extension().and_then(|e| e.to_str()) == Some("obj") {
+        return Ok(read_mesh(path)?.positions);
+    }
+    Ok(read_query_points(path)?)
+}
+
+/// One line of space-separated numbers per row.
+fn rows<const N: usize>(values: &[[f64; N]]) -> String {
+    let mut text = String::new();
+    for row in values {
+        let line: Vec<String> = row.iter().map(|c| format!("{c}")).collect();
+        text.push_str(&line.join(" "));
+        text.push('\n');
+    }
+    text
+}

@@ -1,0 +1,177 @@
+//! Converting between the trainer's `f64` [`SurfaceNetwork`] and the core's surface-network
+//! blobs (layout in `neurosurf_core::parametric`).
+//!
+//! The blob stores input gains g = 1/s (the core multiplies, never divides); reading back
+//! gives s = 1/g, equal to the trained scale up to the storage rounding. The metadata (opaque
+//! to the core) is a postcard-encoded [`NetworkSummary`]. Every blob written here is loaded
+//! back by the core before it is returned.
+
+use std::path::Path;
+
+use neurosurf_core::blob::{ModelKind, stored_value};
+use neurosurf_core::parametric::{
+    self as core_parametric, SurfaceNetworkModel, SurfaceNetworkPayload,
+};
+use neurosurf_core::scalar::{Q16, ScalarKind};
+use serde::{Deserialize, Serialize};
+
+use super::activation::Activation;
+use super::fit::SurfaceFit;
+use super::network::SurfaceNetwork;
+use crate::error::{Error, Result};
+use crate::implicit::frame;
+
+/// How a surface-network blob was made (stored as its metadata).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NetworkSummary {
+    /// Points the network was fitted to.
+    pub points: usize,
+    /// Configurations the topology search trained.
+    pub candidates: usize,
+    /// RMS distance between the network and the points (the points' units).
+    pub rms_error: f64,
+    /// The same over the points' bounding-box diagonal.
+    pub relative_rms_error: f64,
+    /// Wall-clock seconds of the fit.
+    pub seconds: f64,
+}
+
+impl NetworkSummary {
+    /// The summary of a fit that took `seconds`.
+    pub fn of(fit: &SurfaceFit, points: usize, seconds: f64) -> Self {
+        NetworkSummary {
+            points,
+            candidates: fit.search.candidates.len(),
+            rms_error: fit.rms_error,
+            relative_rms_error: fit.relative_rms_error,
+            seconds,
+        }
+    }
+}
+
+/// A surface-network blob read back into `f64`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DecodedNetwork {
+    /// The network, words widened to `f64` exactly (scales as 1/g).
+    pub network: SurfaceNetwork,
+    /// The fit summary, if the blob carries a readable one.
+    pub summary: Option<NetworkSummary>,
+    /// How the words were stored.
+    pub stored_as: ScalarKind,
+}
+
+impl Activation {
+    /// The core's activation of the same formula.
+    pub fn core(self) -> core_parametric::Activation {
+        match self {
+            Activation::LogSig => core_parametric::Activation::LogSig,
+            Activation::TanSig => core_parametric::Activation::TanSig,
+            Activation::RadBas => core_parametric::Activation::RadBas,
+            Activation::TriBas => core_parametric::Activation::TriBas,
+        }
+    }
+}
+
+/// Encodes `network` as a [`ModelKind::SurfaceNetwork`] blob storing its words as `scalar`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when a layer is wider than the core's
+/// [`MAX_NEURONS`](core_parametric::MAX_NEURONS) or deeper than
+/// [`MAX_HIDDEN_LAYERS`](core_parametric::MAX_HIDDEN_LAYERS), a word cannot be stored in
+/// `scalar` (Q16.16: |value| ≤ 1024 for evaluation), or the core would not load the result.
+pub fn network_to_blob(
+    network: &SurfaceNetwork,
+    summary: Option<&NetworkSummary>,
+    scalar: ScalarKind,
+) -> Result<Vec<u8>> {
+    let sizes = network.hidden_sizes();
+    if sizes.len() > core_parametric::MAX_HIDDEN_LAYERS {
+        return Err(Error::invalid(format!(
+            "{} hidden layers: the core evaluates at most {}",
+            sizes.len(),
+            core_parametric::MAX_HIDDEN_LAYERS
+        )));
+    }
+    if let Some(n) = sizes.iter().find(|&&n| n > core_parametric::MAX_NEURONS) {
+        return Err(Error::invalid(format!(
+            "a hidden layer of {n} neurons: the core evaluates at most {}",
+            core_parametric::MAX_NEURONS
+        )));
+    }
+    let hidden: Vec<u8> = sizes.iter().map(|&n| n as u8).collect();
+    let mut values = vec![
+        network.input_center[0],
+        network.input_center[1],
+        1.0 / network.input_scale[0],
+        1.0 / network.input_scale[1],
+    ];
+    values.extend(network.parameters());
+    values.extend(network.output_center);
+    values.push(network.output_scale);
+    let mut words = Vec::with_capacity(values.len() * 4);
+    for (index, &value) in values.iter().enumerate() {
+        let word = scalar.encode(value).ok_or_else(|| {
+            Error::invalid(format!(
+                "word {index} of the network ({value}) cannot be stored as {}",
+                scalar.name()
+            ))
+        })?;
+        words.extend_from_slice(&word);
+    }
+    let metadata = match summary {
+        None => Vec::new(),
+        Some(summary) => postcard::to_allocvec(summary)
+            .map_err(|e| Error::invalid(format!("cannot encode the fit summary: {e}")))?,
+    };
+    let payload = SurfaceNetworkPayload {
+        activation: network.activation.core().code(),
+        hidden: &hidden,
+        parameters: &words,
+        metadata: &metadata,
+    };
+    let bytes = frame(ModelKind::SurfaceNetwork, scalar, &payload)?;
+    let loads = match scalar {
+        ScalarKind::Q16_16 => SurfaceNetworkModel::<Q16>::from_blob(&bytes).map(drop),
+        _ => SurfaceNetworkModel::<f32>::from_blob(&bytes).map(drop),
+    };
+    loads.map_err(|e| Error::invalid(format!("the core would not load this network: {e}")))?;
+    Ok(bytes)
+}
+
+/// Reads a surface-network blob back into `f64`. `path` only names the source in errors.
+///
+/// # Errors
+/// [`Error::Blob`] when the core rejects the blob (framing, kind, shapes, words).
+pub fn network_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedNetwork> {
+    let rejected = |source| Error::Blob {
+        path: path.to_path_buf(),
+        source,
+    };
+    let core = SurfaceNetworkModel::<f32>::from_blob(bytes).map_err(rejected)?;
+    let (header, payload) = SurfaceNetworkPayload::from_blob(bytes).map_err(rejected)?;
+    let words: Vec<f64> = payload
+        .parameters
+        .chunks_exact(4)
+        .map(|w| stored_value(w, header.scalar).unwrap_or(0.0))
+        .collect();
+    let activation = Activation::ALL
+        .into_iter()
+        .find(|a| a.core() == core.activation())
+        .unwrap_or_default();
+    let hidden: Vec<usize> = payload.hidden.iter().map(|&n| usize::from(n)).collect();
+    let n = words.len();
+    let mut network = SurfaceNetwork::zeros(
+        &hidden,
+        activation,
+        [words[0], words[1]],
+        [1.0 / words[2], 1.0 / words[3]],
+        [words[n - 4], words[n - 3], words[n - 2]],
+        words[n - 1],
+    )?;
+    network.set_parameters(&words[4..n - 4])?;
+    Ok(DecodedNetwork {
+        network,
+        summary: postcard::from_bytes(payload.metadata).ok(),
+        stored_as: header.scalar,
+    })
+}

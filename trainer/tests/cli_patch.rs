@@ -1,0 +1,289 @@
+//! `neurosurf patch …` run as a user would: sample points on a known surface, embed them, fit
+//! a surface network, tessellate it both ways, evaluate the blob on the host and on the
+//! simulated Cortex-M4F (which must print exactly what the host prints), stitch two patches
+//! and fill a hole. Bad point sets fail with a message naming the problem and write nothing.
+
+mod common;
+
+use common::{fails, ok};
+use std::fs;
+use std::path::Path;
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
+}
+
+#[test]
+fn points_to_network_to_meshes_and_the_target_agrees() {
+    let dir = tempfile::tempdir().unwrap();
+    let (points, uv, blob) = (
+        dir.path().join("wavy.txt"),
+        dir.path().join("uv.txt"),
+        dir.path().join("wavy.nsb"),
+    );
+    ok(&[
+        "patch",
+        "sample",
+        "wavy",
+        "--points",
+        "300",
+        "--seed",
+        "4",
+        "--out",
+        s(&points),
+    ]);
+    let embedded = json(&ok(&[
+        "patch",
+        "embed",
+        s(&points),
+        "--out",
+        s(&uv),
+        "--json",
+    ]));
+    assert_eq!(embedded["points"], 300);
+    assert_eq!(fs::read_to_string(&uv).unwrap().lines().count(), 300);
+    let fit = json(&ok(&[
+        "patch",
+        "fit",
+        s(&points),
+        "--parameters",
+        s(&uv),
+        "--max-neurons",
+        "6",
+        "--scalar",
+        "q16.16",
+        "--out",
+        s(&blob),
+        "--json",
+    ]));
+    assert_eq!(fit["stored_as"], "q16.16");
+    assert!(fit["relative_rms_error"].as_f64().unwrap() < 0.01, "{fit}");
+    let layers = fit["hidden_layers"].as_array().unwrap();
+    assert!(!layers.is_empty() && layers.len() <= 2, "{fit}");
+    let info = ok(&["info", s(&blob)]);
+    assert!(
+        info.contains("surface-network") && info.contains("300 points"),
+        "{info}"
+    );
+
+    for (method, out, resolution) in [("coons", "grid.obj", "20"), ("delaunay", "tri.ply", "20")] {
+        let mesh = dir.path().join(out);
+        let report = json(&ok(&[
+            "patch",
+            "tessellate",
+            s(&blob),
+            "--parameters",
+            s(&uv),
+            "--method",
+            method,
+            "--resolution",
+            resolution,
+            "--out",
+            s(&mesh),
+            "--json",
+        ]));
+        assert_eq!(report["non_manifold_edges"], 0, "{method}");
+        assert!(
+            report["boundary_edges"].as_u64().unwrap() > 20,
+            "{method}: an open patch"
+        );
+        let vertices = report["vertices"].as_u64().unwrap();
+        if method == "coons" {
+            assert_eq!(
+                (vertices, report["triangles"].as_u64().unwrap()),
+                (400, 2 * 19 * 19)
+            );
+        } else {
+            assert!((250..600).contains(&vertices), "{report}");
+        }
+        assert!(fs::metadata(&mesh).unwrap().len() > 1000);
+    }
+    // Without parameters: the trained (u, v) box.
+    let boxed = dir.path().join("box.obj");
+    let report = json(&ok(&[
+        "patch",
+        "tessellate",
+        s(&blob),
+        "--resolution",
+        "8",
+        "--out",
+        s(&boxed),
+        "--json",
+    ]));
+    assert_eq!(report["vertices"], 64);
+
+    // `u v` queries: the target prints exactly what the host's core prints.
+    let queries = dir.path().join("q.txt");
+    fs::write(&queries, "0 0\n0.5 -0.25\n-1 1\n1.5 0.3\n").unwrap();
+    let host = ok(&[
+        "eval",
+        s(&blob),
+        "--points",
+        s(&queries),
+        "--scalar",
+        "q16.16",
+    ]);
+    assert!(host.starts_with("u,v,x,y,z,nx,ny,nz"), "{host}");
+    assert_eq!(host.lines().count(), 5);
+    let target = ok(&[
+        "sim",
+        s(&blob),
+        "--points",
+        s(&queries),
+        "--scalar",
+        "q16.16",
+    ]);
+    assert_eq!(host, target);
+}
+
+#[test]
+fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
+    let dir = tempfile::tempdir().unwrap();
+    let (points, blob, top) = (
+        dir.path().join("plane.txt"),
+        dir.path().join("plane.nsb"),
+        dir.path().join("top.obj"),
+    );
+    ok(&[
+        "patch",
+        "sample",
+        "plane",
+        "--points",
+        "200",
+        "--out",
+        s(&points),
+    ]);
+    ok(&[
+        "patch",
+        "fit",
+        s(&points),
+        "--max-neurons",
+        "3",
+        "--out",
+        s(&blob),
+    ]);
+    ok(&[
+        "patch",
+        "tessellate",
+        s(&blob),
+        "--resolution",
+        "12",
+        "--out",
+        s(&top),
+    ]);
+    // The same patch lifted by 0.05: stitched to the first, a closed pillow.
+    let lifted: String = fs::read_to_string(&top)
+        .unwrap()
+        .lines()
+        .map(|line| match line.strip_prefix("v ") {
+            Some(rest) => {
+                let c: Vec<f64> = rest
+                    .split_whitespace()
+                    .map(|x| x.parse().unwrap())
+                    .collect();
+                format!("v {} {} {}\n", c[0], c[1], c[2] + 0.05)
+            }
+            None => format!("{line}\n"),
+        })
+        .collect();
+    let bottom = dir.path().join("bottom.obj");
+    fs::write(&bottom, lifted).unwrap();
+    let stitched = dir.path().join("pillow.ply");
+    let report = json(&ok(&[
+        "patch",
+        "stitch",
+        s(&top),
+        s(&bottom),
+        "--out",
+        s(&stitched),
+        "--json",
+    ]));
+    assert_eq!(report["watertight"], true, "{report}");
+    assert_eq!(report["gap_after"], 0.0);
+    assert!((report["gap_before"].as_f64().unwrap() - 0.05).abs() < 1e-6);
+    let e = fails(&[
+        "patch",
+        "stitch",
+        s(&top),
+        s(&bottom),
+        s(&top),
+        "--out",
+        s(&stitched),
+    ]);
+    assert!(e.contains("--seam"), "{e}");
+
+    let Ok(fandisk) = neurosurf_trainer::io::data_file("fandisk.obj") else {
+        eprintln!("fandisk.obj not found: skipped");
+        return;
+    };
+    let filled = dir.path().join("filled.obj");
+    let report = json(&ok(&[
+        "patch",
+        "fill-hole",
+        s(&fandisk),
+        "--punch",
+        "1000,3",
+        "--out",
+        s(&filled),
+        "--json",
+    ]));
+    assert_eq!(
+        (report["holes"].as_u64(), report["watertight"].as_bool()),
+        (Some(1), Some(true))
+    );
+    assert!(report["new_vertices"].as_u64().unwrap() > 5, "{report}");
+    let e = fails(&["patch", "fill-hole", s(&fandisk), "--out", s(&filled)]);
+    assert!(e.contains("has no holes"), "{e}");
+}
+
+#[test]
+fn bad_point_sets_fail_clearly_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.txt");
+    let write = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        fs::write(&path, text).unwrap();
+        path
+    };
+    let line = write(
+        "line.txt",
+        (0..20).map(|i| format!("{i} {i} {i}\n")).collect(),
+    );
+    let few = write(
+        "few.txt",
+        (0..5).map(|i| format!("{i} {} 0\n", i * i)).collect(),
+    );
+    let grid: String = (0..30)
+        .map(|i| format!("{} {} 0.1\n", i % 6, i / 6))
+        .collect();
+    let duplicate = write("dup.txt", grid.clone() + "2 3 0.1\n");
+    let sphere = dir.path().join("sphere.txt");
+    ok(&[
+        "patch",
+        "sample",
+        "sphere",
+        "--points",
+        "400",
+        "--out",
+        s(&sphere),
+    ]);
+    for (points, expected) in [
+        (&line, "line"),
+        (&few, "too few"),
+        (&duplicate, "coincide"),
+        (&sphere, "cannot flatten"),
+    ] {
+        let e = fails(&["patch", "embed", s(points), "--out", s(&out)]);
+        assert!(e.contains(expected), "{}: {e}", points.display());
+        let blob = dir.path().join("x.nsb");
+        let e = fails(&["patch", "fit", s(points), "--out", s(&blob)]);
+        assert!(e.contains(expected), "{}: {e}", points.display());
+        assert!(!out.exists() && !blob.exists());
+    }
+    let e = fails(&["patch", "tessellate", s(&line), "--out", s(&out)]);
+    assert!(e.contains(s(&line)), "{e}");
+}
