@@ -137,3 +137,45 @@ pub fn animate(
         kept,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::body::body_fidelity;
+
+    /// The body converges cold, the animation's frames converge warm, stay close to their
+    /// true bodies, and each warm frame needs fewer iterations than learning the same frame
+    /// from scratch (the paper: "much faster than for the initial state").
+    #[test]
+    fn warm_frames_converge_in_fewer_iterations_than_cold_ones() {
+        let options = ImplicitOptions::default();
+        let frames = 8;
+        let rest = body_points(&Pose::REST, 1).unwrap();
+        let first = train_body(&rest, &options, None, &|_| {}).unwrap();
+        assert!(first.summary.converged());
+        let fidelity = body_fidelity(&first.network, &Pose::REST, 1).unwrap();
+        assert!(fidelity.median_distance_percent < 0.1, "{fidelity:?}");
+        assert!(fidelity.median_angle_degrees < 5.0, "{fidelity:?}");
+
+        let animation = animate(&first, 6, 1, &options, &[5], &|_, _| {}).unwrap();
+        assert_eq!(animation.frames.len(), 5);
+        assert!(animation.frames.iter().all(|f| f.converged));
+        let (frame, pose, network) = &animation.kept[0];
+        assert_eq!((*frame, *pose), (5, Pose::RAISED));
+        let fidelity = body_fidelity(network, pose, 1).unwrap();
+        assert!(fidelity.median_distance_percent < 0.1, "{fidelity:?}");
+
+        // The first step of an 8-frame animation, warm against cold.
+        let points = body_points(&Pose::animation(1, frames), 1).unwrap();
+        let chain = first.summary.cold_iterations.as_slice();
+        let warm = train_body(&points, &options, Some((&first.network, chain)), &|_| {}).unwrap();
+        let cold = train_body(&points, &options, None, &|_| {}).unwrap();
+        assert!(warm.summary.converged() && cold.summary.converged());
+        assert!(
+            2 * warm.summary.iterations() < cold.summary.iterations(),
+            "warm {} cold {}",
+            warm.summary.iterations(),
+            cold.summary.iterations()
+        );
+    }
+}

@@ -23,7 +23,7 @@ use crate::render::{
 };
 
 /// Growth of the per-feature boxes (their joints must overlap; the paper: "slightly").
-pub const FEATURE_INFLATE: f64 = 1.3;
+pub const FEATURE_INFLATE: f64 = 1.1;
 
 /// The search regions of a model trained on `points`: each feature's principal-axis box,
 /// scaled per axis and inflated by `inflate`; the isotropic box for a flat feature (whose
