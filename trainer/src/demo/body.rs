@@ -24,10 +24,11 @@ pub fn body_points(pose: &Pose, seed: u64) -> Result<PointSet> {
 }
 
 /// The body's tree ([`BODY_TREE`]).
-pub fn body_tree() -> TreeSpec {
-    // BODY_TREE is a constant checked by the sampler's tests; a parse failure would be a bug
-    // caught there, so fall back to a balanced spelling rather than panic.
-    BODY_TREE.parse().unwrap_or_else(|_| TreeSpec::Leaf(0))
+///
+/// # Errors
+/// None expected: the constant is parsed and checked by the sampler's tests.
+pub fn body_tree() -> Result<TreeSpec> {
+    BODY_TREE.parse()
 }
 
 /// Trains the body on `points` (cold, or warm from `init`: a previous frame's network and its
@@ -41,7 +42,7 @@ pub fn train_body(
     init: Option<(&ImplicitNetwork, &[usize])>,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<Trained> {
-    train(points, &body_tree(), options, init, progress)
+    train(points, &body_tree()?, options, init, progress)
 }
 
 /// How close a trained body is to the true surface in `pose`.

@@ -23,10 +23,10 @@ fn esc(text: &str) -> String {
 }
 
 fn figure(out: &mut String, p: &Picture) {
-    let _ = write!(
+    let _ = writeln!(
         out,
         "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}<br><small>{}×{}, {} ray(s)/pixel, \
-         {:.2} s</small></figcaption></figure>\n",
+         {:.2} s</small></figcaption></figure>",
         esc(&p.file),
         esc(&p.caption),
         esc(&p.caption),

@@ -5,15 +5,16 @@
 //!
 //! Every feature is one analytic primitive — the head's three ellipsoids, capsules for the
 //! neck and limbs, ellipsoids for the torso, hands and feet — moved by a rigid motion about
-//! its joints. A feature's control points are area-uniform on its primitive where no other
-//! primitive covers it, so the points lie exactly on the boundary of the union and carry its
-//! outward normal.
+//! its joints. A feature's candidate points are area-uniform on its primitive where no other
+//! primitive covers it, so they lie exactly on the boundary of the union and carry its outward
+//! normal; its control points are an evenly spread subset of 8× as many candidates (greedy
+//! farthest-point selection). Purely random control points leave holes that the network fills
+//! with bulges (measured: RMS distance to the true body 1.3 % of its diameter against 0.15 %).
 //!
 //! The animation keeps the points' identity: a feature's candidates are drawn in its rest
-//! frame from a random stream of its own and then moved with it, and the first ones not
-//! covered by another part are kept. Between two frames a point moves only as its limb moves
-//! (a few are swapped where a joint hides or exposes them), which is what makes a warm start
-//! from the previous frame cheap.
+//! frame from a random stream of its own and then moved with it. Between two frames a point
+//! moves only as its limb moves (a few change where a joint hides or exposes candidates), which
+//! is what makes a warm start from the previous frame cheap.
 //!
 //! Frame: z up (the body is ≈ 14 units tall, the head 2, as in [`Shape::Head`]), the face
 //! looks toward +y, the body's right side is +x.
@@ -465,7 +466,7 @@ mod tests {
         let top = rest.positions.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
         let bottom = rest.positions.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
         assert!(
-            top > 13.5 && top < 14.0 && bottom >= -1e-9 && bottom < 0.1,
+            (13.5..14.0).contains(&top) && (-1e-9..0.1).contains(&bottom),
             "{bottom}..{top}"
         );
         let raised = Body::new(&Pose::RAISED).sample(&BODY_POINTS, 1).unwrap();
