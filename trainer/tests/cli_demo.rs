@@ -79,6 +79,16 @@ fn the_tour_learned_the_body_and_its_animation(tour: &serde_json::Value) {
         last["median_distance_percent"].as_f64().unwrap() < 0.1,
         "{last}"
     );
+    // The mesh body (when the shared data is there): 17 automatic features, close to the slab
+    // at most points even though its sharp edges keep the modules above the threshold.
+    let woody = &tour["woody"];
+    if !woody.is_null() {
+        assert_eq!(woody["features"], 17, "{woody}");
+        let median = woody["fidelity"]["median_distance_percent"]
+            .as_f64()
+            .unwrap();
+        assert!(median < 0.5, "{woody}");
+    }
     let tables: Vec<&str> = tour["timings"]
         .as_array()
         .unwrap()

@@ -160,6 +160,19 @@ fn print_tour(tour: &Tour) {
         a.cold_iterations,
         a.converged
     );
+    if let Some(w) = &tour.woody {
+        println!(
+            "woody.obj cookie: {} control points, {} automatic features, {} iterations, {:.3} s, \
+             converged: {}; median distance {:.4} %D, median angle {:.2}°",
+            w.control_points,
+            w.features,
+            w.iterations,
+            w.seconds,
+            w.converged,
+            w.fidelity.median_distance_percent,
+            w.fidelity.median_angle_degrees
+        );
+    }
     println!(
         "\n{:<8} {:<55} {:>9} {:>10} {:>9}",
         "table", "what", "paper", "here", "speed-up"

@@ -10,6 +10,7 @@ mod parametric;
 mod pictures;
 mod report;
 mod tour;
+mod woody;
 
 pub use animation::{Animation, FrameReport, PAPER_FRAMES, Spread, animate};
 pub use body::{
@@ -19,6 +20,7 @@ pub use parametric::{ParametricDemo, cao_en, curve};
 pub use pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};
 pub use report::{INDEX, html, write_index};
 pub use tour::{AnimationDemo, BodyDemo, PaperTiming, Tour, TourModels, TourSize, tour};
+pub use woody::{WOODY_ITERATIONS, WOODY_POINTS, WoodyDemo, extrude, woody, woody_mesh};
 
 use std::path::{Path, PathBuf};
 

@@ -9,6 +9,7 @@ use serde::Serialize;
 use super::animation::{FrameReport, PAPER_FRAMES, Spread, animate};
 use super::body::{BodyModule, body_fidelity, body_points, modules, train_body};
 use super::pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};
+use super::woody::{WoodyDemo, woody};
 use crate::error::Result;
 use crate::fidelity::Fidelity;
 use crate::implicit::{ImplicitOptions, Progress, Trained};
@@ -120,6 +121,9 @@ pub struct Tour {
     pub memorization: Vec<Picture>,
     /// Tables 2–4.
     pub timings: Vec<PaperTiming>,
+    /// The body from `woody.obj` with automatic features; `None` when the data file is not
+    /// there (see `io::data_file`).
+    pub woody: Option<WoodyDemo>,
 }
 
 /// The demo's torus and head, already trained.
@@ -276,6 +280,22 @@ pub fn tour(
         )?);
     }
 
+    let woody = match crate::io::data_file("woody.obj") {
+        Ok(_) => {
+            let (demo, trained, points) = woody(seed, &|p| progress("woody", p))?;
+            pictures.push(picture(
+                &trained.network,
+                feature_regions(&points, FEATURE_INFLATE),
+                &framing(&point_bounds(&points.positions), 20.0, 10.0, w, h)?,
+                size.samples,
+                out_dir,
+                "woody.png",
+                "woody.obj extruded into a cookie: 17 automatic features, balanced tree",
+            )?);
+            Some(demo)
+        }
+        Err(_) => None,
+    };
     let timings = paper_timings(models.head, &body_demo, &animation_demo, &pictures, size);
     Ok(Tour {
         size,
@@ -284,6 +304,7 @@ pub fn tour(
         pictures,
         memorization,
         timings,
+        woody,
     })
 }
 
