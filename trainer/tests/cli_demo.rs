@@ -9,7 +9,7 @@ use common::{fails, ok};
 fn the_demo_writes_every_model_and_reports_their_accuracy() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    let text = ok(&["demo", "--out", out.to_str().unwrap(), "--json"]);
+    let text = ok(&["demo", "--quick", "--out", out.to_str().unwrap(), "--json"]);
     let report: serde_json::Value = serde_json::from_str(&text).unwrap();
     let models = report["models"].as_array().unwrap();
     let names: Vec<&str> = models.iter().map(|m| m["name"].as_str().unwrap()).collect();
@@ -47,6 +47,101 @@ fn the_demo_writes_every_model_and_reports_their_accuracy() {
     assert_eq!((png.width(), png.height()), (720, 330));
     let obj = std::fs::read_to_string(out.join("cao-en.obj")).unwrap();
     assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 2562);
+    the_tour_learned_the_body_and_its_animation(&report["tour"]);
+    the_report_page_shows_existing_pictures(&out, &report);
+}
+
+/// The §6–7 tour: 316 points in 17 features, 33 modules all converged, close to the true
+/// body; the warm-started frames converge in fewer iterations than the cold start.
+fn the_tour_learned_the_body_and_its_animation(tour: &serde_json::Value) {
+    let body = &tour["body"];
+    assert_eq!(body["control_points"], 316, "{body}");
+    assert_eq!(body["features"].as_array().unwrap().len(), 17);
+    assert_eq!(body["modules"].as_array().unwrap().len(), 33);
+    assert_eq!(body["converged"], true, "{body}");
+    let fidelity = &body["fidelity"];
+    assert!(
+        fidelity["median_distance_percent"].as_f64().unwrap() < 0.1,
+        "{fidelity}"
+    );
+    assert!(
+        fidelity["median_angle_degrees"].as_f64().unwrap() < 5.0,
+        "{fidelity}"
+    );
+    let animation = &tour["animation"];
+    assert_eq!(animation["converged"], true, "{animation}");
+    assert_eq!(animation["per_frame"].as_array().unwrap().len(), 5);
+    let warm = animation["iterations"]["average"].as_f64().unwrap();
+    let cold = animation["cold_iterations"].as_f64().unwrap();
+    assert!(warm < cold, "warm {warm} cold {cold}");
+    let last = &animation["last_fidelity"];
+    assert!(
+        last["median_distance_percent"].as_f64().unwrap() < 0.1,
+        "{last}"
+    );
+    // The mesh body (when the shared data is there): 17 automatic features, close to the slab
+    // at most points even though its sharp edges keep the modules above the threshold.
+    let woody = &tour["woody"];
+    if !woody.is_null() {
+        assert_eq!(woody["features"], 17, "{woody}");
+        let median = woody["fidelity"]["median_distance_percent"]
+            .as_f64()
+            .unwrap();
+        assert!(median < 0.5, "{woody}");
+    }
+    let tables: Vec<&str> = tour["timings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["table"].as_str().unwrap())
+        .collect();
+    for table in ["Table 2", "Table 3", "Table 4"] {
+        assert!(tables.contains(&table), "{tables:?}");
+    }
+}
+
+/// Every picture the report names is a PNG in the folder, referenced relatively from
+/// `index.html`; every `src` in the page is one of them.
+fn the_report_page_shows_existing_pictures(out: &std::path::Path, report: &serde_json::Value) {
+    let index = std::path::PathBuf::from(report["index"].as_str().unwrap());
+    assert_eq!(index, out.join("index.html"));
+    let page = std::fs::read_to_string(&index).unwrap();
+    let sources: Vec<&str> = page
+        .split("src=\"")
+        .skip(1)
+        .map(|rest| &rest[..rest.find('"').unwrap()])
+        .collect();
+    let tour = &report["tour"];
+    let mut pictures: Vec<&str> = tour["pictures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain(tour["memorization"].as_array().unwrap())
+        .map(|p| p["file"].as_str().unwrap())
+        .collect();
+    for expected in [
+        "torus.png",
+        "head.png",
+        "body-front.png",
+        "frame-00.png",
+        "frame-03.png",
+        "frame-05.png",
+        "head-memorization-3.png",
+    ] {
+        assert!(pictures.contains(&expected), "{pictures:?}");
+    }
+    pictures.sort_unstable();
+    let mut shown = sources.clone();
+    shown.sort_unstable();
+    assert_eq!(shown, pictures);
+    for source in sources {
+        assert!(!source.contains('/') && !source.contains(':'), "{source}");
+        let png = image::open(out.join(source)).unwrap();
+        assert!(png.width() >= 48 && png.height() >= 48, "{source}");
+    }
+    for table in ["Table 2", "Table 3", "Table 4", "352 s", "q16.16"] {
+        assert!(page.contains(table), "{table}");
+    }
 }
 
 #[test]

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use neurosurf_trainer::demo::{self, HELD_OUT};
+use neurosurf_trainer::demo::{self, HELD_OUT, Tour, TourSize};
 
 use super::{output, progress};
 
@@ -16,6 +16,10 @@ pub struct Args {
     /// Seed of the samples and the weight initialization.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// A small tour (6 animation frames, small pictures, 1 ray per pixel): seconds, not
+    /// minutes.
+    #[arg(long)]
+    quick: bool,
     /// Print a JSON report instead of the table.
     #[arg(long)]
     json: bool,
@@ -23,7 +27,12 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<()> {
     let bar = progress::training_bar("demo", args.json);
-    let report = demo::run(&args.out, args.seed, &|name, event| {
+    let size = if args.quick {
+        TourSize::QUICK
+    } else {
+        TourSize::PAPER
+    };
+    let report = demo::run(&args.out, args.seed, Some(size), &|name, event| {
         bar.set_prefix(name.to_string());
         progress::update(&bar, event);
     })?;
@@ -100,6 +109,9 @@ pub fn run(args: &Args) -> Result<()> {
             );
         }
     }
+    if let Some(tour) = &report.tour {
+        print_tour(tour);
+    }
     println!();
     for m in &report.models {
         for (path, bytes) in &m.blobs {
@@ -111,5 +123,69 @@ pub fn run(args: &Args) -> Result<()> {
             println!("wrote {} ({bytes} bytes)", path.display());
         }
     }
+    if let Some(tour) = &report.tour {
+        for p in tour.pictures.iter().chain(&tour.memorization) {
+            println!("wrote {}", report.out_dir.join(&p.file).display());
+        }
+    }
+    if let Some(index) = &report.index {
+        println!("\nreport: {} (open it in a browser)", index.display());
+    }
     Ok(())
+}
+
+fn print_tour(tour: &Tour) {
+    let b = &tour.body;
+    println!(
+        "\nbody: {} control points, {} features, {} modules, {} iterations, {:.3} s, converged: {}; \
+         median distance {:.4} %D, median angle {:.2}°",
+        b.control_points,
+        b.features.len(),
+        b.modules.len(),
+        b.iterations,
+        b.seconds,
+        b.converged,
+        b.fidelity.median_distance_percent,
+        b.fidelity.median_angle_degrees
+    );
+    let a = &tour.animation;
+    println!(
+        "animation: {} frames, warm-started: {:.3} s per frame (min {:.3}, max {:.3}), \
+         {:.0} iterations per frame against {} cold, converged: {}",
+        a.frames,
+        a.seconds.average,
+        a.seconds.min,
+        a.seconds.max,
+        a.iterations.average,
+        a.cold_iterations,
+        a.converged
+    );
+    if let Some(w) = &tour.woody {
+        println!(
+            "woody.obj cookie: {} control points, {} automatic features, {} iterations, {:.3} s, \
+             converged: {}; median distance {:.4} %D, median angle {:.2}°",
+            w.control_points,
+            w.features,
+            w.iterations,
+            w.seconds,
+            w.converged,
+            w.fidelity.median_distance_percent,
+            w.fidelity.median_angle_degrees
+        );
+    }
+    println!(
+        "\n{:<8} {:<55} {:>9} {:>10} {:>9}",
+        "table", "what", "paper", "here", "speed-up"
+    );
+    for t in &tour.timings {
+        println!(
+            "{:<8} {:<55} {:>7.0} s {:>8.3} s {:>8.0}×  {}",
+            t.table,
+            t.what,
+            t.paper_seconds,
+            t.seconds,
+            t.paper_seconds / t.seconds.max(1e-9),
+            t.note
+        );
+    }
 }

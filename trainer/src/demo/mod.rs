@@ -1,10 +1,26 @@
 //! The main job on built-in data: sample a torus and the 3-feature head, train both, write
 //! their blobs, and measure each in `f64`, `f32` and Q16.16 against the true surface; then a
-//! curve recovered from scattered points and a Cao En surface (`parametric`).
+//! curve recovered from scattered points and a Cao En surface (`parametric`); then the tour
+//! of Carcenac §6–7 (`tour`: the body, its animation, pictures, Tables 2–4) and a static
+//! `index.html` report of it all (`report`).
 
+mod animation;
+mod body;
 mod parametric;
+mod pictures;
+mod report;
+mod tour;
+mod woody;
 
+pub use animation::{Animation, FrameReport, PAPER_FRAMES, Spread, animate};
+pub use body::{
+    BODY_HELD_OUT, BodyModule, body_fidelity, body_points, body_tree, modules, train_body,
+};
 pub use parametric::{ParametricDemo, cao_en, curve};
+pub use pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};
+pub use report::{INDEX, html, write_index};
+pub use tour::{AnimationDemo, BodyDemo, PaperTiming, Tour, TourModels, TourSize, tour};
+pub use woody::{WOODY_ITERATIONS, WOODY_POINTS, WoodyDemo, extrude, woody, woody_mesh};
 
 use std::path::{Path, PathBuf};
 
@@ -53,15 +69,22 @@ pub struct DemoReport {
     pub models: Vec<DemoModel>,
     /// The curve and the Cao En surface.
     pub parametric: Vec<ParametricDemo>,
+    /// The §6–7 tour, when asked for.
+    pub tour: Option<Tour>,
+    /// The report page, when a tour was made.
+    pub index: Option<PathBuf>,
 }
 
-/// Runs the demo into `out_dir` (created if missing) with `seed`.
+/// Runs the demo into `out_dir` (created if missing) with `seed`; with `tour`, also the
+/// §6–7 tour at that size and the `index.html` report.
 ///
 /// # Errors
-/// I/O errors writing into `out_dir`; training errors (none expected on built-in data).
+/// I/O errors writing into `out_dir`; training and rendering errors (none expected on
+/// built-in data).
 pub fn run(
     out_dir: &Path,
     seed: u64,
+    tour_size: Option<TourSize>,
     progress: &(dyn Fn(&str, Progress) + Sync),
 ) -> Result<DemoReport> {
     std::fs::create_dir_all(out_dir).map_err(|e| crate::Error::io(out_dir, e))?;
@@ -74,6 +97,7 @@ pub fn run(
         ("head", Shape::Head, 99, Some("((0,1),2)")),
     ];
     let mut models = Vec::new();
+    let mut networks = Vec::new();
     for (name, shape, count, tree) in jobs {
         let points = sample_shape(&shape, count, seed)?;
         write_points_ply(
@@ -135,11 +159,20 @@ pub fn run(
             fidelity,
             max_field_deviation: deviation,
         });
+        networks.push(trained);
     }
     let parametric = vec![curve(out_dir, seed)?, cao_en(out_dir)?];
-    Ok(DemoReport {
+    let mut report = DemoReport {
         out_dir: out_dir.to_path_buf(),
         models,
         parametric,
-    })
+        tour: None,
+        index: None,
+    };
+    if let (Some(size), [torus, head]) = (tour_size, networks.as_slice()) {
+        let models = TourModels { torus, head };
+        report.tour = Some(tour(out_dir, seed, size, &models, progress)?);
+        report.index = Some(write_index(&report, out_dir)?);
+    }
+    Ok(report)
 }

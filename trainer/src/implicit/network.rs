@@ -150,6 +150,25 @@ impl ImplicitNetwork {
         (self.kinds[i] == ModuleKind::Node).then(|| (self.lefts[i], i - 1))
     }
 
+    /// The model of the subtree rooted at module `i` alone: what the network had memorized
+    /// when that module finished training (the paper's Fig. 6). Post-order keeps a subtree's
+    /// modules and parameters contiguous, so this is a slice of the whole; `None` for an
+    /// index out of range.
+    pub fn subtree(&self, i: usize) -> Option<ImplicitNetwork> {
+        if i >= self.module_count() {
+            return None;
+        }
+        let first = self.subtree_leaves(i).first().copied().unwrap_or(i);
+        let end = self.offsets[i] + self.layout(i).len;
+        Self::from_parts(
+            self.width,
+            self.kinds[first..=i].to_vec(),
+            self.leaf_features[first..=i].to_vec(),
+            self.params[self.offsets[first]..end].to_vec(),
+        )
+        .ok()
+    }
+
     /// Leaf modules of the subtree rooted at `i`, left to right.
     pub fn subtree_leaves(&self, i: usize) -> Vec<usize> {
         match self.children(i) {

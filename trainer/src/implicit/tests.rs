@@ -238,3 +238,37 @@ fn lm_breakdown_probe() {
         t.elapsed().as_secs_f64() * 1e3 / reps as f64
     );
 }
+
+#[test]
+fn a_subtree_is_the_model_its_root_module_computes() {
+    let tree: TreeSpec = "((0,1),(2,3))".parse().unwrap();
+    let mut network = ImplicitNetwork::new(4, &tree).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    for i in 0..network.module_count() {
+        if let Some(n) = network.normalization(i) {
+            let mut n = n;
+            n.center = [rng.random_range(-1.0..1.0), 0.5, -0.2];
+            n.matrix = [[0.7, 0.1, 0.0], [0.0, 0.9, 0.2], [0.1, 0.0, 1.1]];
+            network.set_normalization(i, &n);
+        }
+        for p in network.trained_params_mut(i) {
+            *p = rng.random_range(-0.8..0.8);
+        }
+    }
+    assert_eq!(network.subtree(network.root()).unwrap(), network);
+    assert!(network.subtree(network.module_count()).is_none());
+    // Module 5 is the node over features 2 and 3; module 0 is feature 0's leaf.
+    for (module, leaves) in [(5, vec![Some(2), Some(3)]), (0, vec![Some(0)])] {
+        let sub = network.subtree(module).unwrap();
+        let features: Vec<_> = sub
+            .leaf_features()
+            .iter()
+            .flatten()
+            .map(|&f| Some(f))
+            .collect();
+        assert_eq!(features, leaves);
+        for x in [[0.1, 0.2, 0.3], [-1.0, 0.4, 2.0]] {
+            assert_eq!(sub.eval(x), network.eval_module(module, x));
+        }
+    }
+}

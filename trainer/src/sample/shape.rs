@@ -58,13 +58,13 @@ pub const HEAD_FEATURES: [&str; 3] = ["head", "nose", "mouth"];
 
 /// An axis-aligned ellipsoid, a building block of [`Shape::Head`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Ellipsoid {
-    center: [f64; 3],
-    axes: [f64; 3],
+pub(super) struct Ellipsoid {
+    pub(super) center: [f64; 3],
+    pub(super) axes: [f64; 3],
 }
 
 /// The head, nose and mouth of [`Shape::Head`], in feature order.
-const HEAD_PARTS: [Ellipsoid; 3] = [
+pub(super) const HEAD_PARTS: [Ellipsoid; 3] = [
     Ellipsoid {
         center: [0.0, 0.0, 0.0],
         axes: [0.75, 0.85, 1.0],
@@ -81,14 +81,14 @@ const HEAD_PARTS: [Ellipsoid; 3] = [
 
 impl Ellipsoid {
     /// `|q / axes| − 1` with `q = p − center`: negative inside, zero on the surface.
-    fn level(&self, p: [f64; 3]) -> f64 {
+    pub(super) fn level(&self, p: [f64; 3]) -> f64 {
         let q = [0, 1, 2].map(|k| (p[k] - self.center[k]) / self.axes[k]);
         norm(q) - 1.0
     }
 
     /// First-order distance estimate `f / |∇f|` of `f = |q / axes| − 1`: exact on the
     /// surface, at the centre and for spheres; the sign is always right.
-    fn distance(&self, p: [f64; 3]) -> f64 {
+    pub(super) fn distance(&self, p: [f64; 3]) -> f64 {
         let q = [0, 1, 2].map(|k| p[k] - self.center[k]);
         let k0 = norm([0, 1, 2].map(|k| q[k] / self.axes[k]));
         let k1 = norm([0, 1, 2].map(|k| q[k] / (self.axes[k] * self.axes[k])));
@@ -112,7 +112,7 @@ impl Ellipsoid {
 
     /// One proposal of the area-uniform sampler: a point on the unit sphere accepted with
     /// probability `dA / (max dA)`. Returns the surface point and its outward unit normal.
-    fn propose(&self, rng: &mut ChaCha8Rng) -> Option<([f64; 3], [f64; 3])> {
+    pub(super) fn propose(&self, rng: &mut ChaCha8Rng) -> Option<([f64; 3], [f64; 3])> {
         let u = unit_sphere(rng);
         let w = self.area_weights();
         let element = norm([w[0] * u[0], w[1] * u[1], w[2] * u[2]]);
@@ -127,7 +127,7 @@ impl Ellipsoid {
 }
 
 /// A uniformly distributed point on the unit sphere (Archimedes: z uniform in [−1, 1]).
-fn unit_sphere(rng: &mut ChaCha8Rng) -> [f64; 3] {
+pub(super) fn unit_sphere(rng: &mut ChaCha8Rng) -> [f64; 3] {
     let z = 2.0 * rng.random::<f64>() - 1.0;
     let phi = TAU * rng.random::<f64>();
     let r = (1.0 - z * z).max(0.0).sqrt();
