@@ -1,5 +1,12 @@
 //! `neurosurf caoen`: Cao En surfaces (Wyvill, Cao & Trotman 1992) — build or fit a network
-//! from key and target points, and mesh it.
+//! from key and target points, mesh it, fit the teapot, render, morph, distort, compress
+//! images.
+
+mod distort;
+mod image;
+mod morph;
+mod render;
+mod teapot;
 
 use std::path::{Path, PathBuf};
 
@@ -24,12 +31,44 @@ pub enum Command {
     /// Map a subdivided sphere (or a torus grid) through a network: a polygon mesh with exact
     /// normals (OBJ or PLY).
     Mesh(MeshArgs),
+    /// The teapot as four Cao En surfaces (body, lid, spout on the sphere; the handle on the
+    /// torus): four blobs, the combined mesh, optionally a picture.
+    Teapot(teapot::Args),
+    /// Depth-buffer picture (PNG) of Cao En surfaces with gap filling, or with --ray-march
+    /// the implicit form of a convex shape.
+    Render(render::Args),
+    /// Metamorphosis between two networks (any key counts): a sequence of meshes and
+    /// optionally pictures.
+    Morph(morph::Args),
+    /// Distort a mesh through a 4-D hypersphere → 3-D network with point controls.
+    Distort(distort::Args),
+    /// Image compression on a 5-D hypersphere: compress, decompress, sample picture.
+    #[command(subcommand)]
+    Image(image::Command),
 }
 
 pub fn run(command: &Command) -> Result<()> {
     match command {
         Command::Fit(args) => fit(args),
         Command::Mesh(args) => mesh(args),
+        Command::Teapot(args) => teapot::run(args),
+        Command::Render(args) => render::run(args),
+        Command::Morph(args) => morph::run(args),
+        Command::Distort(args) => distort::run(args),
+        Command::Image(command) => image::run(command),
+    }
+}
+
+/// The Cao En network in the blob at `path`, for `command`.
+fn read_network(path: &Path, command: &str) -> Result<CaoEnNetwork> {
+    let model = LoadedModel::read(path)?;
+    match model {
+        LoadedModel::CaoEn { decoded, .. } => Ok(decoded.network),
+        other => bail!(
+            "{}: a {} model; `caoen {command}` takes Cao En networks",
+            path.display(),
+            other.kind().name()
+        ),
     }
 }
 
@@ -235,16 +274,9 @@ pub struct MeshArgs {
 }
 
 fn mesh(args: &MeshArgs) -> Result<()> {
-    let model = LoadedModel::read(&args.model)?;
-    let LoadedModel::CaoEn { decoded, .. } = &model else {
-        bail!(
-            "{}: a {} model; `caoen mesh` maps Cao En networks",
-            args.model.display(),
-            model.kind().name()
-        );
-    };
+    let network = read_network(&args.model, "mesh")?;
     let (vertices, triangles) =
-        write_network_mesh(&decoded.network, &args.out, args.subdivisions, args.grid)?;
+        write_network_mesh(&network, &args.out, args.subdivisions, args.grid)?;
     println!(
         "wrote {} ({vertices} vertices, {triangles} triangles)",
         args.out.display()
