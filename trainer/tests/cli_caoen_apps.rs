@@ -102,6 +102,13 @@ fn the_teapot_is_four_surfaces_with_the_handle_on_the_torus() {
         assert!(info.contains("cao-en model"), "{info}");
     }
     assert!(!obj_vertices(&dir.path().join("teapot.obj")).is_empty());
+    // Lit from the viewer's side: outward normals make most of the teapot bright.
+    let picture = image::open(&png).unwrap().to_rgb8();
+    let lit = picture
+        .pixels()
+        .filter(|p| p.0 != [255, 255, 255] && p.0.iter().map(|&c| u32::from(c)).sum::<u32>() > 200)
+        .count();
+    assert!(lit * 10 > drawn_pixels(&png) * 7, "{lit} lit pixels");
     // The teapot fills a good part of its frame.
     let drawn = drawn_pixels(&png);
     assert!(drawn > 160 * 120 / 6, "{drawn} pixels drawn");

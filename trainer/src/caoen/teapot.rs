@@ -26,7 +26,7 @@ use neurosurf_core::caoen::{Blending, Domain};
 use super::distance::{SurfaceDistance, surface_distance};
 use super::fit::fit_shape;
 use super::mesh::{map_mesh, torus_grid};
-use super::mesh_fit::{MeshFitOptions, fit_parameterized};
+use super::mesh_fit::{MeshFit, MeshFitOptions, fit_parameterized};
 use super::network::CaoEnNetwork;
 use super::spherical::spherical_parameterization;
 use super::topology::{boundary_loops, cap_holes, edge_components, neighbours, weld};
@@ -60,6 +60,9 @@ const HANDLE: HandleFit = HandleFit {
 pub struct TeapotPart {
     /// "body", "lid", "spout" or "handle".
     pub name: &'static str,
+    /// How the part was parameterized: "tutte" (the spherical Tutte embedding), "axial"
+    /// (latitude along the axis, longitude around it), "tube" (the spout) or "torus".
+    pub parameterization: &'static str,
     /// The network (sphere, or torus for the handle).
     pub network: CaoEnNetwork,
     /// The part's mesh as found in the file (welded).
@@ -107,9 +110,16 @@ pub fn fit_teapot(mesh: &Mesh, keys: [usize; 3]) -> Result<(Vec<TeapotPart>, Mes
         let closed = cap_holes(&parts[index])?;
         let map = spherical_parameterization(&closed)
             .map_err(|e| Error::invalid(format!("teapot {name}: {e}")))?;
-        let fit = fit_parameterized(&closed, &map.points, n, &options)?;
+        let tutte = fit_parameterized(&closed, &map.points, n, &options)?;
+        // The axial map needs every band of latitude populated; where it is not (or fits
+        // worse), the Tutte map stays.
+        let (fit, parameterization) = match fit_axial(&parts[index], &closed, n, &options) {
+            Ok(axial) if axial.distance.rms < tutte.distance.rms => (axial, "axial"),
+            _ => (tutte, "tutte"),
+        };
         fitted.push(TeapotPart {
             name,
+            parameterization,
             network: fit.network,
             mesh: parts[index].clone(),
             distance: fit.distance,
@@ -249,22 +259,94 @@ fn fit_spout(mesh: &Mesh, keys: usize, options: &MeshFitOptions) -> Result<Teapo
     let closed = cap_holes(mesh)?;
     let first_cap = mesh.positions.len() as u32;
     let tube = tube_coordinates(&closed, &[first_cap], &[first_cap + 1])?;
-    let points: Vec<[f64; 3]> = tube
-        .t
-        .iter()
-        .zip(&tube.phi)
-        .map(|(&t, &phi)| {
-            let a = std::f64::consts::PI * t;
-            [a.cos(), a.sin() * phi.cos(), a.sin() * phi.sin()]
-        })
-        .collect();
-    let fit = fit_parameterized(&closed, &points, keys, options)?;
+    let fit = fit_tube(&closed, &tube, keys, options)?;
     Ok(TeapotPart {
         name: "spout",
+        parameterization: "tube",
         network: fit.network,
         mesh: mesh.clone(),
         distance: fit.distance,
     })
+}
+
+/// Fits a closed mesh through its tube coordinates as sphere points (cos πt, sin πt·cos φ,
+/// sin πt·sin φ), with φ's sense chosen so the network's normals point out of the mesh.
+fn fit_tube(closed: &Mesh, tube: &Tube, keys: usize, options: &MeshFitOptions) -> Result<MeshFit> {
+    let points = |sense: f64| -> Vec<[f64; 3]> {
+        tube.t
+            .iter()
+            .zip(&tube.phi)
+            .map(|(&t, &phi)| {
+                let a = std::f64::consts::PI * t;
+                [a.cos(), a.sin() * phi.cos(), sense * a.sin() * phi.sin()]
+            })
+            .collect()
+    };
+    let forward = points(1.0);
+    let fit = fit_parameterized(closed, &forward, keys, options)?;
+    let sources: Vec<Vec<f64>> = forward.iter().map(|p| p.to_vec()).collect();
+    if faces_outward(&fit.network, &sources, closed) {
+        Ok(fit)
+    } else {
+        fit_parameterized(closed, &points(-1.0), keys, options)
+    }
+}
+
+/// A body of revolution about y (the body, the lid) on the sphere: its hole capped, t from
+/// the pole at the bottom (the lowest vertex nearest the axis, or the cap's centre when the
+/// part is open at the bottom) to the top one, φ around the axis.
+fn fit_axial(part: &Mesh, closed: &Mesh, keys: usize, options: &MeshFitOptions) -> Result<MeshFit> {
+    let caps: Vec<u32> = (part.positions.len() as u32..closed.positions.len() as u32).collect();
+    let axis_distance = |p: &[f64; 3]| p[0].hypot(p[2]);
+    let extreme = |sign: f64| -> u32 {
+        (0..closed.positions.len() as u32)
+            .min_by(|&a, &b| {
+                let (p, q) = (closed.positions[a as usize], closed.positions[b as usize]);
+                (sign * p[1])
+                    .total_cmp(&(sign * q[1]))
+                    .then(axis_distance(&p).total_cmp(&axis_distance(&q)))
+            })
+            .unwrap_or(0)
+    };
+    let (bottom, top) = (extreme(1.0), extreme(-1.0));
+    // A cap is a pole when it is the lowest or highest point's neighbour in height.
+    let pole = |v: u32| {
+        caps.iter()
+            .copied()
+            .find(|&c| {
+                (closed.positions[c as usize][1] - closed.positions[v as usize][1]).abs() < 1e-3
+            })
+            .unwrap_or(v)
+    };
+    let tube = tube_coordinates(closed, &[pole(bottom)], &[pole(top)])?;
+    fit_tube(closed, &tube, keys, options)
+}
+
+/// Whether the network's normals at `sources` agree (mostly) with the mesh's outward vertex
+/// normals (area-weighted sums of its triangles' normals).
+fn faces_outward(network: &CaoEnNetwork, sources: &[Vec<f64>], mesh: &Mesh) -> bool {
+    let mut normals = vec![[0.0; 3]; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+        let n = super::network::cross(
+            [0, 1, 2].map(|k| b[k] - a[k]),
+            [0, 1, 2].map(|k| c[k] - a[k]),
+        );
+        for &v in t {
+            for k in 0..3 {
+                normals[v as usize][k] += n[k];
+            }
+        }
+    }
+    let agreement: f64 = sources
+        .iter()
+        .zip(&normals)
+        .filter_map(|(x, m)| {
+            let n = network.normal(x)?;
+            Some((n[0] * m[0] + n[1] * m[1] + n[2] * m[2]).signum())
+        })
+        .sum();
+    agreement > 0.0
 }
 
 /// The handle as a torus network (see the module documentation).
@@ -277,69 +359,75 @@ fn fit_handle(mesh: &Mesh, settings: HandleFit) -> Result<TeapotPart> {
         )));
     }
     let tube = tube_coordinates(mesh, &loops[0], &loops[1])?;
-    let mut sources = Vec::new();
-    let mut values = Vec::new();
-    for ((p, &tv), &phi) in mesh.positions.iter().zip(&tube.t).zip(&tube.phi) {
-        let theta = tv * settings.span;
-        sources.push(vec![theta.cos(), theta.sin(), phi.cos(), phi.sin()]);
-        values.push(p.to_vec());
-    }
-    // The hidden return path: a tube of the ends' mean radius between the end centres.
-    let (start, end) = (tube.centre[0], tube.centre[BANDS - 1]);
-    let ends: Vec<f64> = mesh
-        .positions
-        .iter()
-        .zip(&tube.t)
-        .filter_map(|(p, &tv)| {
-            let c = if tv < 1.0 / BANDS as f64 {
-                start
-            } else if tv >= 1.0 - 1.0 / BANDS as f64 {
-                end
-            } else {
-                return None;
-            };
-            Some((0..3).map(|k| (p[k] - c[k]).powi(2)).sum::<f64>().sqrt())
-        })
-        .collect();
-    let radius = ends.iter().sum::<f64>() / ends.len().max(1) as f64;
-    for i in 1..12 {
-        let s = f64::from(i) / 12.0;
-        let theta = settings.span + s * (std::f64::consts::TAU - settings.span);
-        let c = [0, 1, 2].map(|k| end[k] + s * (start[k] - end[k]));
-        for j in 0..8 {
-            let phi = std::f64::consts::TAU * f64::from(j) / 8.0;
-            sources.push(vec![theta.cos(), theta.sin(), phi.cos(), phi.sin()]);
-            values.push(vec![
-                c[0],
-                c[1] + radius * phi.cos(),
-                c[2] + radius * phi.sin(),
-            ]);
+    let fit = |sense: f64| -> Result<(CaoEnNetwork, Vec<Vec<f64>>)> {
+        let mut sources = Vec::new();
+        let mut values = Vec::new();
+        for ((p, &tv), &phi) in mesh.positions.iter().zip(&tube.t).zip(&tube.phi) {
+            let theta = tv * settings.span;
+            sources.push(vec![theta.cos(), theta.sin(), phi.cos(), sense * phi.sin()]);
+            values.push(p.to_vec());
         }
-    }
-    let (around, across) = settings.keys;
-    let mut weights = Vec::new();
-    for i in 0..around {
-        for j in 0..across {
-            let theta = std::f64::consts::TAU * i as f64 / around as f64;
-            let phi = std::f64::consts::TAU * j as f64 / across as f64;
-            weights.push(vec![
-                0.5 * theta.cos(),
-                0.5 * theta.sin(),
-                0.5 * phi.cos(),
-                0.5 * phi.sin(),
-            ]);
+        // The hidden return path: a tube of the ends' mean radius between the end centres.
+        let (start, end) = (tube.centre[0], tube.centre[BANDS - 1]);
+        let ends: Vec<f64> = mesh
+            .positions
+            .iter()
+            .zip(&tube.t)
+            .filter_map(|(p, &tv)| {
+                let c = if tv < 1.0 / BANDS as f64 {
+                    start
+                } else if tv >= 1.0 - 1.0 / BANDS as f64 {
+                    end
+                } else {
+                    return None;
+                };
+                Some((0..3).map(|k| (p[k] - c[k]).powi(2)).sum::<f64>().sqrt())
+            })
+            .collect();
+        let radius = ends.iter().sum::<f64>() / ends.len().max(1) as f64;
+        for i in 1..12 {
+            let s = f64::from(i) / 12.0;
+            let theta = settings.span + s * (std::f64::consts::TAU - settings.span);
+            let c = [0, 1, 2].map(|k| end[k] + s * (start[k] - end[k]));
+            for j in 0..8 {
+                let phi = std::f64::consts::TAU * f64::from(j) / 8.0;
+                sources.push(vec![theta.cos(), theta.sin(), phi.cos(), sense * phi.sin()]);
+                values.push(vec![
+                    c[0],
+                    c[1] + radius * phi.cos(),
+                    c[2] + radius * phi.sin(),
+                ]);
+            }
         }
-    }
-    let n = weights.len();
-    let network = CaoEnNetwork {
-        domain: Domain::Torus.code(),
-        blending: Blending::Exponential.code(),
-        normalized: true,
-        weights,
-        targets: vec![vec![0.0; 3]; n],
-        sharpness: vec![settings.sharpness; n],
+        let (around, across) = settings.keys;
+        let mut weights = Vec::new();
+        for i in 0..around {
+            for j in 0..across {
+                let theta = std::f64::consts::TAU * i as f64 / around as f64;
+                let phi = std::f64::consts::TAU * j as f64 / across as f64;
+                weights.push(vec![
+                    0.5 * theta.cos(),
+                    0.5 * theta.sin(),
+                    0.5 * phi.cos(),
+                    0.5 * phi.sin(),
+                ]);
+            }
+        }
+        let n = weights.len();
+        let network = CaoEnNetwork {
+            domain: Domain::Torus.code(),
+            blending: Blending::Exponential.code(),
+            normalized: true,
+            weights,
+            targets: vec![vec![0.0; 3]; n],
+            sharpness: vec![settings.sharpness; n],
+        };
+        Ok((fit_shape(&network, &sources, &values)?, sources))
     };
-    let network = fit_shape(&network, &sources, &values)?;
+    let (mut network, sources) = fit(1.0)?;
+    if !faces_outward(&network, &sources[..mesh.positions.len()], mesh) {
+        network = fit(-1.0)?.0;
+    }
     // Score the visible span only.
     let grid = torus_grid(64, 16)?;
     let visible: Vec<[u32; 3]> = grid
@@ -358,6 +446,7 @@ fn fit_handle(mesh: &Mesh, settings: HandleFit) -> Result<TeapotPart> {
     let distance = surface_distance(&surface.mesh, mesh)?;
     Ok(TeapotPart {
         name: "handle",
+        parameterization: "torus",
         network,
         mesh: mesh.clone(),
         distance,
@@ -383,8 +472,9 @@ mod tests {
         for p in &parts {
             let d = p.distance;
             println!(
-                "{:<6} {:>3} keys, {:>4} vertices: rms {:.4}, Hausdorff {:.4} (of the diagonal)",
+                "{:<6} {:<6} {:>3} keys, {:>4} vertices: rms {:.4}, Hausdorff {:.4} (of the diagonal)",
                 p.name,
+                p.parameterization,
                 p.network.key_count(),
                 p.mesh.vertex_count(),
                 d.rms,

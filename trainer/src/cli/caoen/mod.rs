@@ -3,6 +3,7 @@
 //! images.
 
 mod distort;
+mod fit_mesh;
 mod image;
 mod morph;
 mod render;
@@ -31,6 +32,8 @@ pub enum Command {
     /// Map a subdivided sphere (or a torus grid) through a network: a polygon mesh with exact
     /// normals (OBJ or PLY).
     Mesh(MeshArgs),
+    /// Fit a network to a closed genus-0 mesh through its spherical parameterization.
+    FitMesh(fit_mesh::Args),
     /// The teapot as four Cao En surfaces (body, lid, spout on the sphere; the handle on the
     /// torus): four blobs, the combined mesh, optionally a picture.
     Teapot(teapot::Args),
@@ -51,6 +54,7 @@ pub fn run(command: &Command) -> Result<()> {
     match command {
         Command::Fit(args) => fit(args),
         Command::Mesh(args) => mesh(args),
+        Command::FitMesh(args) => fit_mesh::run(args),
         Command::Teapot(args) => teapot::run(args),
         Command::Render(args) => render::run(args),
         Command::Morph(args) => morph::run(args),
