@@ -7,7 +7,8 @@
 //! table), `distance` (two-sided surface-to-mesh distance). Pictures: `render` (depth buffer
 //! through the projection network) and `raymarch` (the convex implicit form in the core).
 //! Applications: `morph` (metamorphosis with empty key points), `distort` (S³ → ℝ³),
-//! `teapot` (four surfaces, the handle on the torus), `image` (compression on S⁴). The core evaluates what this writes
+//! `teapot` (four surfaces, the handle on the torus), `image` (compression on S⁴), `texture`
+//! (texture coordinates from the source sphere, the cosine law folded into extra outputs). The core evaluates what this writes
 //! (`neurosurf_core::caoen`).
 //!
 //! ```
@@ -45,6 +46,7 @@ mod raymarch;
 mod render;
 mod spherical;
 mod teapot;
+mod texture;
 mod topology;
 
 pub use blob::{from_blob, to_blob};
@@ -68,6 +70,10 @@ pub use raymarch::{convex_implicit, ray_marched_image};
 pub use render::{MAX_SAMPLE_GAP, Rendering, View, depth_buffer_image};
 pub use spherical::{SphericalMap, flipped_triangles, spherical_parameterization};
 pub use teapot::{HANDLE_KEYS, HANDLE_SPAN, TeapotPart, fit_teapot};
+pub use texture::{
+    LIGHTING_CHECK_SUBDIVISIONS, LightingFit, cosine_law, fold_lighting, mesh_texture,
+    position_part, texture_coordinates,
+};
 pub use topology::{boundary_loops, cap_holes, check_sphere_topology, edge_components, weld};
 
 #[cfg(test)]
