@@ -174,10 +174,12 @@ pub fn map_mesh(
             }
         }
     }
+    // A shape with extra outputs (shading) has the normal of its first three.
+    let shape = super::texture::position_part(network);
     let normals = sources
         .iter()
         .zip(fallback)
-        .map(|(x, f)| network.normal(x).unwrap_or_else(|| unit_or_z(f)))
+        .map(|(x, f)| shape.normal(x).unwrap_or_else(|| unit_or_z(f)))
         .collect();
     Ok(CaoEnMesh {
         mesh: Mesh {

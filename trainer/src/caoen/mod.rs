@@ -6,7 +6,9 @@
 //! stretch reweighting), `mesh_fit` (keys, least squares against every vertex, the error
 //! table), `distance` (two-sided surface-to-mesh distance). Pictures: `render` (depth buffer
 //! through the projection network) and `raymarch` (the convex implicit form in the core).
-//! Applications: `morph` (metamorphosis with empty key points), `distort` (S³ → ℝ³). The core evaluates what this writes
+//! Applications: `morph` (metamorphosis with empty key points), `distort` (S³ → ℝ³),
+//! `teapot` (four surfaces, the handle on the torus), `image` (compression on S⁴), `texture`
+//! (texture coordinates from the source sphere, the cosine law folded into extra outputs). The core evaluates what this writes
 //! (`neurosurf_core::caoen`).
 //!
 //! ```
@@ -35,6 +37,7 @@ mod blob;
 mod distance;
 mod distort;
 mod fit;
+mod image;
 mod mesh;
 mod mesh_fit;
 mod morph;
@@ -42,12 +45,17 @@ mod network;
 mod raymarch;
 mod render;
 mod spherical;
+mod teapot;
+mod texture;
 mod topology;
 
 pub use blob::{from_blob, to_blob};
 pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
 pub use distort::Distortion;
 pub use fit::{fit_shape, fit_sharpness, from_key_points, rms_error};
+pub use image::{
+    CompressedImage, ImageCodec, MAX_ITERATIONS, SPAN, compress_image, psnr, smooth_test_image,
+};
 pub use mesh::{
     CaoEnMesh, MAX_SUBDIVISIONS, SourceGrid, icosphere, map_mesh, sphere_mesh, torus_grid,
     torus_mesh,
@@ -61,6 +69,11 @@ pub use network::{CaoEnNetwork, Evaluation, on_domain};
 pub use raymarch::{convex_implicit, ray_marched_image};
 pub use render::{MAX_SAMPLE_GAP, Rendering, View, depth_buffer_image};
 pub use spherical::{SphericalMap, flipped_triangles, spherical_parameterization};
+pub use teapot::{HANDLE_KEYS, HANDLE_SPAN, TeapotPart, fit_teapot};
+pub use texture::{
+    LIGHTING_CHECK_SUBDIVISIONS, LightingFit, cosine_law, fold_lighting, mesh_texture,
+    position_part, texture_coordinates,
+};
 pub use topology::{boundary_loops, cap_holes, check_sphere_topology, edge_components, weld};
 
 #[cfg(test)]

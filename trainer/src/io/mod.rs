@@ -18,6 +18,7 @@ mod text;
 pub use atomic::{write_atomic, write_atomic_with};
 pub use data::{DATA_VARIABLE, data_dir, data_file};
 pub use mesh::{Mesh, read_mesh, write_mesh};
+pub use obj::{TextureCoordinates, write_textured_obj};
 pub use ply::{PlyEncoding, read_points, write_mesh_ply, write_points_ply};
 pub use text::{
     MAX_PARAMETERS, read_parameters, read_query_points, read_rows, read_scattered_points,

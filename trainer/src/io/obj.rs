@@ -105,10 +105,39 @@ fn parse_obj(path: &Path, mut bytes: Vec<u8>) -> Result<Mesh> {
     })
 }
 
+/// Texture coordinates of a mesh, per triangle corner: `coordinates` are the `vt` entries,
+/// `corners[t][c]` indexes the one corner `c` of triangle `t` uses. Corners may share an entry
+/// or not (a seam of the parameterization needs two entries at one vertex).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TextureCoordinates {
+    /// (u, v) of each `vt` line, in order.
+    pub coordinates: Vec<[f64; 2]>,
+    /// For each triangle of the mesh, the index into `coordinates` of each corner.
+    pub corners: Vec<[u32; 3]>,
+}
+
 /// Writes `mesh` (and optional per-vertex normals) as OBJ, atomically. Coordinates are
 /// printed in Rust's shortest round-trip form, so reading the file back is bit-exact.
 pub(crate) fn write_obj_mesh(path: &Path, mesh: &Mesh, normals: Option<&[[f64; 3]]>) -> Result<()> {
+    write_textured_obj(path, mesh, normals, None)
+}
+
+/// [`write_obj_mesh`] with optional texture coordinates: `vt` lines after the vertices (and
+/// normals), faces `v/vt` or `v/vt/vn`. Coordinates round-trip bit-exactly like the vertices.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for out-of-range vertex or texture indices, a normal count other
+/// than the vertex count or a corner list other than one per triangle; I/O errors.
+pub fn write_textured_obj(
+    path: &Path,
+    mesh: &Mesh,
+    normals: Option<&[[f64; 3]]>,
+    texture: Option<&TextureCoordinates>,
+) -> Result<()> {
     check_writable(mesh, normals)?;
+    if let Some(texture) = texture {
+        check_texture(mesh, texture)?;
+    }
     write_atomic_with(path, |w| {
         writeln!(
             w,
@@ -119,22 +148,61 @@ pub(crate) fn write_obj_mesh(path: &Path, mesh: &Mesh, normals: Option<&[[f64; 3
         for p in &mesh.positions {
             writeln!(w, "v {:?} {:?} {:?}", p[0], p[1], p[2])?;
         }
-        if let Some(normals) = normals {
-            for n in normals {
-                writeln!(w, "vn {:?} {:?} {:?}", n[0], n[1], n[2])?;
+        for n in normals.unwrap_or_default() {
+            writeln!(w, "vn {:?} {:?} {:?}", n[0], n[1], n[2])?;
+        }
+        for [u, v] in texture.map_or(&[][..], |t| &t.coordinates) {
+            writeln!(w, "vt {u:?} {v:?}")?;
+        }
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            let v = t.map(|i| u64::from(i) + 1);
+            let vt = texture
+                .and_then(|t| t.corners.get(i))
+                .map(|c| c.map(|i| u64::from(i) + 1));
+            write!(w, "f")?;
+            for c in 0..3 {
+                match (vt, normals.is_some()) {
+                    (Some(vt), true) => write!(w, " {}/{}/{}", v[c], vt[c], v[c])?,
+                    (Some(vt), false) => write!(w, " {}/{}", v[c], vt[c])?,
+                    (None, true) => write!(w, " {}//{}", v[c], v[c])?,
+                    (None, false) => write!(w, " {}", v[c])?,
+                }
             }
-            for t in &mesh.triangles {
-                let [a, b, c] = t.map(|i| u64::from(i) + 1);
-                writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-            }
-        } else {
-            for t in &mesh.triangles {
-                let [a, b, c] = t.map(|i| u64::from(i) + 1);
-                writeln!(w, "f {a} {b} {c}")?;
-            }
+            writeln!(w)?;
         }
         Ok(())
     })
+}
+
+/// One corner triple per triangle, every index within the coordinates, every value finite.
+fn check_texture(mesh: &Mesh, texture: &TextureCoordinates) -> Result<()> {
+    if texture.corners.len() != mesh.triangles.len() {
+        return Err(Error::invalid(format!(
+            "{} texture corner triples for a mesh with {} triangles",
+            texture.corners.len(),
+            mesh.triangles.len()
+        )));
+    }
+    let count = texture.coordinates.len();
+    if let Some(i) = texture
+        .corners
+        .iter()
+        .position(|c| c.iter().any(|&k| k as usize >= count))
+    {
+        return Err(Error::invalid(format!(
+            "triangle {i} uses a texture coordinate beyond the {count} given"
+        )));
+    }
+    if let Some(i) = texture
+        .coordinates
+        .iter()
+        .position(|uv| uv.iter().any(|c| !c.is_finite()))
+    {
+        return Err(Error::invalid(format!(
+            "texture coordinate {i} is not finite"
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

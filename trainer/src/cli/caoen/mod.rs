@@ -1,5 +1,14 @@
 //! `neurosurf caoen`: Cao En surfaces (Wyvill, Cao & Trotman 1992) — build or fit a network
-//! from key and target points, and mesh it.
+//! from key and target points, mesh it, fit the teapot, render, morph, distort, compress
+//! images.
+
+mod distort;
+mod fit_mesh;
+mod image;
+mod morph;
+mod render;
+mod shade;
+mod teapot;
 
 use std::path::{Path, PathBuf};
 
@@ -12,7 +21,7 @@ use neurosurf_trainer::caoen::{
     self, CaoEnNetwork, fit_shape, fit_sharpness, from_key_points, rms_error,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
-use neurosurf_trainer::io::{read_rows, write_atomic, write_mesh};
+use neurosurf_trainer::io::{read_rows, write_atomic, write_mesh, write_textured_obj};
 
 use super::output::{self, blob_scalar, comma_list, wrote_blob};
 
@@ -22,14 +31,53 @@ pub enum Command {
     /// default, fit V so the surface passes through the targets; write its blob.
     Fit(FitArgs),
     /// Map a subdivided sphere (or a torus grid) through a network: a polygon mesh with exact
-    /// normals (OBJ or PLY).
+    /// normals (OBJ or PLY), optionally with the source's texture coordinates (OBJ `vt`).
     Mesh(MeshArgs),
+    /// Fold the cosine law for fixed lights into extra outputs of a shape network (p = 3 + k),
+    /// fitted at the key points; reports the error against the direct computation.
+    Shade(shade::Args),
+    /// Fit a network to a closed genus-0 mesh through its spherical parameterization.
+    FitMesh(fit_mesh::Args),
+    /// The teapot as four Cao En surfaces (body, lid, spout on the sphere; the handle on the
+    /// torus): four blobs, the combined mesh, optionally a picture.
+    Teapot(teapot::Args),
+    /// Depth-buffer picture (PNG) of Cao En surfaces with gap filling, or with --ray-march
+    /// the implicit form of a convex shape.
+    Render(render::Args),
+    /// Metamorphosis between two networks (any key counts): a sequence of meshes and
+    /// optionally pictures.
+    Morph(morph::Args),
+    /// Distort a mesh through a 4-D hypersphere → 3-D network with point controls.
+    Distort(distort::Args),
+    /// Image compression on a 5-D hypersphere: compress, decompress, sample picture.
+    #[command(subcommand)]
+    Image(image::Command),
 }
 
 pub fn run(command: &Command) -> Result<()> {
     match command {
         Command::Fit(args) => fit(args),
         Command::Mesh(args) => mesh(args),
+        Command::Shade(args) => shade::run(args),
+        Command::FitMesh(args) => fit_mesh::run(args),
+        Command::Teapot(args) => teapot::run(args),
+        Command::Render(args) => render::run(args),
+        Command::Morph(args) => morph::run(args),
+        Command::Distort(args) => distort::run(args),
+        Command::Image(command) => image::run(command),
+    }
+}
+
+/// The Cao En network in the blob at `path`, for `command`.
+fn read_network(path: &Path, command: &str) -> Result<CaoEnNetwork> {
+    let model = LoadedModel::read(path)?;
+    match model {
+        LoadedModel::CaoEn { decoded, .. } => Ok(decoded.network),
+        other => bail!(
+            "{}: a {} model; `caoen {command}` takes Cao En networks",
+            path.display(),
+            other.kind().name()
+        ),
     }
 }
 
@@ -229,47 +277,106 @@ pub struct MeshArgs {
     /// Grid of a torus network, `AROUND,ACROSS`.
     #[arg(long, value_parser = comma_list::<usize, 2>, default_value = "48,24")]
     grid: [usize; 2],
+    /// Also write texture coordinates (`vt`, OBJ only): each vertex's source point as
+    /// longitude/latitude on the sphere, (θ, φ)/2π on the torus, so a texture defined on the
+    /// sphere is carried onto the surface.
+    #[arg(long)]
+    texture: bool,
     /// Output mesh (`.obj` or `.ply`), with the exact normals.
     #[arg(long)]
     out: PathBuf,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct MeshReport<'a> {
+    out: &'a Path,
+    vertices: usize,
+    triangles: usize,
+    /// `vt` entries written (0 without --texture): one per vertex, plus the extra ones of
+    /// triangles across the seam or at a pole.
+    texture_coordinates: usize,
 }
 
 fn mesh(args: &MeshArgs) -> Result<()> {
-    let model = LoadedModel::read(&args.model)?;
-    let LoadedModel::CaoEn { decoded, .. } = &model else {
+    let network = read_network(&args.model, "mesh")?;
+    let is_obj = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if args.texture && !is_obj {
         bail!(
-            "{}: a {} model; `caoen mesh` maps Cao En networks",
-            args.model.display(),
-            model.kind().name()
+            "{}: texture coordinates are written to OBJ files only",
+            args.out.display()
         );
+    }
+    let mapped = map_network(&network, args.subdivisions, args.grid)?;
+    let texture = args
+        .texture
+        .then(|| caoen::mesh_texture(network.domain, &mapped));
+    if texture.is_some() {
+        write_textured_obj(
+            &args.out,
+            &mapped.mesh,
+            Some(&mapped.normals),
+            texture.as_ref(),
+        )?;
+    } else {
+        write_mesh(&args.out, &mapped.mesh, Some(&mapped.normals))?;
+    }
+    let report = MeshReport {
+        out: &args.out,
+        vertices: mapped.mesh.vertex_count(),
+        triangles: mapped.mesh.triangle_count(),
+        texture_coordinates: texture.map_or(0, |t| t.coordinates.len()),
     };
-    let (vertices, triangles) =
-        write_network_mesh(&decoded.network, &args.out, args.subdivisions, args.grid)?;
+    if args.json {
+        return output::json(&report);
+    }
     println!(
-        "wrote {} ({vertices} vertices, {triangles} triangles)",
-        args.out.display()
+        "wrote {} ({} vertices, {} triangles{})",
+        args.out.display(),
+        report.vertices,
+        report.triangles,
+        if args.texture {
+            format!(", {} texture coordinates", report.texture_coordinates)
+        } else {
+            String::new()
+        }
     );
     Ok(())
 }
 
-/// Meshes a sphere network (icosphere) or a torus network (grid) and writes it with its
-/// normals; returns the vertex and triangle counts.
+/// Maps a sphere network (icosphere) or a torus network (grid).
+fn map_network(
+    network: &CaoEnNetwork,
+    subdivisions: usize,
+    [around, across]: [usize; 2],
+) -> Result<caoen::CaoEnMesh> {
+    Ok(
+        match (
+            network.source_dimension(),
+            network.domain == Domain::Torus.code(),
+        ) {
+            (4, true) => caoen::torus_mesh(network, around, across)?,
+            (3, false) => caoen::sphere_mesh(network, subdivisions)?,
+            (m, _) => bail!(
+                "only sphere (m = 3) and torus (m = 4) networks are meshed, this one has m = {m}"
+            ),
+        },
+    )
+}
+
+/// Meshes a sphere or torus network and writes it with its normals.
 fn write_network_mesh(
     network: &CaoEnNetwork,
     path: &Path,
     subdivisions: usize,
-    [around, across]: [usize; 2],
-) -> Result<(usize, usize)> {
-    let mapped = match (
-        network.source_dimension(),
-        network.domain == Domain::Torus.code(),
-    ) {
-        (4, true) => caoen::torus_mesh(network, around, across)?,
-        (3, false) => caoen::sphere_mesh(network, subdivisions)?,
-        (m, _) => {
-            bail!("only sphere (m = 3) and torus (m = 4) networks are meshed, this one has m = {m}")
-        }
-    };
+    grid: [usize; 2],
+) -> Result<()> {
+    let mapped = map_network(network, subdivisions, grid)?;
     write_mesh(path, &mapped.mesh, Some(&mapped.normals))?;
-    Ok((mapped.mesh.vertex_count(), mapped.mesh.triangle_count()))
+    Ok(())
 }

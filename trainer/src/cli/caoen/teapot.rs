@@ -1,0 +1,120 @@
+//! `neurosurf caoen teapot`: the teapot as four Cao En surfaces (paper §10.2, Fig. 7).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use serde::Serialize;
+
+use neurosurf_trainer::caoen::{self, SurfaceDistance, fit_teapot};
+use neurosurf_trainer::evaluate::Precision;
+use neurosurf_trainer::io::{data_file, read_mesh, write_atomic, write_mesh};
+use neurosurf_trainer::render::write_png;
+
+use super::super::output::{self, blob_scalar, comma_list};
+use super::render::{Camera, depth_picture};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The teapot mesh (default: `teapot.obj` in the shared data folder).
+    #[arg(long)]
+    mesh: Option<PathBuf>,
+    /// Key points of the body, the lid and the spout (the handle takes a 6 × 4 torus grid).
+    #[arg(long, value_parser = comma_list::<usize, 3>, default_value = "40,20,20")]
+    keys: [usize; 3],
+    /// How the blobs store the networks: `f32` or `q16.16`.
+    #[arg(long, default_value = "f32")]
+    scalar: Precision,
+    /// Folder for `body.nsb`, `lid.nsb`, `spout.nsb`, `handle.nsb` and `teapot.obj` (the
+    /// four mapped surfaces in one mesh).
+    #[arg(long)]
+    out_dir: PathBuf,
+    /// Also render the four surfaces (depth buffer) to this PNG.
+    #[arg(long, value_name = "FILE")]
+    png: Option<PathBuf>,
+    #[command(flatten)]
+    camera: Camera,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Part {
+    name: &'static str,
+    blob: PathBuf,
+    blob_bytes: usize,
+    key_points: usize,
+    /// "sphere" or "torus".
+    domain: &'static str,
+    /// Vertices of the part in the mesh file.
+    vertices: usize,
+    /// Surface against the part's mesh, relative to the part's bounding diagonal.
+    distance: SurfaceDistance,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    parts: Vec<Part>,
+    key_points: usize,
+    mesh: PathBuf,
+    png: Option<&'a Path>,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let scalar = blob_scalar(args.scalar)?;
+    let source = match &args.mesh {
+        Some(path) => path.clone(),
+        None => data_file("teapot.obj")?,
+    };
+    let (parts, combined) = fit_teapot(&read_mesh(&source)?, args.keys)?;
+    std::fs::create_dir_all(&args.out_dir)?;
+    let mut report = Report {
+        parts: Vec::new(),
+        key_points: parts.iter().map(|p| p.network.key_count()).sum(),
+        mesh: args.out_dir.join("teapot.obj"),
+        png: args.png.as_deref(),
+    };
+    for part in &parts {
+        let blob = caoen::to_blob(&part.network, scalar, part.name.as_bytes())?;
+        let path = args.out_dir.join(format!("{}.nsb", part.name));
+        write_atomic(&path, &blob)?;
+        report.parts.push(Part {
+            name: part.name,
+            blob: path,
+            blob_bytes: blob.len(),
+            key_points: part.network.key_count(),
+            domain: if part.network.source_dimension() == 4 {
+                "torus"
+            } else {
+                "sphere"
+            },
+            vertices: part.mesh.vertex_count(),
+            distance: part.distance,
+        });
+    }
+    write_mesh(&report.mesh, &combined, None)?;
+    if let Some(png) = &args.png {
+        let networks: Vec<_> = parts.iter().map(|p| p.network.clone()).collect();
+        write_png(png, &depth_picture(&networks, &args.camera, 3)?.image)?;
+    }
+    if args.json {
+        return output::json(&report);
+    }
+    println!("part    keys  domain  vertices  rms      Hausdorff (of the part's diagonal)");
+    for p in &report.parts {
+        println!(
+            "{:<7} {:>4}  {:<6}  {:>8}  {:.4}   {:.4}",
+            p.name, p.key_points, p.domain, p.vertices, p.distance.rms, p.distance.hausdorff
+        );
+    }
+    println!(
+        "{} key points in all; wrote the blobs and {} to {}",
+        report.key_points,
+        report.mesh.display(),
+        args.out_dir.display()
+    );
+    if let Some(png) = &args.png {
+        println!("wrote {}", png.display());
+    }
+    Ok(())
+}
