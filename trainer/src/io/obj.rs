@@ -122,7 +122,7 @@ pub(crate) fn write_obj_mesh(path: &Path, mesh: &Mesh, normals: Option<&[[f64; 3
     write_textured_obj(path, mesh, normals, None)
 }
 
-/// [`write_obj_mesh`] with optional texture coordinates: `vt` lines after the vertices (and
+/// An OBJ mesh (vertices, optional normals, faces) with optional texture coordinates: `vt` lines after the vertices (and
 /// normals), faces `v/vt` or `v/vt/vn`. Coordinates round-trip bit-exactly like the vertices.
 ///
 /// # Errors

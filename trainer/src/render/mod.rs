@@ -33,10 +33,10 @@ pub use compare::{MAX_DENSE_SAMPLES, MethodComparison, compare_methods, dense_hi
 pub use field::{CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, Field, NetworkField, SphereField};
 pub use interval::Interval;
 pub use mesh::{BLOCK, ExtractedMesh, MAX_RESOLUTION, MeshStats, extract_mesh};
-pub use octree::{MAX_DEPTH, Octree};
+pub use octree::{MAX_DEPTH, Octree, PROBE_GRID, PROBE_REACH};
 pub use raycast::{
-    MAX_SAMPLES, Method, RenderOptions, RenderStats, Rendered, TILE, Tracer, hit_map, render,
-    write_png,
+    EDGE_COSINE, EDGE_DEPTH, MAX_SAMPLES, Method, RenderOptions, RenderStats, Rendered, TILE,
+    Tracer, hit_map, render, write_png,
 };
 pub use region::{Aabb, Region, bounds_of, ray_spans};
 pub use shade::{Shading, to_srgb8};
