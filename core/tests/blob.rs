@@ -400,7 +400,7 @@ fn crc_mismatch() {
 #[test]
 fn unknown_model_kind() {
     let blob = Sample::new(1, 3, PAIR).blob(ScalarKind::F32);
-    for code in [0_u8, 6, 255] {
+    for code in [0_u8, 7, 255] {
         let mut bad = blob.clone();
         bad[6] = code;
         // Without a matching CRC the corruption is reported as such.
