@@ -317,9 +317,9 @@ fn framing_errors() {
     bad[7] = 9;
     fix_crc(&mut bad);
     curve_rejected(&bad, BlobError::UnknownScalarKind { code: 9 });
-    bad[6] = 6;
+    bad[6] = 7;
     fix_crc(&mut bad);
-    curve_rejected(&bad, BlobError::UnknownModelKind { code: 6 });
+    curve_rejected(&bad, BlobError::UnknownModelKind { code: 7 });
 }
 
 #[test]
@@ -373,7 +373,7 @@ fn wrong_model_kind() {
     );
     assert_eq!(ModelKind::from_code(3), Some(ModelKind::Curve));
     assert_eq!(ModelKind::from_code(4), Some(ModelKind::SplineSurface));
-    assert_eq!(ModelKind::from_code(6), None);
+    assert_eq!(ModelKind::from_code(7), None);
 }
 
 #[test]

@@ -254,9 +254,9 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
     let out = ok(&["sim-bench", s(&model), "--json"]);
     let bench: serde_json::Value = serde_json::from_str(&out).unwrap();
     let rows = bench["rows"].as_array().unwrap();
-    // (torus, head, spiral curve, the extra blob) × (f32, q16.16) × (value, value+derivative)
-    // × (single, batch)
-    assert_eq!(rows.len(), 32, "{out}");
+    // (torus, head, spiral curve, wavy surface network, the extra blob) × (f32, q16.16) ×
+    // (value, value+derivative) × (single, batch)
+    assert_eq!(rows.len(), 40, "{out}");
     for r in rows {
         let instructions = r["instructions_per_eval"].as_f64().unwrap();
         let macs = r["macs"].as_u64().unwrap() as f64;
@@ -274,7 +274,7 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
         .find(|r| r["model"].as_str().unwrap().starts_with("spiral curve"))
         .unwrap();
     assert_eq!(curve["op"], "position", "{curve}");
-    assert_eq!(bench["ratios"].as_array().unwrap().len(), 16, "{out}");
+    assert_eq!(bench["ratios"].as_array().unwrap().len(), 20, "{out}");
     let footprint = &bench["footprint"];
     assert!(
         footprint["flash_bytes"].as_u64().unwrap() < footprint["flash_budget"].as_u64().unwrap()
