@@ -13,96 +13,42 @@ use std::time::Instant;
 
 use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
-use neurosurf_trainer::fidelity::{Fidelity, median};
-use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions, StopReason};
-use neurosurf_trainer::rbf::{self, RbfOptions};
-use neurosurf_trainer::sample::{Shape, sample_shape};
-
-const TORUS: Shape = Shape::Torus {
-    major: 1.0,
-    minor: 0.4,
-};
-const DIAMETER: f64 = 2.8;
-/// The paper's Table 5 (1.7 GHz Pentium IV): points, iterations, network s, RBF s.
-const PAPER: [(usize, usize, f64, f64); 5] = [
-    (48, 73, 2.5, 0.0018),
-    (96, 61, 3.6, 0.027),
-    (160, 67, 6.2, 0.18),
-    (336, 58, 10.9, 1.88),
-    (576, 59, 17.8, 8.3),
-];
+use neurosurf_trainer::demo::{TABLE5_HELD_OUT, TABLE5_TORUS, paper_points, table5};
+use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions};
+use neurosurf_trainer::sample::sample_shape;
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let seeds: &[u64] = if quick { &[1] } else { &[1, 2, 3, 4, 5] };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("a one-thread pool");
-    let held_out = sample_shape(&TORUS, 2000, 999).expect("held-out torus");
 
     println!(
         "Table 5 — torus R=1 r=0.4, network N=9 (Table 1 settings) vs multiquadric RBF (c²=1e-3)"
     );
     println!(
-        "median over seeds {seeds:?}; fidelity on 2000 held-out surface points (median distance %D / median normal error)"
+        "median over seeds {seeds:?}; fidelity on {TABLE5_HELD_OUT} held-out surface points (median distance %D / median normal error)"
     );
     println!();
     println!(
         "| points | iterations (paper) | network time (paper) | RBF time (paper) | network fidelity | RBF fidelity | network ms / iteration |"
     );
     println!("|---:|---:|---:|---:|---:|---:|---:|");
-    for (n, paper_it, paper_net, paper_rbf) in PAPER {
-        let mut iterations = Vec::new();
-        let mut net_times = Vec::new();
-        let mut rbf_times = Vec::new();
-        let mut net_fid = Vec::new();
-        let mut rbf_fid = Vec::new();
-        let mut converged = true;
-        for &seed in seeds {
-            let points = sample_shape(&TORUS, n, seed).expect("torus sample");
-            let options = ImplicitOptions {
-                seed,
-                ..ImplicitOptions::default()
-            };
-            let start = Instant::now();
-            let trained = pool
-                .install(|| {
-                    implicit::fit(points.clone(), &FitRequest::default(), &options, &|_| {})
-                })
-                .expect("training");
-            net_times.push(start.elapsed().as_secs_f64());
-            let module = &trained.summary.modules[0];
-            converged &= module.lm.stop == StopReason::Converged;
-            iterations.push(module.lm.iterations as f64);
-            let f = Fidelity::measure(&held_out, DIAMETER, |p| trained.network.eval(p))
-                .expect("fidelity");
-            net_fid.push((f.median_distance_percent, f.median_angle_degrees));
-
-            let start = Instant::now();
-            let (model, _) = rbf::fit(&points, &RbfOptions::default()).expect("RBF fit");
-            rbf_times.push(start.elapsed().as_secs_f64());
-            let f = Fidelity::measure(&held_out, DIAMETER, |p| model.field_gradient(p))
-                .expect("fidelity");
-            rbf_fid.push((f.median_distance_percent, f.median_angle_degrees));
-        }
-        let it = median(&mut iterations);
-        let net = median(&mut net_times);
-        let rbf = median(&mut rbf_times);
-        let fid = |v: &[(f64, f64)]| {
-            let mut d: Vec<f64> = v.iter().map(|x| x.0).collect();
-            let mut a: Vec<f64> = v.iter().map(|x| x.1).collect();
-            format!("{:.3} % / {:.2}°", median(&mut d), median(&mut a))
-        };
+    for row in table5(&paper_points(), seeds).expect("Table 5") {
+        let paper = row.paper.expect("a paper row");
         println!(
-            "| {n} | {it:.0} ({paper_it}) | {} ({paper_net} s) | {} ({}) | {} | {} | {:.2}{} |",
-            seconds(net),
-            seconds(rbf),
-            seconds(paper_rbf),
-            fid(&net_fid),
-            fid(&rbf_fid),
-            1000.0 * net / it.max(1.0),
-            if converged {
+            "| {} | {:.0} ({}) | {} ({} s) | {} ({}) | {:.3} % / {:.2}° | {:.3} % / {:.2}° | {:.2}{} |",
+            row.points,
+            row.iterations,
+            paper.iterations,
+            seconds(row.network_seconds),
+            paper.network_seconds,
+            seconds(row.rbf_seconds),
+            seconds(paper.rbf_seconds),
+            row.network_distance_percent,
+            row.network_angle_degrees,
+            row.rbf_distance_percent,
+            row.rbf_angle_degrees,
+            1000.0 * row.network_seconds / row.iterations.max(1.0),
+            if row.converged {
                 ""
             } else {
                 " (not all converged)"
@@ -112,7 +58,7 @@ fn main() {
 
     println!();
     println!("Core evaluation throughput, 576-point torus model, 4096 points (field + gradient)");
-    let points = sample_shape(&TORUS, 576, 1).expect("torus sample");
+    let points = sample_shape(&TABLE5_TORUS, 576, 1).expect("torus sample");
     let trained = implicit::fit(
         points,
         &FitRequest::default(),
@@ -120,7 +66,9 @@ fn main() {
         &|_| {},
     )
     .expect("training");
-    let queries: Vec<[f64; 3]> = sample_shape(&TORUS, 4096, 5).expect("queries").positions;
+    let queries: Vec<[f64; 3]> = sample_shape(&TABLE5_TORUS, 4096, 5)
+        .expect("queries")
+        .positions;
     let f32_blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
     let q16_blob = implicit::to_blob(&trained.network, None, ScalarKind::Q16_16).expect("blob");
     let reference = {

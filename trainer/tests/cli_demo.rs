@@ -98,6 +98,32 @@ fn the_tour_learned_the_body_and_its_animation(tour: &serde_json::Value) {
     for table in ["Table 2", "Table 3", "Table 4"] {
         assert!(tables.contains(&table), "{tables:?}");
     }
+    the_tour_measured_table_5(&tour["table5"]);
+}
+
+/// Table 5 in the quick tour: the paper's first three point counts, each beside the paper's
+/// row, both models trained and measured; the network beats the RBF on the fewest points.
+fn the_tour_measured_table_5(rows: &serde_json::Value) {
+    let rows = rows.as_array().unwrap();
+    let points: Vec<u64> = rows.iter().map(|r| r["points"].as_u64().unwrap()).collect();
+    assert_eq!(points, [48, 96, 160]);
+    for row in rows {
+        assert_eq!(row["paper"]["points"], row["points"], "{row}");
+        assert_eq!(row["converged"], true, "{row}");
+        assert!(row["iterations"].as_f64().unwrap() >= 1.0, "{row}");
+        for key in ["network_seconds", "rbf_seconds"] {
+            assert!(row[key].as_f64().unwrap() > 0.0, "{key}: {row}");
+        }
+        let network = row["network_distance_percent"].as_f64().unwrap();
+        assert!(network < 0.2, "{row}");
+        assert!(row["rbf_distance_percent"].as_f64().unwrap() > 0.0, "{row}");
+    }
+    let first = &rows[0];
+    assert!(
+        first["network_distance_percent"].as_f64().unwrap()
+            < first["rbf_distance_percent"].as_f64().unwrap(),
+        "{first}"
+    );
 }
 
 /// Every picture the report names is a PNG in the folder, referenced relatively from
@@ -139,9 +165,31 @@ fn the_report_page_shows_existing_pictures(out: &std::path::Path, report: &serde
         let png = image::open(out.join(source)).unwrap();
         assert!(png.width() >= 48 && png.height() >= 48, "{source}");
     }
-    for table in ["Table 2", "Table 3", "Table 4", "352 s", "q16.16"] {
+    for table in [
+        "Table 2", "Table 3", "Table 4", "Table 5", "352 s", "q16.16",
+    ] {
         assert!(page.contains(table), "{table}");
     }
+    // Table 5's rows: the measured numbers of the JSON report beside the paper's.
+    for row in tour["table5"].as_array().unwrap() {
+        let cells = format!(
+            "<tr><td>{}</td><td>{:.0} ({})</td>",
+            row["points"],
+            row["iterations"].as_f64().unwrap(),
+            row["paper"]["iterations"]
+        );
+        assert!(page.contains(&cells), "{cells}");
+        let fidelity = format!(
+            "<td>{:.3} % / {:.2}°</td>",
+            row["network_distance_percent"].as_f64().unwrap(),
+            row["network_angle_degrees"].as_f64().unwrap()
+        );
+        assert!(page.contains(&fidelity), "{fidelity}");
+    }
+    assert!(
+        page.contains("(2.50 s)"),
+        "the paper's 48-point network time"
+    );
 }
 
 #[test]

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use neurosurf_trainer::demo::{self, HELD_OUT, Tour, TourSize};
+use neurosurf_trainer::demo::{self, HELD_OUT, TABLE5_HELD_OUT, Tour, TourSize};
 
 use super::{output, progress};
 
@@ -186,6 +186,40 @@ fn print_tour(tour: &Tour) {
             t.seconds,
             t.paper_seconds / t.seconds.max(1e-9),
             t.note
+        );
+    }
+    println!(
+        "\nTable 5: torus by one network module vs the RBF, one thread (paper in parentheses); \
+         median distance %D / angle on {TABLE5_HELD_OUT} held-out points"
+    );
+    println!(
+        "{:>6} {:>10} {:>20} {:>20} {:>17} {:>17}",
+        "points", "iterations", "network", "RBF", "network fidelity", "RBF fidelity"
+    );
+    for r in &tour.table5 {
+        println!(
+            "{:>6} {:>10} {:>20} {:>20} {:>8.3}% {:>6.2}° {:>8.3}% {:>6.2}°{}",
+            r.points,
+            format!(
+                "{:.0}{}",
+                r.iterations,
+                r.beside_paper(|p| p.iterations.to_string())
+            ),
+            format!(
+                "{:.4} s{}",
+                r.network_seconds,
+                r.beside_paper(|p| format!("{} s", p.network_seconds))
+            ),
+            format!(
+                "{:.4} s{}",
+                r.rbf_seconds,
+                r.beside_paper(|p| format!("{} s", p.rbf_seconds))
+            ),
+            r.network_distance_percent,
+            r.network_angle_degrees,
+            r.rbf_distance_percent,
+            r.rbf_angle_degrees,
+            if r.converged { "" } else { "  (not converged)" }
         );
     }
 }

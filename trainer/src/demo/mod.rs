@@ -1,7 +1,8 @@
 //! The main job on built-in data: sample a torus and the 3-feature head, train both, write
 //! their blobs, and measure each in `f64`, `f32` and Q16.16 against the true surface; then a
 //! curve recovered from scattered points and a Cao En surface (`parametric`); then the tour
-//! of Carcenac §6–7 (`tour`: the body, its animation, pictures, Tables 2–4) and a static
+//! of Carcenac §6–7 (`tour`: the body, its animation, pictures, Tables 2–4, and Table 5's
+//! torus against the RBF, `table5`) and a static
 //! `index.html` report of it all (`report`).
 
 mod animation;
@@ -9,6 +10,7 @@ mod body;
 mod parametric;
 mod pictures;
 mod report;
+mod table5;
 mod tour;
 mod woody;
 
@@ -19,6 +21,10 @@ pub use body::{
 pub use parametric::{ParametricDemo, cao_en, curve};
 pub use pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};
 pub use report::{INDEX, html, write_index};
+pub use table5::{
+    PAPER_TABLE5, PaperTable5Row, TABLE5_DIAMETER, TABLE5_HELD_OUT, TABLE5_TORUS, Table5Row,
+    paper_points, table5, table5_held_out, table5_row,
+};
 pub use tour::{AnimationDemo, BodyDemo, PaperTiming, Tour, TourModels, TourSize, tour};
 pub use woody::{WOODY_ITERATIONS, WOODY_POINTS, WoodyDemo, extrude, woody, woody_mesh};
 

@@ -1,13 +1,15 @@
 //! The demo's `index.html`: one static page (no script, no server) with the pictures,
 //! referenced by relative file names in the same folder, the paper's Tables 2–4 beside this
-//! machine's times, the body's per-module training (Fig. 9), the animation's frames, and
-//! the fixed-vs-float accuracy tables.
+//! machine's times, its Table 5 (network against RBF on the torus) measured again, the body's
+//! per-module training (Fig. 9), the animation's frames, and the fixed-vs-float accuracy
+//! tables.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use super::DemoReport;
 use super::pictures::Picture;
+use super::table5::{TABLE5_DIAMETER, TABLE5_HELD_OUT, Table5Row};
 use crate::error::Result;
 use crate::io::write_atomic;
 
@@ -43,6 +45,45 @@ fn seconds(s: f64) -> String {
     } else {
         format!("{:.1} ms", 1e3 * s)
     }
+}
+
+/// The paper's Table 5 beside this run's: the torus by one network module and by the RBF.
+fn table5(out: &mut String, rows: &[Table5Row]) {
+    let seeds = rows.first().map_or_else(String::new, |r| {
+        let s: Vec<String> = r.seeds.iter().map(u64::to_string).collect();
+        s.join(", ")
+    });
+    let _ = write!(
+        out,
+        "<h2>The network against an RBF network (Table 5)</h2>\n<p>The torus R = 1, r = 0.4 \
+         learned from n control points by one network module (Table 1's settings) and by the \
+         multiquadric RBF interpolant; seed {seeds}, one thread. The paper: a C program on a \
+         1.7 GHz Pentium IV (in parentheses). Fidelity: median distance in % of the diameter \
+         D = {TABLE5_DIAMETER} / median normal error on {TABLE5_HELD_OUT} held-out points of \
+         the true torus (the paper gives none).</p>\n<table><tr><th>points</th>\
+         <th>network iterations</th><th>network time</th><th>RBF time</th>\
+         <th>network fidelity</th><th>RBF fidelity</th><th class=l>converged</th></tr>\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            out,
+            "<tr><td>{}</td><td>{:.0}{}</td><td>{}{}</td><td>{}{}</td>\
+             <td>{:.3} % / {:.2}°</td><td>{:.3} % / {:.2}°</td><td class=l>{}</td></tr>",
+            r.points,
+            r.iterations,
+            r.beside_paper(|p| p.iterations.to_string()),
+            seconds(r.network_seconds),
+            r.beside_paper(|p| seconds(p.network_seconds)),
+            seconds(r.rbf_seconds),
+            r.beside_paper(|p| seconds(p.rbf_seconds)),
+            r.network_distance_percent,
+            r.network_angle_degrees,
+            r.rbf_distance_percent,
+            r.rbf_angle_degrees,
+            if r.converged { "yes" } else { "no" }
+        );
+    }
+    out.push_str("</table>\n");
 }
 
 /// Renders the page for `report`.
@@ -122,6 +163,7 @@ pub fn html(report: &DemoReport) -> String {
             );
         }
         o.push_str("</table>\n");
+        table5(&mut o, &tour.table5);
         let b = &tour.body;
         let _ = write!(
             o,

@@ -1,6 +1,7 @@
 //! The demo's tour of Carcenac §6–7: the 17-feature body, its 50-frame animation learned
 //! incrementally, pictures (torus, head, the head's gradual memorization, the body, three
-//! animation frames), and the paper's Tables 2–4 next to this machine's times.
+//! animation frames), the paper's Tables 2–4 next to this machine's times, and Table 5 (the
+//! torus by the network and by the RBF) measured again.
 
 use std::path::Path;
 
@@ -9,6 +10,7 @@ use serde::Serialize;
 use super::animation::{FrameReport, PAPER_FRAMES, Spread, animate};
 use super::body::{BodyModule, body_fidelity, body_points, modules, train_body};
 use super::pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};
+use super::table5::{Table5Row, table5};
 use super::woody::{WoodyDemo, woody};
 use crate::error::Result;
 use crate::fidelity::Fidelity;
@@ -29,25 +31,30 @@ pub struct TourSize {
     pub head: u32,
     /// Width of the body and animation pictures (height twice that; the paper: 128 × 256).
     pub body_width: u32,
+    /// Control-point counts of Table 5 (one seed each).
+    pub table5_points: &'static [usize],
 }
 
 impl TourSize {
-    /// The paper's: 50 frames, 4 rays per pixel, 256 × 256 head, 128 × 256 body.
+    /// The paper's: 50 frames, 4 rays per pixel, 256 × 256 head, 128 × 256 body, every row
+    /// of Table 5.
     pub const PAPER: TourSize = TourSize {
         frames: PAPER_FRAMES,
         samples: 4,
         square: 160,
         head: 256,
         body_width: 128,
+        table5_points: &[48, 96, 160, 336, 576],
     };
 
-    /// A few seconds: 6 frames, 1 ray per pixel, small pictures.
+    /// A few seconds: 6 frames, 1 ray per pixel, small pictures, Table 5's first three rows.
     pub const QUICK: TourSize = TourSize {
         frames: 6,
         samples: 1,
         square: 48,
         head: 64,
         body_width: 48,
+        table5_points: &[48, 96, 160],
     };
 }
 
@@ -121,6 +128,8 @@ pub struct Tour {
     pub memorization: Vec<Picture>,
     /// Tables 2–4.
     pub timings: Vec<PaperTiming>,
+    /// Table 5: the torus by the network and by the RBF, one seed, one thread.
+    pub table5: Vec<Table5Row>,
     /// The body from `woody.obj` with automatic features; `None` when the data file is not
     /// there (see `io::data_file`).
     pub woody: Option<WoodyDemo>,
@@ -297,6 +306,7 @@ pub fn tour(
         Err(_) => None,
     };
     let timings = paper_timings(models.head, &body_demo, &animation_demo, &pictures, size);
+    let table5 = table5(size.table5_points, &[seed])?;
     Ok(Tour {
         size,
         body: body_demo,
@@ -304,6 +314,7 @@ pub fn tour(
         pictures,
         memorization,
         timings,
+        table5,
         woody,
     })
 }
