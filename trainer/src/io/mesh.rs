@@ -1,5 +1,6 @@
 //! Triangle meshes: the in-memory type and format dispatch by file extension.
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -66,6 +67,55 @@ impl Mesh {
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
+    }
+
+    /// How the triangles meet along their edges: whether the mesh is closed and consistently
+    /// wound, and its Euler characteristic.
+    pub fn edge_report(&self) -> EdgeReport {
+        // Per undirected edge: how many triangles use it, and the sum of +1 for each use
+        // from the lower index to the higher and −1 for the other way.
+        let mut edges: HashMap<(u32, u32), (usize, i64)> = HashMap::new();
+        let mut used = vec![false; self.positions.len()];
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let entry = edges.entry((a.min(b), a.max(b))).or_default();
+                entry.0 += 1;
+                entry.1 += if a < b { 1 } else { -1 };
+                if let Some(u) = used.get_mut(a as usize) {
+                    *u = true;
+                }
+            }
+        }
+        let vertices = used.iter().filter(|&&u| u).count() as i64;
+        EdgeReport {
+            edges: edges.len(),
+            not_shared_by_two: edges.values().filter(|e| e.0 != 2).count(),
+            same_way: edges.values().filter(|e| e.0 == 2 && e.1 != 0).count(),
+            euler_characteristic: vertices - edges.len() as i64 + self.triangles.len() as i64,
+        }
+    }
+}
+
+/// How the triangles of a [`Mesh`] meet along their edges ([`Mesh::edge_report`]).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct EdgeReport {
+    /// Distinct undirected edges.
+    pub edges: usize,
+    /// Edges not shared by exactly two triangles: open (one) or non-manifold (three or more).
+    pub not_shared_by_two: usize,
+    /// Edges shared by two triangles that run along it the same way (inconsistent winding).
+    pub same_way: usize,
+    /// V − E + F, counting the vertices the triangles use: 2 for a closed surface of genus 0,
+    /// 0 for a torus.
+    pub euler_characteristic: i64,
+}
+
+impl EdgeReport {
+    /// Watertight and consistently wound: every edge shared by exactly two triangles, once
+    /// in each direction.
+    pub fn is_closed(&self) -> bool {
+        self.not_shared_by_two == 0 && self.same_way == 0
     }
 }
 
@@ -203,6 +253,35 @@ pub(crate) mod tests {
             let dot: f64 = (0..3).map(|k| n[k] * centroid[k]).sum();
             assert!(dot > 0.0, "{t:?}");
         }
+    }
+
+    #[test]
+    fn edge_report_tells_closed_open_flipped_and_non_manifold_meshes() {
+        let cube = unit_cube();
+        let closed = cube.edge_report();
+        assert_eq!(closed.edges, 18);
+        assert_eq!(closed.euler_characteristic, 2);
+        assert!(closed.is_closed(), "{closed:?}");
+
+        let mut open = cube.clone();
+        open.triangles.pop();
+        let report = open.edge_report();
+        assert_eq!((report.not_shared_by_two, report.same_way), (3, 0));
+        assert!(!report.is_closed());
+
+        let mut flipped = cube.clone();
+        flipped.triangles[0].swap(1, 2);
+        let report = flipped.edge_report();
+        assert_eq!((report.not_shared_by_two, report.same_way), (0, 3));
+        assert!(!report.is_closed());
+
+        let mut fin = cube;
+        fin.positions.push([0.5, 0.5, 0.5]);
+        fin.triangles.push([0, 2, 8]);
+        let report = fin.edge_report();
+        // Edge 0–2 is now used three times; the fin's two new edges once each.
+        assert_eq!(report.not_shared_by_two, 3);
+        assert!(!report.is_closed());
     }
 
     #[test]

@@ -17,7 +17,7 @@ mod text;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use data::{DATA_VARIABLE, data_dir, data_file};
-pub use mesh::{Mesh, read_mesh, write_mesh};
+pub use mesh::{EdgeReport, Mesh, read_mesh, write_mesh};
 pub use obj::{TextureCoordinates, write_textured_obj};
 pub use ply::{PlyEncoding, read_points, write_mesh_ply, write_points_ply};
 pub use text::{

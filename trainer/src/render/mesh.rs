@@ -82,22 +82,89 @@ type EdgeKey = (u64, u64);
 /// One block's output: interpolated vertices by edge, triangles by edge.
 type BlockOutput = (Vec<(EdgeKey, [f64; 3])>, Vec<[EdgeKey; 3]>, u64);
 
-/// The grid: origin, cell size, cells per axis.
-#[derive(Copy, Clone, Debug)]
-struct Grid {
-    origin: [f64; 3],
-    cell: f64,
-    cells: [usize; 3],
+/// The regular grid a mesh is extracted on: the bounds of the field's regions with one
+/// padding cell on each side, so the grid's boundary lies outside every region.
+#[derive(Copy, Clone, Debug, PartialEq, Serialize)]
+pub struct MeshGrid {
+    /// The grid point of index (0, 0, 0).
+    pub origin: [f64; 3],
+    /// Cell side (world units).
+    pub cell: f64,
+    /// Cells per axis; grid points per axis are one more.
+    pub cells: [usize; 3],
 }
 
-impl Grid {
-    fn point(&self, i: [usize; 3]) -> [f64; 3] {
+impl MeshGrid {
+    /// The grid [`extract_mesh`] uses for `field` at `resolution` cells along the longest
+    /// side of its regions.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for a resolution outside 1..=[`MAX_RESOLUTION`] or a field
+    /// without regions, or with regions of no extent.
+    pub fn new<F: Field + ?Sized>(field: &F, resolution: usize) -> Result<MeshGrid> {
+        if !(1..=MAX_RESOLUTION).contains(&resolution) {
+            return Err(Error::invalid(format!(
+                "mesh resolution {resolution} is outside 1..={MAX_RESOLUTION}"
+            )));
+        }
+        let bounds = bounds_of(field.regions())
+            .ok_or_else(|| Error::invalid("the field has no region to mesh"))?;
+        let cell = bounds.longest_side() / resolution as f64;
+        if !(cell > 0.0 && cell.is_finite()) {
+            return Err(Error::invalid("the field's regions have no extent"));
+        }
+        Ok(MeshGrid {
+            origin: bounds.lo.map(|v| v - cell),
+            cell,
+            cells: [0, 1, 2].map(|k| ((bounds.hi[k] - bounds.lo[k]) / cell).ceil() as usize + 2),
+        })
+    }
+
+    /// The grid point of index `i`.
+    pub fn point(&self, i: [usize; 3]) -> [f64; 3] {
         [0, 1, 2].map(|k| self.origin[k] + self.cell * i[k] as f64)
     }
 
     fn id(&self, i: [usize; 3]) -> u64 {
         let n = self.cells.map(|c| c as u64 + 1);
         i[0] as u64 + n[0] * (i[1] as u64 + n[1] * i[2] as u64)
+    }
+
+    /// The values the mesher marches over at the grid points from `lo` to `hi` (inclusive,
+    /// each `hi[k]` at most `cells[k]`), x fastest, then y, then z: Φ at points inside a
+    /// region, −1 (outside) elsewhere and where Φ is NaN; and how many points Φ was
+    /// evaluated at (one batch call of the field).
+    pub fn sample<F: Field + ?Sized>(
+        &self,
+        field: &F,
+        lo: [usize; 3],
+        hi: [usize; 3],
+    ) -> (Vec<f64>, u64) {
+        let n = [0, 1, 2].map(|k| hi[k] + 1 - lo[k]);
+        let regions = field.regions();
+        let mut values = vec![-1.0; n[0] * n[1] * n[2]];
+        let mut inside = Vec::new();
+        let mut slots = Vec::new();
+        let mut slot = 0;
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let p = self.point([x, y, z]);
+                    if regions.iter().any(|r| r.contains(p)) {
+                        inside.push(p);
+                        slots.push(slot);
+                    }
+                    slot += 1;
+                }
+            }
+        }
+        let mut evaluated = vec![0.0; inside.len()];
+        field.values(&inside, &mut evaluated);
+        for (&slot, v) in slots.iter().zip(evaluated) {
+            // A NaN counts as outside.
+            values[slot] = if v.is_nan() { -1.0 } else { v };
+        }
+        (values, inside.len() as u64)
     }
 }
 
@@ -113,23 +180,7 @@ pub fn extract_mesh<F: Field + ?Sized>(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<ExtractedMesh> {
     let start = Instant::now();
-    if !(1..=MAX_RESOLUTION).contains(&resolution) {
-        return Err(Error::invalid(format!(
-            "mesh resolution {resolution} is outside 1..={MAX_RESOLUTION}"
-        )));
-    }
-    let bounds = bounds_of(field.regions())
-        .ok_or_else(|| Error::invalid("the field has no region to mesh"))?;
-    let cell = bounds.longest_side() / resolution as f64;
-    if !(cell > 0.0 && cell.is_finite()) {
-        return Err(Error::invalid("the field's regions have no extent"));
-    }
-    // One padding cell on each side keeps the grid's boundary outside every region.
-    let grid = Grid {
-        origin: bounds.lo.map(|v| v - cell),
-        cell,
-        cells: [0, 1, 2].map(|k| ((bounds.hi[k] - bounds.lo[k]) / cell).ceil() as usize + 2),
-    };
+    let grid = MeshGrid::new(field, resolution)?;
     let blocks = grid.cells.map(|c| c.div_ceil(BLOCK));
     let total = blocks[0] * blocks[1] * blocks[2];
     let done = AtomicU64::new(0);
@@ -177,7 +228,7 @@ pub fn extract_mesh<F: Field + ?Sized>(
         .collect();
     let stats = MeshStats {
         resolution,
-        cell_size: cell,
+        cell_size: grid.cell,
         blocks: total,
         blocks_searched: searched,
         evaluations,
@@ -196,7 +247,7 @@ pub fn extract_mesh<F: Field + ?Sized>(
 }
 
 /// Marches the block at `index` (in blocks); `false` when it meets no region.
-fn block<F: Field + ?Sized>(field: &F, grid: &Grid, index: [usize; 3]) -> (bool, BlockOutput) {
+fn block<F: Field + ?Sized>(field: &F, grid: &MeshGrid, index: [usize; 3]) -> (bool, BlockOutput) {
     let lo = index.map(|i| i * BLOCK);
     let hi = [0, 1, 2].map(|k| (lo[k] + BLOCK).min(grid.cells[k]));
     let bounds = Aabb {
@@ -209,26 +260,7 @@ fn block<F: Field + ?Sized>(field: &F, grid: &Grid, index: [usize; 3]) -> (bool,
     }
     let n = [0, 1, 2].map(|k| hi[k] - lo[k] + 1);
     let at = |i: [usize; 3]| (i[0] - lo[0]) + n[0] * ((i[1] - lo[1]) + n[1] * (i[2] - lo[2]));
-    let mut values = vec![-1.0; n[0] * n[1] * n[2]];
-    let mut inside = Vec::new();
-    let mut slots = Vec::new();
-    for z in lo[2]..=hi[2] {
-        for y in lo[1]..=hi[1] {
-            for x in lo[0]..=hi[0] {
-                let p = grid.point([x, y, z]);
-                if regions.iter().any(|r| r.contains(p)) {
-                    inside.push(p);
-                    slots.push(at([x, y, z]));
-                }
-            }
-        }
-    }
-    let mut evaluated = vec![0.0; inside.len()];
-    field.values(&inside, &mut evaluated);
-    for (&slot, v) in slots.iter().zip(evaluated) {
-        // A NaN counts as outside.
-        values[slot] = if v.is_nan() { -1.0 } else { v };
-    }
+    let (values, count) = grid.sample(field, lo, hi);
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
     for z in lo[2]..hi[2] {
@@ -247,7 +279,6 @@ fn block<F: Field + ?Sized>(field: &F, grid: &Grid, index: [usize; 3]) -> (bool,
             }
         }
     }
-    let count = inside.len() as u64;
     (true, (vertices, triangles, count))
 }
 

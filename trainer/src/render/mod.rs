@@ -32,7 +32,7 @@ pub use camera::{Camera, MAX_SIDE, View};
 pub use compare::{MAX_DENSE_SAMPLES, MethodComparison, compare_methods, dense_hit};
 pub use field::{CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, Field, NetworkField, SphereField};
 pub use interval::Interval;
-pub use mesh::{BLOCK, ExtractedMesh, MAX_RESOLUTION, MeshStats, extract_mesh};
+pub use mesh::{BLOCK, ExtractedMesh, MAX_RESOLUTION, MeshGrid, MeshStats, extract_mesh};
 pub use octree::{MAX_DEPTH, Octree, PROBE_GRID, PROBE_REACH};
 pub use raycast::{
     EDGE_COSINE, EDGE_DEPTH, MAX_SAMPLES, Method, RenderOptions, RenderStats, Rendered, TILE,

@@ -1,7 +1,6 @@
 //! The renderer and the mesher on an analytic sphere and on trained models (a sphere, the
 //! torus of the foundation's tests).
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use super::*;
@@ -43,32 +42,18 @@ fn camera_for<F: Field>(field: &F, size: u32, view: View) -> Camera {
 
 /// Every edge of `mesh` is shared by exactly two triangles, once in each direction.
 fn assert_watertight(mesh: &Mesh) {
-    let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_default() += if a < b { 1 } else { -1 };
-        }
-    }
-    let mut uses: HashMap<(u32, u32), usize> = HashMap::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    let bad = uses.values().filter(|&&n| n != 2).count();
+    let report = mesh.edge_report();
     assert_eq!(
-        bad,
-        0,
-        "{bad} of {} edges are not shared by two triangles",
-        uses.len()
+        report.not_shared_by_two, 0,
+        "{} of {} edges are not shared by two triangles",
+        report.not_shared_by_two, report.edges
     );
-    let unoriented = edges.values().filter(|&&s| s != 0).count();
     assert_eq!(
-        unoriented, 0,
-        "{unoriented} edges are traversed twice the same way"
+        report.same_way, 0,
+        "{} edges are traversed twice the same way",
+        report.same_way
     );
+    assert!(report.is_closed());
 }
 
 #[test]
