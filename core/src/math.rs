@@ -15,3 +15,9 @@ pub(crate) fn sqrtf(x: f32) -> f32 {
 pub(crate) fn fabsf(x: f32) -> f32 {
     libm::fabsf(x)
 }
+
+/// Square root for `f64` (libm: correctly rounded); load-time geometry only.
+#[inline]
+pub(crate) fn sqrt(x: f64) -> f64 {
+    libm::sqrt(x)
+}

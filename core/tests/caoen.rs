@@ -184,16 +184,16 @@ fn axis_targets_exponential_matches_the_closed_form() {
 // ---------------------------------------------------------------------------------------------
 // Against the f64 reference
 
-/// Random networks (unit weights, targets in [−2, 2]³, both blendings, both forms, n from 6 to
-/// 104) at random sphere points: position errors of f32 and Q16.16, and normal angles.
+/// Random networks (unit weights, targets in [−2, 2]³, the three blendings, both forms, n from
+/// 6 to 104) at random sphere points: position errors of f32 and Q16.16, and normal angles.
 #[test]
 fn random_networks_agree_with_the_reference() {
     let mut rng = Rng::new(5);
     let mut worst = [0.0_f64; 4];
-    for trial in 0..24 {
+    for trial in 0..36 {
         let n = [6, 26, 104][trial % 3];
-        let blending = ((trial / 3) % 2) as u8;
-        let normalized = (trial / 6) % 2 == 1;
+        let blending = ((trial / 3) % 3) as u8;
+        let normalized = (trial / 9) % 2 == 1;
         let net = random_network(&mut rng, n, (3, 3), blending, normalized, 2.0);
         let (f, fixed) = models(&net);
         // The decoded words are the reference's (all on the Q16.16 grid, below 2⁸).
@@ -215,7 +215,9 @@ fn random_networks_agree_with_the_reference() {
             // Where the Jacobian is nearly rank 1 (a cusp of the surface) the normal's
             // direction is ill-conditioned in any precision: its error grows like 1/strength.
             let strength = net.normal_strength(&x);
-            if let Some(exact_normal) = net.normal(&x).filter(|_| strength > 1e-3) {
+            // In the rational form the Jacobian is (∂A − y ⊗ ∂B)/Σ F: as ill-conditioned as
+            // the position where Σ F is tiny.
+            if let Some(exact_normal) = net.normal(&x).filter(|_| strength > 1e-3 && q16_valid) {
                 let n32 = f64s(f.normal(&f32s::<3>(&x)).unwrap());
                 worst[2] = worst[2].max(angle(n32, exact_normal) * strength);
                 // Q16.16 normals need the Jacobian well above the resolution.
@@ -234,7 +236,7 @@ fn random_networks_agree_with_the_reference() {
         worst[0], worst[1], worst[2], worst[3]
     );
     assert!(worst[0] < 2e-6, "{worst:?}");
-    assert!(worst[1] < 64.0, "{worst:?}");
+    assert!(worst[1] < 128.0, "{worst:?}");
     assert!(worst[2] < 1e-4, "{worst:?}");
     assert!(worst[3] < 1e-2, "{worst:?}");
 }
@@ -245,9 +247,9 @@ fn random_networks_agree_with_the_reference() {
 fn exact_normals_match_finite_differences() {
     let mut rng = Rng::new(6);
     let mut worst = 0.0_f64;
-    for trial in 0..8 {
-        let blending = (trial % 2) as u8;
-        let net = random_network(&mut rng, 26, (3, 3), blending, trial >= 4, 1.5);
+    for trial in 0..12 {
+        let blending = (trial % 3) as u8;
+        let net = random_network(&mut rng, 26, (3, 3), blending, trial >= 6, 1.5);
         let (f, _) = models(&net);
         for x in sphere_points(&mut rng, 50) {
             let (Some(exact), Some(fd)) = (net.normal(&x), net.normal_by_differences(&x, 1e-5))
@@ -387,7 +389,14 @@ fn batch_identical<S: Scalar>(model: &CaoEnModel<S>, points: &[[S; 3]]) {
 #[test]
 fn batches_are_bit_identical_to_single_points() {
     let mut rng = Rng::new(9);
-    for (blending, normalized) in [(0, false), (1, false), (0, true), (1, true)] {
+    for (blending, normalized) in [
+        (0, false),
+        (1, false),
+        (2, false),
+        (0, true),
+        (1, true),
+        (2, true),
+    ] {
         let net = random_network(&mut rng, 26, (3, 3), blending, normalized, 2.0);
         let (f, fixed) = models(&net);
         let points = sphere_points(&mut rng, 37);
@@ -400,7 +409,7 @@ fn batches_are_bit_identical_to_single_points() {
 #[test]
 fn any_input_evaluates() {
     let mut rng = Rng::new(10);
-    for blending in [0, 1] {
+    for blending in [0, 1, 2] {
         let net = random_network(&mut rng, 12, (3, 3), blending, true, 2.0);
         let (f, fixed) = models(&net);
         for x in [
@@ -415,6 +424,76 @@ fn any_input_evaluates() {
             let y: [Q16; 3] = fixed.eval(&q);
             let _ = fixed.eval_normal(&q);
             assert!(y.iter().all(|c| c.abs() <= Q16::MAX));
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Compact blending: group skipping
+
+/// 96 key points of a cube sphere (4 × 4 per face) in face order, so that groups of eight
+/// consecutive keys are halves of faces, with compact blending (q = 3).
+fn banded_compact_network(normalized: bool) -> RefNet {
+    let offsets = [-0.75, -0.25, 0.25, 0.75];
+    let weights: Vec<Vec<f64>> = (0..96)
+        .map(|i| {
+            let (face, cell) = (i / 16, i % 16);
+            let (axis, sign) = (face / 2, if face % 2 == 0 { 1.0 } else { -1.0 });
+            let mut v = [0.0; 3];
+            v[axis] = sign;
+            v[(axis + 1) % 3] = offsets[cell % 4];
+            v[(axis + 2) % 3] = offsets[cell / 4];
+            let r = dot(&v, &v).sqrt();
+            v.iter().map(|c| caoen_support::to_grid(c / r)).collect()
+        })
+        .collect();
+    let targets = weights
+        .iter()
+        .map(|w| {
+            let bump = 1.0 + 0.3 * w[0] * w[1];
+            w.iter().map(|c| caoen_support::to_grid(c * bump)).collect()
+        })
+        .collect();
+    RefNet {
+        domain: 0,
+        blending: 2,
+        normalized,
+        weights,
+        targets,
+        sharpness: vec![3.0; 96],
+    }
+}
+
+/// Skipping out-of-reach groups changes no bit: in Q16.16 every output and Jacobian entry is
+/// an exact integer sum, independent of the key order, so the banded network (whose groups
+/// are skipped) and the same keys in an order without locality (rarely skipped) must give
+/// the same bits; both agree with the f64 reference.
+#[test]
+fn compact_group_skipping_changes_no_bit() {
+    let mut rng = Rng::new(12);
+    for normalized in [false, true] {
+        let banded = banded_compact_network(normalized);
+        let n = banded.weights.len();
+        let order: Vec<usize> = (0..n).map(|i| (i * 41) % n).collect();
+        let shuffled = RefNet {
+            weights: order.iter().map(|&i| banded.weights[i].clone()).collect(),
+            targets: order.iter().map(|&i| banded.targets[i].clone()).collect(),
+            sharpness: order.iter().map(|&i| banded.sharpness[i]).collect(),
+            ..banded.clone()
+        };
+        let (f, a) = models(&banded);
+        let (_, b) = models(&shuffled);
+        for x in sphere_points(&mut rng, 200) {
+            let q = q16s::<3>(&x);
+            assert_eq!(a.eval_normal(&q), b.eval_normal(&q), "at {x:?}");
+            let exact = banded.position(&x);
+            let y = f64s(f.eval::<3, 3>(&f32s(&x)));
+            for k in 0..3 {
+                assert!(
+                    (y[k] - exact[k]).abs() < 1e-5,
+                    "f32 at {x:?}: {y:?} {exact:?}"
+                );
+            }
         }
     }
 }

@@ -146,7 +146,11 @@ fn shape_errors() {
     );
     rejected(
         &raw_blob(kind, [0, 7, 0, 3, 3], [&w3, &t3, &q]),
-        shape(Quantity::Blending, 1, 7),
+        shape(Quantity::Blending, 2, 7),
+    );
+    rejected(
+        &raw_blob(kind, [0, 3, 0, 3, 3], [&w3, &t3, &q]),
+        shape(Quantity::Blending, 2, 3),
     );
     rejected(
         &raw_blob(kind, [0, 0, 0, 2, 3], [&w3, &t3, &q]),

@@ -254,9 +254,9 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
     let out = ok(&["sim-bench", s(&model), "--json"]);
     let bench: serde_json::Value = serde_json::from_str(&out).unwrap();
     let rows = bench["rows"].as_array().unwrap();
-    // (torus, head, spiral curve, wavy surface network, the extra blob) × (f32, q16.16) ×
-    // (value, value+derivative) × (single, batch)
-    assert_eq!(rows.len(), 40, "{out}");
+    // (torus, head, spiral curve, wavy surface network, four Cao En networks, the extra blob)
+    // × (f32, q16.16) × (value, value+derivative) × (single, batch)
+    assert_eq!(rows.len(), 72, "{out}");
     for r in rows {
         let instructions = r["instructions_per_eval"].as_f64().unwrap();
         let macs = r["macs"].as_u64().unwrap() as f64;
@@ -274,7 +274,31 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
         .find(|r| r["model"].as_str().unwrap().starts_with("spiral curve"))
         .unwrap();
     assert_eq!(curve["op"], "position", "{curve}");
-    assert_eq!(bench["ratios"].as_array().unwrap().len(), 20, "{out}");
+    assert_eq!(bench["ratios"].as_array().unwrap().len(), 36, "{out}");
+    // Local support: with 104 keys, compact blending skips the groups out of reach and costs
+    // well under half of exponential blending, which touches every key (same MAC count).
+    let cao_en = |blending: &str, op: &str| {
+        rows.iter()
+            .find(|r| {
+                let model = r["model"].as_str().unwrap();
+                model.starts_with("Cao En sphere, 104 keys")
+                    && model.contains(blending)
+                    && r["op"] == op
+                    && r["scalar"] == "f32"
+                    && r["mode"] == "single"
+            })
+            .unwrap_or_else(|| panic!("no 104-key {blending} {op} row: {out}"))
+    };
+    for op in ["position", "position+direction"] {
+        let (compact, exponential) = (cao_en("compact", op), cao_en("exponential", op));
+        assert_eq!(compact["macs"], exponential["macs"]);
+        let ratio = compact["instructions_per_eval"].as_f64().unwrap()
+            / exponential["instructions_per_eval"].as_f64().unwrap();
+        assert!(
+            ratio < 0.5,
+            "compact / exponential {ratio}: {compact} {exponential}"
+        );
+    }
     let footprint = &bench["footprint"];
     assert!(
         footprint["flash_bytes"].as_u64().unwrap() < footprint["flash_budget"].as_u64().unwrap()

@@ -18,14 +18,21 @@ pub enum Blending {
     Power,
     /// F(s) = e^{q(s−1)} (paper eq. 5); q any value in [0, 64].
     Exponential,
+    /// F(s) = u³ with u = 1 + q(s − 1) for u > 0, else 0: local support (the paper's §5 open
+    /// question). A key point only reaches the cap s > 1 − 1/q around its weight (q ≥ 1/2 for
+    /// a cap smaller than the sphere), F is C¹ at the cap's edge, F(1) = 1 like the
+    /// exponential, and keys stored in groups (see [`crate::caoen`]) that cannot reach a source
+    /// point are skipped whole. q any value in [0, 64]; q = 0 gives F = 1 everywhere.
+    Compact,
 }
 
 impl Blending {
-    /// The blob code: 0 power, 1 exponential.
+    /// The blob code: 0 power, 1 exponential, 2 compact.
     pub const fn code(self) -> u8 {
         match self {
             Blending::Power => 0,
             Blending::Exponential => 1,
+            Blending::Compact => 2,
         }
     }
 
@@ -34,12 +41,13 @@ impl Blending {
         match code {
             0 => Some(Blending::Power),
             1 => Some(Blending::Exponential),
+            2 => Some(Blending::Compact),
             _ => None,
         }
     }
 
     /// The largest valid code.
-    pub(crate) const LAST_CODE: u8 = 1;
+    pub(crate) const LAST_CODE: u8 = 2;
 }
 
 /// What the network maps from, which fixes how tangents (and so normals) are formed.
@@ -103,6 +111,20 @@ pub(crate) fn blend<S: Scalar, const DERIVATIVE: bool>(
             let value = q.mul(s.sub(S::ONE)).exp();
             let slope = if DERIVATIVE { q.mul(value) } else { S::ZERO };
             (value, slope)
+        }
+        Blending::Compact => {
+            let u = S::ONE.add(q.mul(s.sub(S::ONE)));
+            // NaN is not greater than 0 either and gives 0, like any point off the cap.
+            if u.partial_cmp(&S::ZERO) != Some(core::cmp::Ordering::Greater) {
+                return (S::ZERO, S::ZERO);
+            }
+            let square = u.mul(u);
+            let slope = if DERIVATIVE {
+                q.mul(square.add(square).add(square))
+            } else {
+                S::ZERO
+            };
+            (square.mul(u), slope)
         }
     };
     (clamp(value, limit), clamp(slope, limit))

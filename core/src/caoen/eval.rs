@@ -7,8 +7,8 @@
 //! reading of the network), and every output is one accumulation with one rounding. The
 //! single-point calls are the same code with one lane, so batches give the same bits.
 
-use super::blending::{blend, clamp};
-use super::model::CaoEnModel;
+use super::blending::{Blending, blend, clamp};
+use super::model::{CaoEnModel, GROUP_NORM_LIMIT};
 use crate::scalar::Scalar;
 
 /// The output and, when asked for, the Jacobian at one input.
@@ -38,34 +38,77 @@ impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
     }
 
     /// `L` inputs at once (structure of arrays over the lanes).
+    ///
+    /// The common shapes (m, p) = (3, 3) (sphere → space) and (4, 3) (torus → space) get their
+    /// own copy of the loop with the dimensions as constants, so that the per-key loops unroll;
+    /// every other shape runs the same code with the dimensions read at run time.
     #[inline]
     pub(crate) fn lanes<const L: usize, const M: usize, const P: usize, const JACOBIAN: bool>(
         &self,
         x: &[[S; M]; L],
     ) -> [Jet<S, M, P>; L] {
-        let limit = S::from_f32_saturating(S::MAX_PARAMETER);
         let m = self.source_dimension().min(M);
         let p = self.target_dimension().min(P);
+        match (m, p) {
+            (3, 3) => self.kernel::<L, M, P, JACOBIAN>(x, 3, 3),
+            (4, 3) => self.kernel::<L, M, P, JACOBIAN>(x, 4, 3),
+            _ => self.kernel::<L, M, P, JACOBIAN>(x, m, p),
+        }
+    }
+
+    /// [`Self::lanes`] for m source and p target coordinates (m ≤ M, p ≤ P).
+    #[inline(always)]
+    fn kernel<const L: usize, const M: usize, const P: usize, const JACOBIAN: bool>(
+        &self,
+        x: &[[S; M]; L],
+        m: usize,
+        p: usize,
+    ) -> [Jet<S, M, P>; L] {
+        let limit = S::from_f32_saturating(S::MAX_PARAMETER);
         let zero = S::ZERO.to_acc();
         let mut outputs = [[zero; P]; L];
         let mut sums = [zero; L];
         let mut jacobians = [[[zero; M]; P]; L];
         let mut sum_gradients = [[zero; M]; L];
-        for key in &self.keys {
-            let mut k = [S::ZERO; L];
-            let mut slope = [S::ZERO; L];
-            for ((x, k), slope) in x.iter().zip(&mut k).zip(&mut slope) {
+        let grouped = self.blending == Blending::Compact;
+        let norm_limit = S::from_f32_saturating(GROUP_NORM_LIMIT);
+        let norms = if grouped {
+            x.map(|x| {
+                let mut squared = zero;
+                for &xh in x.iter().take(m) {
+                    squared = S::mac(squared, xh, xh);
+                }
+                S::from_acc(squared).sqrt()
+            })
+        } else {
+            [S::ZERO; L]
+        };
+        let mut index = 0;
+        while let Some(key) = self.keys.get(index) {
+            let mut cosines = [S::ZERO; L];
+            for (x, cosine) in x.iter().zip(&mut cosines) {
                 let mut s = zero;
                 for (&xh, &wh) in x.iter().zip(&key.weight).take(m) {
                     s = S::mac(s, xh, wh);
                 }
-                (*k, *slope) = blend::<S, JACOBIAN>(
-                    self.blending,
-                    S::from_acc(s),
-                    key.sharpness,
-                    key.power,
-                    limit,
-                );
+                *cosine = S::from_acc(s);
+            }
+            if grouped
+                && key.group.span > 0
+                && cosines
+                    .iter()
+                    .zip(&norms)
+                    .all(|(&s0, &norm)| key.group.out_of_reach(s0, norm, norm_limit))
+            {
+                index += usize::from(key.group.span);
+                continue;
+            }
+            index += 1;
+            let mut k = [S::ZERO; L];
+            let mut slope = [S::ZERO; L];
+            for ((&s, k), slope) in cosines.iter().zip(&mut k).zip(&mut slope) {
+                (*k, *slope) =
+                    blend::<S, JACOBIAN>(self.blending, s, key.sharpness, key.power, limit);
             }
             for (y, &k) in outputs.iter_mut().zip(&k) {
                 for (y, &t) in y.iter_mut().zip(&key.target).take(p) {
@@ -105,7 +148,7 @@ impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
             let (Some(y), Some(&sum)) = (outputs.get(lane), sums.get(lane)) else {
                 continue;
             };
-            for (position, &y) in jet.position.iter_mut().zip(y) {
+            for (position, &y) in jet.position.iter_mut().zip(y).take(p) {
                 *position = if self.normalized {
                     S::quotient(y, sum)
                 } else {
@@ -120,8 +163,14 @@ impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
             else {
                 continue;
             };
-            for ((out, row), &y) in jet.jacobian.iter_mut().zip(jacobian).zip(&jet.position) {
-                for ((out, &entry), &db) in out.iter_mut().zip(row).zip(sum_gradient) {
+            for ((out, row), &y) in jet
+                .jacobian
+                .iter_mut()
+                .zip(jacobian)
+                .zip(&jet.position)
+                .take(p)
+            {
+                for ((out, &entry), &db) in out.iter_mut().zip(row).zip(sum_gradient).take(m) {
                     *out = if self.normalized {
                         S::from_acc(entry).sub(y.mul(S::from_acc(db)))
                     } else {

@@ -15,8 +15,10 @@
 //!
 //! sᵢ = x·wᵢ,  kᵢ = Fᵢ(sᵢ)  (or kᵢ = Fᵢ(sᵢ) / Σⱼ Fⱼ(sⱼ) when normalized),  y = Σᵢ kᵢ·tᵢ,
 //!
-//! with F(s) = s^q for s > 0 and 0 otherwise ([`Blending::Power`], q whole, eq. 4) or
-//! F(s) = e^{q(s−1)} ([`Blending::Exponential`], eq. 5). The normalized form is our reading of
+//! with F(s) = s^q for s > 0 and 0 otherwise ([`Blending::Power`], q whole, eq. 4),
+//! F(s) = e^{q(s−1)} ([`Blending::Exponential`], eq. 5) or F(s) = (1 + q(s − 1))³ where
+//! positive and 0 otherwise ([`Blending::Compact`]: local support, the paper's §5 open
+//! question). The normalized form is our reading of
 //! the paper's rational form (eq. 6, printed as kᵢ = sᵢ/Σ F, which cannot give the described
 //! effect): it makes y a convex combination of the targets, so the surface stays within their
 //! convex hull, and with the six axis targets it approaches the octahedron as q grows (Fig. 3).
@@ -25,6 +27,14 @@
 //! (cos θ, sin θ, cos φ, sin φ) on the torus — so the evaluator needs no trigonometry; a
 //! normalized network with power blending gives y = 0 where no key point has sᵢ > 0.
 //! Normals (eq. 8–13) come from the Jacobian of y, see [`CaoEnModel::normal`] and `normal.rs`.
+//! Under compact blending a key point only reaches the cap s > 1 − 1/q around its weight. The
+//! loader groups [`GROUP_KEYS`] consecutive keys and the evaluator skips a group when no lane
+//! of the pass is within reach of any of its keys (bounded by the first key's cosine plus |x|
+//! times the group's spread, with a margin that makes a skipped key one that would have given
+//! exactly 0: skipping changes no bit). Keys stored near each other in the blob make compact
+//! groups; the trainer orders them so. Then the cost per point follows the keys within reach,
+//! not n.
+//!
 //! The paper's approximate-normal network — targets replaced by the normals at the key points —
 //! is an ordinary model for this evaluator, built by the trainer.
 //!
@@ -35,7 +45,8 @@
 //! [`ScalarKind::Q16_16`](crate::scalar::ScalarKind):
 //!
 //! ```text
-//! { domain: u8 (0 sphere, 1 torus), blending: u8 (0 power, 1 exponential), normalized: bool,
+//! { domain: u8 (0 sphere, 1 torus), blending: u8 (0 power, 1 exponential, 2 compact),
+//!   normalized: bool,
 //!   source_dimension: u8 (m), target_dimension: u8 (p),
 //!   weights: [u8] (w₁ … wₙ, m words each), targets: [u8] (t₁ … tₙ, p words each),
 //!   sharpness: [u8] (q₁ … qₙ, one word each), metadata: [u8] }
@@ -58,17 +69,21 @@
 //! rounding, `core/tests/caoen_scalar.rs`).
 //!
 //! Against an `f64` evaluation at unit source points, for random networks with unit weights,
-//! targets in [−2, 2]³, n = 6 … 104, both blendings and both forms (`core/tests/caoen.rs`;
+//! targets in [−2, 2]³, n = 6 … 104, the three blendings and both forms (`core/tests/caoen.rs`;
 //! asserted bound, measured worst in parentheses):
 //!
-//! - `f32`: positions within 2·10⁻⁶·(1 + max|y|) (4.8·10⁻⁷);
-//! - Q16.16: positions within 64 LSB (28 LSB). The rational form divides by Σ F, a sum of
-//!   values rounded to 2⁻¹⁶: this holds where Σ F ≥ 0.01 — choose q so that every source point
-//!   is within reach of a key point;
+//! - `f32`: positions within 2·10⁻⁶·(1 + max|y|) (7.7·10⁻⁷);
+//! - Q16.16: positions within 128 LSB (62 LSB, power blending, n = 6, rational form at
+//!   Σ F = 0.027; compact blending 31 LSB). The rational form divides by Σ F, a sum of values
+//!   rounded to 2⁻¹⁶, so its error grows like 1/Σ F: this holds where Σ F ≥ 0.01 — choose q so
+//!   that every source point is within reach of a key point;
 //! - normals: the direction of N is ill-conditioned where the Jacobian is nearly rank 1 (a cusp
 //!   of the surface), so the bound is on angle × strength, strength = |N|/max|J|² (1 for a
-//!   conformal map): `f32` 10⁻⁴ rad (3.0·10⁻⁵), Q16.16 10⁻² rad (1.3·10⁻³) where
-//!   max|J| > 0.05 and strength > 0.01. Against finite differences: 1.5·10⁻⁴ rad.
+//!   conformal map): `f32` 10⁻⁴ rad (7.4·10⁻⁵), Q16.16 10⁻² rad (6.9·10⁻³) where
+//!   max|J| > 0.05 and strength > 0.01, both where Σ F ≥ 0.01 in the rational form. Against
+//!   finite differences: 4.1·10⁻⁴ rad.
+//! - Compact blending amplifies the input's rounding by F′(1) = 3q at a key (exponential: q),
+//!   so the same accuracy needs q three times smaller; the tests draw q ≤ 16/3 for it.
 //!
 //! [`MAX_PARAMETER`]: crate::scalar::Scalar::MAX_PARAMETER
 //!
@@ -114,7 +129,8 @@ pub use convex::{
     BISECTION_STEPS, GOLDEN_STEPS, MAX_RAY_EVALUATIONS, RAY_SCAN_SAMPLES, Ray, RayHit,
 };
 pub use model::{
-    CaoEnModel, DEFAULT_KEY_POINTS, MAX_KEY_POINTS, MAX_SOURCE_DIMENSION, MAX_TARGET_DIMENSION,
+    CaoEnModel, DEFAULT_KEY_POINTS, GROUP_KEYS, MAX_KEY_POINTS, MAX_SOURCE_DIMENSION,
+    MAX_TARGET_DIMENSION,
 };
 pub use normal::CaoEnPoint;
 pub use payload::CaoEnPayload;

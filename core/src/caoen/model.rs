@@ -20,15 +20,62 @@ pub const MAX_KEY_POINTS: usize = 1024;
 /// paper's 104-point teapot.
 pub const DEFAULT_KEY_POINTS: usize = 256;
 
+/// Most key points in one group of a [`Blending::Compact`] network: consecutive keys are
+/// grouped in the blob's order, eight at a time, and a group that cannot reach a source point
+/// is skipped whole.
+pub const GROUP_KEYS: usize = 8;
+
 /// One key point: its blending weight wᵢ (the source point), its target tᵢ (column i of V),
 /// and its sharpness q (also as a whole number for power blending).
+///
+/// The first key of a group also carries the group's skip test (see [`Group`]); `group.span`
+/// is 0 for the other keys and for networks that never skip.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub(crate) struct Key<S> {
     pub(crate) weight: [S; MAX_SOURCE_DIMENSION],
     pub(crate) target: [S; MAX_TARGET_DIMENSION],
     pub(crate) sharpness: S,
     pub(crate) power: u8,
+    pub(crate) group: Group<S>,
 }
+
+/// The skip test of a group of compact keys led by key 0 with weight w₀: every key j of the
+/// group has |wⱼ − w₀| ≤ `reach`, so sⱼ = x·wⱼ ≤ x·w₀ + |x|·`reach`, and it is off its cap when
+/// sⱼ ≤ 1 − 1/qⱼ. The group is skipped when x·w₀ + |x|·`reach` < `floor`, the smallest cap
+/// edge minus a margin of 2⁻¹⁰ that covers every rounding of both scalars, so a skipped key
+/// would have given exactly 0: skipping changes no bit of any result. Groups are only formed
+/// of keys with weights within ±[`GROUP_WEIGHT_LIMIT`] and only lanes with |x| below
+/// [`GROUP_NORM_LIMIT`] are tested, so nothing in the test saturates in Q16.16.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct Group<S> {
+    /// Keys in the group, this one first (0: not a group leader, or never skipped).
+    pub(crate) span: u8,
+    pub(crate) reach: S,
+    pub(crate) floor: S,
+}
+
+/// Largest weight coordinate of a key that can be grouped.
+pub(crate) const GROUP_WEIGHT_LIMIT: f64 = 16.0;
+/// |x| from which a lane is never skipped.
+pub(crate) const GROUP_NORM_LIMIT: f32 = 64.0;
+
+impl<S: Scalar> Group<S> {
+    const NONE: Self = Group {
+        span: 0,
+        reach: S::ZERO,
+        floor: S::ZERO,
+    };
+
+    /// Whether no key of the group reaches a lane with s₀ = x·w₀ and `norm` = |x| (false for
+    /// |x| ≥ `norm_limit`, [`GROUP_NORM_LIMIT`] in the scalar, and for NaN).
+    #[inline(always)]
+    pub(crate) fn out_of_reach(&self, s0: S, norm: S, norm_limit: S) -> bool {
+        norm < norm_limit && s0.add(norm.mul(self.reach)) < self.floor
+    }
+}
+
+/// Margin of the skip test (see [`Group`]).
+const SKIP_MARGIN: f64 = 1.0 / 1024.0;
 
 /// A Cao En network y = V·k, kᵢ = Fᵢ(x·wᵢ), loaded from a blob and validated (see
 /// [`crate::caoen`] for the contract, the payload and the accuracy).
@@ -169,6 +216,7 @@ impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
                 target: [S::ZERO; MAX_TARGET_DIMENSION],
                 sharpness: S::ZERO,
                 power: 0,
+                group: Group::NONE,
             };
             for (h, slot) in key.weight.iter_mut().take(m).enumerate() {
                 *slot = word(payload.weights, i * m + h)?;
@@ -193,6 +241,9 @@ impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
             key.power = sharpness_check(chunk, stored, blending)
                 .ok_or(BlobError::ParameterOutOfRange { index })?;
         }
+        if blending == Blending::Compact {
+            self.form_groups(m);
+        }
         self.domain = domain;
         self.blending = blending;
         self.normalized = payload.normalized;
@@ -200,6 +251,52 @@ impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
         self.target_dimension = payload.target_dimension;
         self.stored_as = stored;
         Ok(())
+    }
+
+    /// Fills the skip test of every group of [`GROUP_KEYS`] consecutive keys (m source
+    /// coordinates). Done once at load, in `f64` from the scalar's values; a group with a key
+    /// of q < 1/2 (a cap that covers the sphere) or a weight beyond ±[`GROUP_WEIGHT_LIMIT`]
+    /// is never skipped.
+    fn form_groups(&mut self, m: usize) {
+        for group in self.keys.chunks_mut(GROUP_KEYS) {
+            let Some(leader) = group.first().map(|k| k.weight) else {
+                continue;
+            };
+            let mut reach = 0.0_f64;
+            let mut floor = f64::INFINITY;
+            let bounded = group.iter().all(|key| {
+                key.weight
+                    .iter()
+                    .all(|w| w.to_f64().abs() <= GROUP_WEIGHT_LIMIT)
+            });
+            for key in group.iter() {
+                let squared: f64 = key
+                    .weight
+                    .iter()
+                    .zip(&leader)
+                    .take(m)
+                    .map(|(a, b)| {
+                        let d = a.to_f64() - b.to_f64();
+                        d * d
+                    })
+                    .sum();
+                reach = reach.max(crate::math::sqrt(squared));
+                let q = key.sharpness.to_f64();
+                floor = floor.min(if q >= 0.5 { 1.0 - 1.0 / q } else { -3.0 });
+            }
+            let span = group.len() as u8;
+            if let Some(first) = group.first_mut() {
+                first.group = if bounded && floor > -2.0 {
+                    Group {
+                        span,
+                        reach: round_up::<S>(reach * (1.0 + SKIP_MARGIN) + SKIP_MARGIN),
+                        floor: S::from_f32_saturating((floor - SKIP_MARGIN) as f32),
+                    }
+                } else {
+                    Group::NONE
+                };
+            }
+        }
     }
 
     /// What the network maps from.
@@ -287,6 +384,11 @@ impl<S: Scalar, const K: usize> Default for CaoEnModel<S, K> {
     }
 }
 
+/// `value` in the scalar, rounded up by a margin larger than its rounding (values ≤ 2048).
+fn round_up<S: Scalar>(value: f64) -> S {
+    S::from_f32_saturating((value + 1.0 / 32768.0) as f32)
+}
+
 /// The shape error for a dimension outside `valid` (reports the nearer end as expected).
 fn dimension_error(
     what: Quantity,
@@ -341,5 +443,107 @@ fn sharpness_check(word: &[u8], stored: ScalarKind, blending: Blending) -> Optio
             (f64::from(whole) == q).then_some(whole)
         }
         _ => Some(0),
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::indexing_slicing)]
+mod tests {
+    use super::super::blending::blend;
+    use super::*;
+    use crate::scalar::Q16;
+
+    /// 96 key points of a cube sphere (4 × 4 per face), each face's two 2 × 4 halves a group,
+    /// `(x, y, z)` per key.
+    fn cube_sphere() -> [[f64; 3]; 96] {
+        let mut keys = [[0.0; 3]; 96];
+        let offsets = [-0.75, -0.25, 0.25, 0.75];
+        for (i, key) in keys.iter_mut().enumerate() {
+            let (face, cell) = (i / 16, i % 16);
+            let (axis, sign) = (face / 2, if face % 2 == 0 { 1.0 } else { -1.0 });
+            let mut v = [0.0; 3];
+            v[axis] = sign;
+            v[(axis + 1) % 3] = offsets[cell % 4];
+            v[(axis + 2) % 3] = offsets[cell / 4];
+            let r = libm::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            *key = v.map(|c| c / r);
+        }
+        keys
+    }
+
+    /// The cube-sphere compact network (q = 3): a quarter of the groups is out of reach of a
+    /// sphere point, and every key of a skipped group blends to exactly 0, in both scalars.
+    fn check_skipping<S: Scalar>() {
+        let mut weights = [0_u8; 96 * 3 * 4];
+        for (key, chunk) in cube_sphere().iter().zip(weights.chunks_exact_mut(12)) {
+            for (c, word) in key.iter().zip(chunk.chunks_exact_mut(4)) {
+                word.copy_from_slice(&ScalarKind::F32.encode(*c).unwrap_or_default());
+            }
+        }
+        let mut sharpness = [0_u8; 96 * 4];
+        for word in sharpness.chunks_exact_mut(4) {
+            word.copy_from_slice(&ScalarKind::F32.encode(3.0).unwrap_or_default());
+        }
+        let payload = CaoEnPayload {
+            domain: 0,
+            blending: Blending::Compact.code(),
+            normalized: false,
+            source_dimension: 3,
+            target_dimension: 3,
+            weights: &weights,
+            targets: &weights,
+            sharpness: &sharpness,
+            metadata: &[],
+        };
+        let mut blob = [0_u8; 4096];
+        let len = payload.write(ScalarKind::F32, &mut blob).unwrap_or(0);
+        let mut model = CaoEnModel::<S, 128>::new();
+        assert!(model.load(blob.get(..len).unwrap_or(&[])).is_ok());
+        let limit = S::from_f32_saturating(S::MAX_PARAMETER);
+        let norm_limit = S::from_f32_saturating(GROUP_NORM_LIMIT);
+        let (mut groups, mut skipped) = (0, 0);
+        for p in 0..100 {
+            let z = 1.0 - 2.0 * (f64::from(p) + 0.5) / 100.0;
+            let r = libm::sqrt(1.0 - z * z);
+            let a = 2.4 * f64::from(p);
+            let x =
+                [r * libm::cos(a), r * libm::sin(a), z].map(|c| S::from_f32_saturating(c as f32));
+            let norm = crate::scalar::dot(S::ZERO, &x, &x).sqrt();
+            let cosine = |key: &Key<S>| crate::scalar::dot(S::ZERO, &x, &key.weight[..3]);
+            let mut index = 0;
+            while let Some(key) = model.keys.get(index) {
+                assert!(key.group.span > 0, "every group of this network is tested");
+                let span = usize::from(key.group.span);
+                groups += 1;
+                if key.group.out_of_reach(cosine(key), norm, norm_limit) {
+                    skipped += 1;
+                    for other in model.keys.iter().skip(index).take(span) {
+                        let (k, slope) = blend::<S, true>(
+                            Blending::Compact,
+                            cosine(other),
+                            other.sharpness,
+                            other.power,
+                            limit,
+                        );
+                        assert!(k == S::ZERO && slope == S::ZERO);
+                    }
+                }
+                index += span;
+            }
+        }
+        // 12 groups per point. A cap of q = 3 (48°) covers 1/6 of the sphere, and a group is
+        // skipped beyond about 48° plus its own spread (≈ 45°): 298 of 1200 here.
+        assert_eq!(groups, 1200);
+        assert!(skipped > 240, "{skipped} of {groups} groups skipped");
+    }
+
+    #[test]
+    fn out_of_reach_groups_blend_to_zero_f32() {
+        check_skipping::<f32>();
+    }
+
+    #[test]
+    fn out_of_reach_groups_blend_to_zero_q16() {
+        check_skipping::<Q16>();
     }
 }

@@ -36,7 +36,8 @@ use crate::scalar::ScalarKind;
 pub struct CaoEnPayload<'a> {
     /// [`Domain::code`](super::Domain::code): 0 sphere or hypersphere, 1 torus.
     pub domain: u8,
-    /// [`Blending::code`](super::Blending::code): 0 power s^q, 1 exponential e^{q(s−1)}.
+    /// [`Blending::code`](super::Blending::code): 0 power s^q, 1 exponential e^{q(s−1)}, 2
+    /// compact (1 + q(s − 1))³₊.
     pub blending: u8,
     /// Whether k is normalized, kᵢ = Fᵢ/Σⱼ Fⱼ (the rational form, paper eq. 6).
     pub normalized: bool,

@@ -53,9 +53,16 @@ impl RefNet {
             } else {
                 (s.powi(q as i32), q * s.powi(q as i32 - 1))
             }
-        } else {
+        } else if self.blending == 1 {
             let f = (q * (s - 1.0)).exp();
             (f, q * f)
+        } else {
+            let u = 1.0 + q * (s - 1.0);
+            if u > 0.0 {
+                (u.powi(3), 3.0 * q * u * u)
+            } else {
+                (0.0, 0.0)
+            }
         }
     }
 
@@ -270,7 +277,8 @@ pub fn unit_vector(rng: &mut Rng, m: usize) -> Vec<f64> {
     }
 }
 
-/// A random network: unit weights, targets in [−scale, scale]ᵖ, q per blending.
+/// A random network: unit weights, targets in [−scale, scale]ᵖ, q per blending (power 1 … 8,
+/// exponential 0.5 … 16, compact 0.5 … 16/3).
 pub fn random_network(
     rng: &mut Rng,
     n: usize,
@@ -290,10 +298,12 @@ pub fn random_network(
             .collect(),
         sharpness: (0..n)
             .map(|_| {
-                if blending == 0 {
-                    (1 + rng.below(8)) as f64
-                } else {
-                    rng.grid(0.5, 16.0)
+                match blending {
+                    0 => (1 + rng.below(8)) as f64,
+                    // F′(1) = 3q for compact blending (q for exponential): the same steepness
+                    // at the key, where the input's rounding matters most.
+                    2 => rng.grid(0.5, 16.0 / 3.0),
+                    _ => rng.grid(0.5, 16.0),
                 }
             })
             .collect(),

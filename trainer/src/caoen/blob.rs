@@ -3,21 +3,29 @@
 use std::path::Path;
 
 use neurosurf_core::blob::ModelKind;
-use neurosurf_core::caoen::CaoEnPayload;
+use neurosurf_core::caoen::{Blending, CaoEnPayload};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 
+use super::groups::order_for_groups;
 use super::network::CaoEnNetwork;
 use crate::error::{Error, Result};
 use crate::implicit::frame;
 
 /// Encodes `network` as a Cao En blob storing its words as `scalar` (`metadata` is opaque to
-/// the core).
+/// the core). Compact networks are stored with their keys in [`order_for_groups`]'s order.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for an invalid network, a word that cannot be stored (beyond ±1024
 /// for Q16.16), or a scalar other than f32 / Q16.16.
 pub fn to_blob(network: &CaoEnNetwork, scalar: ScalarKind, metadata: &[u8]) -> Result<Vec<u8>> {
     network.validate()?;
+    let ordered;
+    let network = if network.blending == Blending::Compact.code() {
+        ordered = order_for_groups(network);
+        &ordered
+    } else {
+        network
+    };
     let limit = match scalar {
         ScalarKind::F32 => f64::from(f32::MAX),
         ScalarKind::Q16_16 => f64::from(<Q16 as Scalar>::MAX_PARAMETER),

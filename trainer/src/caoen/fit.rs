@@ -18,6 +18,22 @@ use neurosurf_core::caoen::{Blending, Domain};
 use super::network::{CaoEnNetwork, on_domain};
 use crate::error::{Error, Result};
 
+/// The 26 unit directions of a cube's faces, edges and corners: the paper's key points.
+pub fn cube_directions() -> Vec<Vec<f64>> {
+    let mut keys = Vec::new();
+    for i in -1_i32..=1 {
+        for j in -1_i32..=1 {
+            for k in -1_i32..=1 {
+                if (i, j, k) != (0, 0, 0) {
+                    let n = f64::from(i * i + j * j + k * k).sqrt();
+                    keys.push(vec![f64::from(i) / n, f64::from(j) / n, f64::from(k) / n]);
+                }
+            }
+        }
+    }
+    keys
+}
+
 /// The paper's construction: the key points (normalized onto the domain) as weights, the
 /// targets as the shape matrix, one q for all.
 ///

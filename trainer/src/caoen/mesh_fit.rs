@@ -8,7 +8,9 @@
 //! space), so key density follows the mesh's area even where the parameterization shrinks a
 //! protrusion; [`KeyPlacement::Sphere`] samples on the sphere instead. The sharpness of key i
 //! makes its blending fall to `overlap` at its nearest neighbouring key (angle dᵢ):
-//! qᵢ = ln(1/overlap)/(1 − cos dᵢ) for exponential blending, clamped to [0.5, 64] (the core's
+//! qᵢ = ln(1/overlap)/(1 − cos dᵢ) for exponential blending (qᵢ = (1 − overlap^⅓)/(1 − cos dᵢ)
+//! for compact blending, whose cap then reaches about 1.7 times as far as the neighbour at the
+//! default overlap 0.3), clamped to [0.5, 64] (the core's
 //! limit, which also bounds how finely the sphere can be resolved: 64 reaches `overlap` = e⁻¹
 //! at 10°).
 //!
@@ -144,6 +146,8 @@ fn spacing_sharpness(keys: &[[f64; 3]], blending: Blending, overlap: f64) -> Vec
                 .min(1.0 - 1e-12);
             let q = match blending {
                 Blending::Power => (overlap.ln() / cos.max(1e-3).ln()).round(),
+                // (1 + q(cos − 1))³ = overlap.
+                Blending::Compact => (1.0 - overlap.cbrt()) / (1.0 - cos),
                 _ => -overlap.ln() / (1.0 - cos),
             };
             q.clamp(

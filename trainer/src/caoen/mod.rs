@@ -1,6 +1,7 @@
 //! Cao En surfaces (Wyvill, Cao & Trotman 1992) on the host, in f64: the network and its
 //! reference evaluation (`network`), construction from key/target points and least-squares
-//! fitting of V and of q per key point (`fit`), blob conversion (`blob`), and polygon meshes
+//! fitting of V and of q per key point (`fit`), blob conversion (`blob`, keys ordered for
+//! the core's group skipping under compact blending by `groups`), and polygon meshes
 //! from an icosphere or a torus grid (`mesh`). Fitting to a closed genus-0 mesh:
 //! `topology` (welding, parts, holes), `spherical` (the spherical Tutte embedding with
 //! stretch reweighting), `mesh_fit` (keys, least squares against every vertex, the error
@@ -37,6 +38,7 @@ mod blob;
 mod distance;
 mod distort;
 mod fit;
+mod groups;
 mod image;
 mod mesh;
 mod mesh_fit;
@@ -52,7 +54,8 @@ mod topology;
 pub use blob::{from_blob, to_blob};
 pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
 pub use distort::Distortion;
-pub use fit::{fit_shape, fit_sharpness, from_key_points, rms_error};
+pub use fit::{cube_directions, fit_shape, fit_sharpness, from_key_points, rms_error};
+pub use groups::order_for_groups;
 pub use image::{
     CompressedImage, ImageCodec, MAX_ITERATIONS, SPAN, compress_image, psnr, smooth_test_image,
 };

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 pub struct CaoEnNetwork {
     /// 0 sphere / hypersphere, 1 torus ([`Domain::code`]).
     pub domain: u8,
-    /// 0 power, 1 exponential ([`Blending::code`]).
+    /// 0 power, 1 exponential, 2 compact ([`Blending::code`]).
     pub blending: u8,
     /// Whether k is normalized by Σ F (the rational form).
     pub normalized: bool,
@@ -107,18 +107,29 @@ impl CaoEnNetwork {
     /// F and F′ of key `i` at s.
     pub fn blend(&self, i: usize, s: f64) -> (f64, f64) {
         let q = self.sharpness[i];
-        if self.blending == 0 {
-            if s <= 0.0 {
-                (0.0, 0.0)
-            } else if q == 0.0 {
-                (1.0, 0.0)
-            } else {
-                let below = s.powi(q as i32 - 1);
-                (below * s, q * below)
+        match self.blending {
+            0 => {
+                if s <= 0.0 {
+                    (0.0, 0.0)
+                } else if q == 0.0 {
+                    (1.0, 0.0)
+                } else {
+                    let below = s.powi(q as i32 - 1);
+                    (below * s, q * below)
+                }
             }
-        } else {
-            let f = (q * (s - 1.0)).exp();
-            (f, q * f)
+            1 => {
+                let f = (q * (s - 1.0)).exp();
+                (f, q * f)
+            }
+            _ => {
+                let u = 1.0 + q * (s - 1.0);
+                if u > 0.0 {
+                    (u * u * u, 3.0 * q * u * u)
+                } else {
+                    (0.0, 0.0)
+                }
+            }
         }
     }
 

@@ -12,7 +12,11 @@ use neurosurf_firmware_sim::{Footprint, Job, Mode, Op, TARGET_MACHINE};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use neurosurf_trainer::compare::{EvaluationPoints, ParameterSet, SURFACE_SAMPLES};
+use neurosurf_core::caoen::{Blending, Domain, MAX_SHARPNESS};
+use neurosurf_trainer::caoen::{self, cube_directions, fit_shape, from_key_points};
+use neurosurf_trainer::compare::{
+    EvaluationPoints, ParameterSet, SURFACE_SAMPLES, fibonacci_sphere,
+};
 use neurosurf_trainer::curve::{
     CurveOptions, SampleCurve, SampleOptions, curve_to_blob, reconstruct_curve, sample_curve,
 };
@@ -204,7 +208,78 @@ fn built_in() -> Result<Vec<Subject>> {
     }
     subjects.push(spiral_curve()?);
     subjects.push(wavy_network()?);
+    for (keys, blending) in [
+        (26, Blending::Exponential),
+        (26, Blending::Compact),
+        (104, Blending::Exponential),
+        (104, Blending::Compact),
+    ] {
+        subjects.push(cao_en_sphere(keys, blending)?);
+    }
     Ok(subjects)
+}
+
+/// A Cao En sphere network with `n` key points (26: the paper's cube directions; otherwise a
+/// Fibonacci set), targets on a bent ellipsoid, V fitted through them, in both scalars, at
+/// [`POINTS`] Fibonacci sphere points. Exponential blending with q = 4 (26 keys) or 12 (104);
+/// compact blending with q from the spacing, each cap reaching √3 times the widest gap between
+/// a key and its nearest neighbour.
+fn cao_en_sphere(n: usize, blending: Blending) -> Result<Subject> {
+    let keys = if n == 26 {
+        cube_directions()
+    } else {
+        fibonacci_sphere(n)
+    };
+    let targets: Vec<Vec<f64>> = keys
+        .iter()
+        .map(|k| vec![1.3 * k[0], 0.8 * k[1] + 0.25 * k[0] * k[0], 0.6 * k[2]])
+        .collect();
+    let q = match blending {
+        Blending::Compact => {
+            // The widest gap to a nearest key, at angle d: the cap edge 1 − cos r = 3 (1 − cos d).
+            let nearest = keys
+                .iter()
+                .enumerate()
+                .map(|(i, a)| {
+                    keys.iter()
+                        .enumerate()
+                        .filter(|&(j, _)| j != i)
+                        .map(|(_, b)| dot(a, b))
+                        .fold(-1.0_f64, f64::max)
+                })
+                .fold(1.0_f64, f64::min);
+            (1.0 / (3.0 * (1.0 - nearest))).clamp(0.5, MAX_SHARPNESS)
+        }
+        _ if n == 26 => 4.0,
+        _ => 12.0,
+    };
+    let built = from_key_points(Domain::Sphere, blending, false, &keys, &targets, q)?;
+    let network = fit_shape(&built, &keys, &targets)?;
+    let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
+        .into_iter()
+        .map(|scalar| Ok((scalar, caoen::to_blob(&network, scalar, &[])?)))
+        .collect::<Result<Vec<_>>>()?;
+    let kind = match blending {
+        Blending::Compact => "compact",
+        _ => "exponential",
+    };
+    let name = format!("Cao En sphere, {n} keys, {kind} q = {q:.2}");
+    Ok(Subject {
+        path: PathBuf::from(format!("<built-in {name}>")),
+        name,
+        blobs,
+        points: fibonacci_sphere(POINTS)
+            .iter()
+            .flatten()
+            .map(|&c| c as f32)
+            .collect(),
+        arity: 3,
+        ops: [Op::Position, Op::PositionDirection],
+    })
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The approximating spline of 200 noisy points on a two-turn spiral (fixed seed), in both

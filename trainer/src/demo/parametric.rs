@@ -135,17 +135,7 @@ pub fn curve(out_dir: &Path, seed: u64) -> Result<ParametricDemo> {
 /// # Errors
 /// I/O and fitting errors (none expected).
 pub fn cao_en(out_dir: &Path) -> Result<ParametricDemo> {
-    let mut keys = Vec::new();
-    for i in -1_i32..=1 {
-        for j in -1_i32..=1 {
-            for k in -1_i32..=1 {
-                if (i, j, k) != (0, 0, 0) {
-                    let n = f64::from(i * i + j * j + k * k).sqrt();
-                    keys.push(vec![f64::from(i) / n, f64::from(j) / n, f64::from(k) / n]);
-                }
-            }
-        }
-    }
+    let keys = caoen::cube_directions();
     let targets: Vec<Vec<f64>> = keys
         .iter()
         .map(|k| vec![1.3 * k[0], 0.8 * k[1] + 0.25 * k[0] * k[0], 0.6 * k[2]])

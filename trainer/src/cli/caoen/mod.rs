@@ -97,6 +97,9 @@ pub enum BlendingArg {
     Power,
     /// e^{q(s − 1)}.
     Exponential,
+    /// (1 + q(s − 1))³ where positive, else 0: local support, only the cap s > 1 − 1/q
+    /// around each key point; groups of keys out of reach are skipped by the core.
+    Compact,
 }
 
 #[derive(Debug, clap::Args)]
@@ -200,6 +203,7 @@ fn fit(args: &FitArgs) -> Result<()> {
     let blending = match args.blending {
         BlendingArg::Power => Blending::Power,
         BlendingArg::Exponential => Blending::Exponential,
+        BlendingArg::Compact => Blending::Compact,
     };
     let rows = read_rows(&args.points)?;
     if rows.is_empty() {
