@@ -13,6 +13,7 @@ use neurosurf_core::parametric::SurfaceNetworkModel;
 use neurosurf_core::scalar::{Q16, ScalarKind};
 use neurosurf_firmware_sim::{Job, Mode, Op, SimError, Simulator, Status};
 use neurosurf_trainer::caoen;
+use neurosurf_trainer::compare::fibonacci_sphere;
 use neurosurf_trainer::curve::CurvePoints;
 use neurosurf_trainer::curve::{
     CurveOptions, SampleCurve, SampleOptions, SurfaceOptions, curve_to_blob, fit_surface,
@@ -83,6 +84,28 @@ fn caoen_sphere_blob(scalar: ScalarKind) -> Vec<u8> {
     let built =
         caoen::from_key_points(Domain::Sphere, Blending::Power, false, &keys, &targets, 3.0)
             .unwrap();
+    let fitted = caoen::fit_shape(&built, &keys, &targets).unwrap();
+    caoen::to_blob(&fitted, scalar, b"test").unwrap()
+}
+
+/// A Cao En shape on the sphere with local support: 104 Fibonacci key points, compact
+/// blending (q = 6: each key reaches about 33°, so most groups of keys are skipped), targets on
+/// a bent ellipsoid, V fitted through them.
+fn caoen_compact_blob(scalar: ScalarKind) -> Vec<u8> {
+    let keys = fibonacci_sphere(104);
+    let targets: Vec<Vec<f64>> = keys
+        .iter()
+        .map(|k| vec![1.2 * k[0], 0.8 * k[1], 0.6 * k[2] + 0.1 * k[0] * k[1]])
+        .collect();
+    let built = caoen::from_key_points(
+        Domain::Sphere,
+        Blending::Compact,
+        false,
+        &keys,
+        &targets,
+        6.0,
+    )
+    .unwrap();
     let fitted = caoen::fit_shape(&built, &keys, &targets).unwrap();
     caoen::to_blob(&fitted, scalar, b"test").unwrap()
 }
@@ -284,6 +307,12 @@ fn cao_en_networks_on_the_target_equal_the_host_bit_for_bit() {
             3,
         ),
         ("torus", caoen_torus_blob, torus_points(120), 4),
+        (
+            "compact sphere",
+            caoen_compact_blob,
+            source_points(120, 3),
+            3,
+        ),
         (
             "5-D image layout",
             caoen_image_blob,
