@@ -11,8 +11,10 @@
 //!   contributes nothing);
 //! - normalized form with power blending: its weight scales to zero (sᵢ = 0 gives F = 0, so
 //!   the key drops out of Σ F as well);
-//! - normalized form with exponential blending: no key is ever empty (F > 0 everywhere), so
-//!   models with different key counts are refused.
+//! - normalized form with compact blending: the same, for keys with q ≥ 1 (s = 0 is then off
+//!   the key's cap);
+//! - normalized form with exponential blending (or a compact key with q < 1): no key is ever
+//!   empty (F > 0 at s = 0), so models with different key counts are refused.
 //!
 //! At t = 0 and t = 1 the network equals the two models up to rounding (the test asserts
 //! surfaces within 10⁻⁹).
@@ -95,11 +97,25 @@ impl Morph {
                 .map(|j| (None, Some(j))),
         );
         pairs.sort();
-        if from.normalized && !power && pairs.iter().any(|p| p.0.is_none() || p.1.is_none()) {
+        // In the normalized form a key is emptied by scaling its weight to zero: s = 0 must
+        // give F = 0, as power blending does and compact blending does for q ≥ 1.
+        let emptiable =
+            |network: &CaoEnNetwork, i: usize| match Blending::from_code(network.blending) {
+                Some(Blending::Power) => true,
+                Some(Blending::Compact) => network.sharpness[i] >= 1.0,
+                _ => false,
+            };
+        let stuck = pairs.iter().any(|pair| match *pair {
+            (Some(i), None) => !emptiable(from, i),
+            (None, Some(j)) => !emptiable(to, j),
+            _ => false,
+        });
+        if from.normalized && stuck {
             return Err(Error::invalid(
-                "no key point is ever empty in the normalized form with exponential blending, \
-                 so networks with different key counts cannot morph (use power blending or \
-                 the unnormalized form)",
+                "no key point is ever empty in the normalized form with exponential blending \
+                 (nor with compact blending and q < 1), so these networks with different key \
+                 counts cannot morph (use power blending, compact blending with q ≥ 1, or the \
+                 unnormalized form)",
             ));
         }
         let morph = Morph {
@@ -251,6 +267,8 @@ mod tests {
             (Blending::Exponential, false),
             (Blending::Power, false),
             (Blending::Power, true),
+            (Blending::Compact, false),
+            (Blending::Compact, true),
         ] {
             let a = shape(26, [1.0, 1.0, 1.0], blending, normalized);
             let b = shape(40, [2.0, 0.6, 1.0], blending, normalized);
