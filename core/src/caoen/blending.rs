@@ -22,7 +22,9 @@ pub enum Blending {
     /// question). A key point only reaches the cap s > 1 − 1/q around its weight (q ≥ 1/2 for
     /// a cap smaller than the sphere), F is C¹ at the cap's edge, F(1) = 1 like the
     /// exponential, and keys stored in groups (see [`crate::caoen`]) that cannot reach a source
-    /// point are skipped whole. q any value in [0, 64]; q = 0 gives F = 1 everywhere.
+    /// point are skipped whole. q any value in [0, 64]; q = 0 gives F = 1 everywhere. Sums of
+    /// caps vary between the keys, so the normalized form (a partition of unity) suits it best;
+    /// unnormalized, the surface sags where few caps overlap.
     Compact,
 }
 

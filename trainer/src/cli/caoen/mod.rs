@@ -98,7 +98,9 @@ pub enum BlendingArg {
     /// e^{q(s − 1)}.
     Exponential,
     /// (1 + q(s − 1))³ where positive, else 0: local support, only the cap s > 1 − 1/q
-    /// around each key point; groups of keys out of reach are skipped by the core.
+    /// around each key point; groups of keys out of reach are skipped by the core. Best with
+    /// --normalized (a partition of unity): unnormalized, the surface sags toward the centre
+    /// where few caps overlap.
     Compact,
 }
 
