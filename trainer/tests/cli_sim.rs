@@ -276,7 +276,8 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
     assert_eq!(curve["op"], "position", "{curve}");
     assert_eq!(bench["ratios"].as_array().unwrap().len(), 36, "{out}");
     // Local support: with 104 keys, compact blending skips the groups out of reach and costs
-    // well under half of exponential blending, which touches every key (same MAC count).
+    // well under half of exponential blending, which touches every key (the normalized compact
+    // network even has n more MACs).
     let cao_en = |blending: &str, op: &str| {
         rows.iter()
             .find(|r| {
@@ -291,7 +292,7 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
     };
     for op in ["position", "position+direction"] {
         let (compact, exponential) = (cao_en("compact", op), cao_en("exponential", op));
-        assert_eq!(compact["macs"], exponential["macs"]);
+        assert!(compact["macs"].as_u64() > exponential["macs"].as_u64());
         let ratio = compact["instructions_per_eval"].as_f64().unwrap()
             / exponential["instructions_per_eval"].as_f64().unwrap();
         assert!(

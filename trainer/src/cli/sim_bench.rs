@@ -222,7 +222,7 @@ fn built_in() -> Result<Vec<Subject>> {
 /// A Cao En sphere network with `n` key points (26: the paper's cube directions; otherwise a
 /// Fibonacci set), targets on a bent ellipsoid, V fitted through them, in both scalars, at
 /// [`POINTS`] Fibonacci sphere points. Exponential blending with q = 4 (26 keys) or 12 (104);
-/// compact blending with q from the spacing, each cap reaching √3 times the widest gap between
+/// compact blending, normalized, with q from the spacing, each cap reaching √3 times the widest gap between
 /// a key and its nearest neighbour.
 fn cao_en_sphere(n: usize, blending: Blending) -> Result<Subject> {
     let keys = if n == 26 {
@@ -253,14 +253,16 @@ fn cao_en_sphere(n: usize, blending: Blending) -> Result<Subject> {
         _ if n == 26 => 4.0,
         _ => 12.0,
     };
-    let built = from_key_points(Domain::Sphere, blending, false, &keys, &targets, q)?;
+    // Compact blending in the rational form, as recommended for it (see `Blending::Compact`).
+    let normalized = blending == Blending::Compact;
+    let built = from_key_points(Domain::Sphere, blending, normalized, &keys, &targets, q)?;
     let network = fit_shape(&built, &keys, &targets)?;
     let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
         .into_iter()
         .map(|scalar| Ok((scalar, caoen::to_blob(&network, scalar, &[])?)))
         .collect::<Result<Vec<_>>>()?;
     let kind = match blending {
-        Blending::Compact => "compact",
+        Blending::Compact => "compact normalized",
         _ => "exponential",
     };
     let name = format!("Cao En sphere, {n} keys, {kind} q = {q:.2}");
