@@ -35,15 +35,16 @@ impl Activation {
 
     /// σ′(a) (for tri-bas the one-sided slope −sign(a) inside (−1, 1), 0 outside and at 0).
     pub fn derivative(self, a: f64) -> f64 {
-        match self {
-            Activation::LogSig => {
-                let s = self.value(a);
-                s * (1.0 - s)
-            }
-            Activation::TanSig => {
-                let s = self.value(a);
-                0.5 * (1.0 - s * s)
-            }
+        self.value_and_derivative(a).1
+    }
+
+    /// (σ(a), σ′(a)) with one exponential for the sigmoids (the same values as [`Self::value`]
+    /// and [`Self::derivative`]).
+    pub fn value_and_derivative(self, a: f64) -> (f64, f64) {
+        let s = self.value(a);
+        let slope = match self {
+            Activation::LogSig => s * (1.0 - s),
+            Activation::TanSig => 0.5 * (1.0 - s * s),
             Activation::RadBas => -2.0 * a * (-a * a).exp(),
             Activation::TriBas => {
                 if a.abs() < 1.0 && a != 0.0 {
@@ -52,7 +53,8 @@ impl Activation {
                     0.0
                 }
             }
-        }
+        };
+        (s, slope)
     }
 
     /// The paper's name.

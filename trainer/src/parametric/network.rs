@@ -206,6 +206,32 @@ impl SurfaceNetwork {
 
     /// The network's normalized output y for normalized input x⁰.
     pub fn forward_normalized(&self, x0: [f64; 2]) -> [f64; 3] {
+        // The training loop calls this for every point of every trial step: keep the layers
+        // on the stack when they fit (the same sums in the same order as the heap path).
+        const STACK: usize = 64;
+        if self.layers.iter().all(|l| l.outputs <= STACK) {
+            let (mut x, mut next) = ([0.0; STACK], [0.0; STACK]);
+            x[..2].copy_from_slice(&x0);
+            let mut width = 2;
+            let last = self.layers.len() - 1;
+            for (li, l) in self.layers.iter().enumerate() {
+                for (o, value) in next[..l.outputs].iter_mut().enumerate() {
+                    let row = &l.weights[o * l.inputs..(o + 1) * l.inputs];
+                    *value = l.biases[o]
+                        + row
+                            .iter()
+                            .zip(&x[..width])
+                            .map(|(w, xi)| w * xi)
+                            .sum::<f64>();
+                    if li < last {
+                        *value = self.activation.value(*value);
+                    }
+                }
+                std::mem::swap(&mut x, &mut next);
+                width = l.outputs;
+            }
+            return [x[0], x[1], x[2]];
+        }
         let mut x: Vec<f64> = x0.to_vec();
         let last = self.layers.len() - 1;
         for (li, l) in self.layers.iter().enumerate() {

@@ -203,8 +203,12 @@ pub fn train(
 /// Per-layer buffers of one forward/backward pass.
 struct Backprop {
     activations: Vec<Vec<f64>>,
-    pre: Vec<Vec<f64>>,
+    /// Activation slopes σ'(z) of the hidden neurons, shared by the three backward passes.
+    slopes: Vec<Vec<f64>>,
     offsets: Vec<usize>,
+    /// ∂yₖ/∂(pre-activations) of the layer being visited, and of the one below it.
+    delta: Vec<f64>,
+    previous: Vec<f64>,
 }
 
 impl Backprop {
@@ -217,12 +221,14 @@ impl Backprop {
         }
         Backprop {
             activations: network.layers.iter().map(|l| vec![0.0; l.inputs]).collect(),
-            pre: network
+            slopes: network
                 .layers
                 .iter()
                 .map(|l| vec![0.0; l.outputs])
                 .collect(),
             offsets,
+            delta: Vec::new(),
+            previous: Vec::new(),
         }
     }
 
@@ -248,9 +254,10 @@ impl Backprop {
                         .zip(&self.activations[li])
                         .map(|(w, x)| w * x)
                         .sum::<f64>();
-                self.pre[li][o] = z;
                 if li < last {
-                    self.activations[li + 1][o] = network.activation.value(z);
+                    let (value, slope) = network.activation.value_and_derivative(z);
+                    self.slopes[li][o] = slope;
+                    self.activations[li + 1][o] = value;
                 } else {
                     output[o] = z;
                 }
@@ -260,13 +267,15 @@ impl Backprop {
             residuals[k] = output[k] - target[k];
             let row = &mut rows[k * stride..(k + 1) * stride];
             row.fill(0.0);
-            let mut delta = vec![0.0; 3];
+            let delta = &mut self.delta;
+            delta.clear();
+            delta.resize(3, 0.0);
             delta[k] = 1.0;
             for li in (0..=last).rev() {
                 let l = &network.layers[li];
                 if li < last {
                     for (o, d) in delta.iter_mut().enumerate() {
-                        *d *= network.activation.derivative(self.pre[li][o]);
+                        *d *= self.slopes[li][o];
                     }
                 }
                 let base = self.offsets[li];
@@ -282,13 +291,15 @@ impl Backprop {
                     row[base + l.weights.len() + o] = d;
                 }
                 if li > 0 {
-                    let mut previous = vec![0.0; l.inputs];
+                    let previous = &mut self.previous;
+                    previous.clear();
+                    previous.resize(l.inputs, 0.0);
                     for (o, &d) in delta.iter().enumerate() {
                         for (i, pv) in previous.iter_mut().enumerate() {
                             *pv += l.weights[o * l.inputs + i] * d;
                         }
                     }
-                    delta = previous;
+                    std::mem::swap(delta, previous);
                 }
             }
         }
