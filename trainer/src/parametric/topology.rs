@@ -14,15 +14,20 @@
 //! wins, so a plane is not given a big network for a 10⁻¹² gain. Errors are normalized MSEs
 //! (see [`super::SurfaceNetwork`]).
 //!
+//! The random starts of a configuration are trained in parallel (rayon); the result does not
+//! depend on the number of threads.
+//!
 //! Large sets: candidates are trained on a stratified subsample of at most
 //! [`TopologyOptions::max_search_points`] training points (the networks have at most a few
 //! hundred weights, so a couple of thousand points determine them), and the chosen network is
 //! then refined on the whole training set.
 
+use rayon::prelude::*;
+
 use super::activation::Activation;
 use super::network::SurfaceNetwork;
 use super::split::Split;
-use super::train::{Samples, TrainSettings, mean_square, randomize, train};
+use super::train::{Samples, TrainReport, TrainSettings, mean_square, randomize, train};
 
 /// Search settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -119,37 +124,45 @@ pub(crate) fn search(
         let mut stale = 0;
         for neurons in 1..=options.max_neurons.max(1) {
             let hidden = vec![neurons; layers];
-            let mut kept: Option<(SurfaceNetwork, f64, usize, f64)> = None;
-            for _ in 0..options.restarts.max(1) {
-                seed = seed.wrapping_add(0x9e37_79b9);
-                let Ok(mut net) = SurfaceNetwork::zeros(
-                    &hidden,
-                    options.activation,
-                    template.input_center,
-                    template.input_scale,
-                    template.output_center,
-                    template.output_scale,
-                ) else {
-                    continue;
-                };
-                randomize(&mut net, seed);
-                let report = train(
-                    &mut net,
-                    samples,
-                    search_training,
-                    &split.validation,
-                    &options.train,
-                );
-                if kept.as_ref().is_none_or(|k| report.validation_mse < k.1) {
-                    kept = Some((
-                        net,
-                        report.validation_mse,
-                        report.iterations,
-                        report.training_mse,
-                    ));
+            // The starts are independent: train them in parallel (rayon) and keep the first
+            // with the lowest validation error, as a sequential loop would.
+            let seeds: Vec<u64> = (0..options.restarts.max(1))
+                .map(|_| {
+                    seed = seed.wrapping_add(0x9e37_79b9);
+                    seed
+                })
+                .collect();
+            let trained: Vec<(SurfaceNetwork, TrainReport)> = seeds
+                .into_par_iter()
+                .filter_map(|start| {
+                    let mut net = SurfaceNetwork::zeros(
+                        &hidden,
+                        options.activation,
+                        template.input_center,
+                        template.input_scale,
+                        template.output_center,
+                        template.output_scale,
+                    )
+                    .ok()?;
+                    randomize(&mut net, start);
+                    let report = train(
+                        &mut net,
+                        samples,
+                        search_training,
+                        &split.validation,
+                        &options.train,
+                    );
+                    Some((net, report))
+                })
+                .collect();
+            let kept = trained.into_iter().reduce(|kept, other| {
+                if other.1.validation_mse < kept.1.validation_mse {
+                    other
+                } else {
+                    kept
                 }
-            }
-            let Some((net, validation_mse, iterations, training_mse)) = kept else {
+            });
+            let Some((net, report)) = kept else {
                 continue;
             };
             let test_mse = mean_square(&net, samples, &split.test);
@@ -157,10 +170,10 @@ pub(crate) fn search(
                 layers,
                 neurons,
                 parameters: net.parameter_count(),
-                training_mse,
-                validation_mse,
+                training_mse: report.training_mse,
+                validation_mse: report.validation_mse,
                 test_mse,
-                iterations,
+                iterations: report.iterations,
             });
             networks.push(net);
             if test_mse < best_pt * (1.0 - options.tolerance) && best_pt > options.floor {
