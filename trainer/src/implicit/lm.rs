@@ -142,16 +142,7 @@ pub fn levenberg_marquardt(
     // Every buffer is allocated once; an iteration allocates nothing.
     let mut residuals = vec![0.0; ns];
     let mut normal = NormalEquations::new(p);
-    // A = JᵀJ/N_s + λ′I and the factored A + μI: upper triangles, row-major n × n, padded
-    // from p to a multiple of 4 with an identity block (which leaves the step unchanged).
-    let n = normal.stride();
-    let mut lhs = vec![0.0; n * n];
-    for i in p..n {
-        lhs[i * n + i] = 1.0;
-    }
-    let mut system = vec![0.0; n * n];
-    let mut rhs = vec![0.0; n];
-    let mut step = vec![0.0; n];
+    let mut system = DampedSystem::new(p);
     let mut trial = vec![0.0; p];
     problem.residuals(params, &mut residuals);
     let mut evaluations = 1;
@@ -170,27 +161,20 @@ pub fn levenberg_marquardt(
         problem.normal_equations(params, &mut residuals, &mut normal);
         normal.finish();
         for i in 0..p {
+            let row = system.lhs_row_mut(i);
             for j in i..p {
-                lhs[i * n + j] = normal.gram(i, j) * scale;
+                row[j - i] = normal.gram(i, j) * scale;
             }
-            lhs[i * n + i] += decay;
+            row[0] += decay;
             // B = −(Jᵀe/N_s + λ′V).
-            rhs[i] = -(normal.gradient(i) * scale + params[i] * decay);
+            system.rhs_mut()[i] = -(normal.gradient(i) * scale + params[i] * decay);
         }
         let mut accepted = false;
         while mu <= options.mu_max {
-            for i in 0..n {
-                let row = i * n + i..(i + 1) * n;
-                system[row.clone()].copy_from_slice(&lhs[row]);
-                if i < p {
-                    system[i * n + i] += mu;
-                }
-            }
-            if !cholesky(&mut system, n, normal.fma) {
+            let Some(step) = system.solve(mu) else {
                 mu *= options.theta;
                 continue;
-            }
-            cholesky_solve(&system, n, &rhs, &mut step);
+            };
             for ((t, &x), &dx) in trial.iter_mut().zip(params.iter()).zip(step.iter()) {
                 *t = x + dx;
             }
@@ -222,6 +206,70 @@ pub fn levenberg_marquardt(
         criterion: error + decay_energy(params),
         stop,
         evaluations,
+    }
+}
+
+/// The LM system (A + μI)Δ = b for one A and b and a sequence of μ.
+///
+/// A's upper triangle is kept row-major n × n, padded from p to a multiple of 4 with an
+/// identity block (which leaves the step unchanged); each [`Self::solve`] copies it, adds μ and
+/// factors the copy with the blocked Cholesky below (AVX2/FMA when the CPU has them).
+#[derive(Clone, Debug)]
+pub struct DampedSystem {
+    p: usize,
+    n: usize,
+    lhs: Vec<f64>,
+    system: Vec<f64>,
+    rhs: Vec<f64>,
+    step: Vec<f64>,
+    fma: bool,
+}
+
+impl DampedSystem {
+    /// A zero system of `p` unknowns.
+    pub fn new(p: usize) -> Self {
+        let n = p.div_ceil(4) * 4;
+        let mut lhs = vec![0.0; n * n];
+        for i in p..n {
+            lhs[i * n + i] = 1.0;
+        }
+        DampedSystem {
+            p,
+            n,
+            lhs,
+            system: vec![0.0; n * n],
+            rhs: vec![0.0; n],
+            step: vec![0.0; n],
+            fma: cpu_has_fma(),
+        }
+    }
+
+    /// Row `i` of A from the diagonal on: entry k is A[i][i + k] (`p − i` entries).
+    pub fn lhs_row_mut(&mut self, i: usize) -> &mut [f64] {
+        let n = self.n;
+        &mut self.lhs[i * n + i..i * n + self.p]
+    }
+
+    /// b (`p` entries).
+    pub fn rhs_mut(&mut self) -> &mut [f64] {
+        &mut self.rhs[..self.p]
+    }
+
+    /// Δ for damping `mu`, or `None` when A + μI is not positive definite.
+    pub fn solve(&mut self, mu: f64) -> Option<&[f64]> {
+        let (p, n) = (self.p, self.n);
+        for i in 0..n {
+            let row = i * n + i..(i + 1) * n;
+            self.system[row.clone()].copy_from_slice(&self.lhs[row]);
+            if i < p {
+                self.system[i * n + i] += mu;
+            }
+        }
+        if !cholesky(&mut self.system, n, self.fma) {
+            return None;
+        }
+        cholesky_solve(&self.system, n, &self.rhs, &mut self.step);
+        Some(&self.step[..p])
     }
 }
 

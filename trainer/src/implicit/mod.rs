@@ -22,7 +22,8 @@ pub use jacobian::{
     HiddenJet, InputJet, LANES, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows,
 };
 pub use lm::{
-    DecayScale, LeastSquares, LmOptions, LmReport, NormalEquations, StopReason, levenberg_marquardt,
+    DampedSystem, DecayScale, LeastSquares, LmOptions, LmReport, NormalEquations, StopReason,
+    levenberg_marquardt,
 };
 pub use network::ImplicitNetwork;
 pub use normalize::{BoxScaling, Normalization};

@@ -26,7 +26,7 @@ pub struct HoleOptions {
     pub rings: usize,
     /// Embedding (its `neighbors` is unused: one-rings are the neighbourhoods).
     pub embedding: LleOptions,
-    /// Regression.
+    /// Regression ([`TopologyOptions::from_random_starts`]: the network extrapolates).
     pub topology: TopologyOptions,
 }
 
@@ -35,7 +35,7 @@ impl Default for HoleOptions {
         HoleOptions {
             rings: 4,
             embedding: LleOptions::default(),
-            topology: TopologyOptions::default(),
+            topology: TopologyOptions::from_random_starts(),
         }
     }
 }

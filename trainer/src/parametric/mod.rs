@@ -52,6 +52,7 @@ mod embedding;
 mod fit;
 mod folds;
 mod grid;
+mod growth;
 mod hole;
 mod laplacian;
 mod mesh_graph;

@@ -3,20 +3,21 @@
 //!
 //! The residuals are the 3·N normalized coordinate errors y(xᵢ) − tᵢ of the training points;
 //! J's rows come from one forward pass and three backward passes per point and are multiplied
-//! into JᵀJ a block at a time by the implicit trainer's [`NormalEquations`] (AVX2/FMA SYRK).
-//! Each step solves (JᵀJ + μI)Δ = −Jᵀe by dense Cholesky (the networks have at most a few
-//! hundred weights); μ is divided by 10 after a step that lowers the training error and
+//! into JᵀJ a block at a time by the implicit trainer's [`NormalEquations`] (AVX2/FMA SYRK),
+//! in [`PARTS`] parts of the training set that run in parallel. Each step solves
+//! (JᵀJ + μI)Δ = −Jᵀe by the implicit trainer's blocked Cholesky ([`DampedSystem`]; the
+//! networks have at most a few hundred weights); μ is divided by 10 after a step that lowers the training error and
 //! multiplied by 10 otherwise (MATLAB's `trainlm`, which the paper used). After every
 //! accepted step the validation error is measured; training stops after
 //! [`TrainSettings::max_fail`] steps without a new best, and the best-validation weights are
 //! kept.
 
-use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use super::network::SurfaceNetwork;
-use crate::implicit::NormalEquations;
+use crate::implicit::{DampedSystem, NormalEquations};
 
 /// Levenberg–Marquardt settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -99,6 +100,30 @@ pub fn mean_square(network: &SurfaceNetwork, samples: &Samples, indices: &[usize
     sum / (3 * indices.len()) as f64
 }
 
+/// Fixed parts the training and evaluation sets are split into; the parts run in parallel
+/// (rayon) and their sums are added in part order, so results do not depend on the number of
+/// threads.
+const PARTS: usize = 4;
+
+/// [`mean_square`] over [`PARTS`] parts in parallel (the same value on any thread count).
+pub fn mean_square_parallel(network: &SurfaceNetwork, samples: &Samples, indices: &[usize]) -> f64 {
+    if indices.is_empty() {
+        return 0.0;
+    }
+    let part = indices.len().div_ceil(PARTS);
+    let sums: Vec<f64> = indices
+        .par_chunks(part)
+        .map(|chunk| mean_square(network, samples, chunk) * chunk.len() as f64)
+        .collect();
+    sums.iter().sum::<f64>() / indices.len() as f64
+}
+
+/// One part's Jacobian rows and normal equations.
+struct Part {
+    normal: NormalEquations,
+    backprop: Backprop,
+}
+
 /// Trains `network` in place on `training`, stopping early on `validation` (see the module
 /// docs). An empty validation set falls back to the training error.
 pub fn train(
@@ -110,16 +135,26 @@ pub fn train(
 ) -> TrainReport {
     let p = network.parameter_count();
     let mut params = network.parameters();
-    let mut normal = NormalEquations::new(p);
-    let stride = normal.stride();
+    let chunks: Vec<&[usize]> = training
+        .chunks(training.len().div_ceil(PARTS).max(1))
+        .collect();
+    let mut parts: Vec<Part> = chunks
+        .iter()
+        .map(|_| Part {
+            normal: NormalEquations::new(p),
+            backprop: Backprop::new(network),
+        })
+        .collect();
+    let stride = parts[0].normal.stride();
+    let mut system = DampedSystem::new(p);
     let validation = if validation.is_empty() {
         training
     } else {
         validation
     };
-    let mut train_error = mean_square(network, samples, training);
+    let mut train_error = mean_square_parallel(network, samples, training);
     let mut best = (
-        mean_square(network, samples, validation),
+        mean_square_parallel(network, samples, validation),
         params.clone(),
         train_error,
     );
@@ -127,44 +162,51 @@ pub fn train(
     let mut fails = 0;
     let mut iterations = 0;
     let mut trial = network.clone();
-    let mut scratch = Backprop::new(network);
     while iterations < settings.max_iterations
         && train_error > settings.goal
         && fails < settings.max_fail
     {
-        normal.clear();
-        for chunk in training.chunks(NormalEquations::MAX_ROWS / 3) {
-            let (rows, residuals) = normal.rows_mut(3 * chunk.len());
-            for (c, &i) in chunk.iter().enumerate() {
-                scratch.rows(
-                    network,
-                    samples.inputs[i],
-                    samples.targets[i],
-                    &mut rows[3 * c * stride..3 * (c + 1) * stride],
-                    stride,
-                    &mut residuals[3 * c..3 * c + 3],
-                );
+        parts
+            .par_iter_mut()
+            .zip(chunks.par_iter())
+            .for_each(|(part, chunk)| {
+                part.normal.clear();
+                for rows_of in chunk.chunks(NormalEquations::MAX_ROWS / 3) {
+                    let (rows, residuals) = part.normal.rows_mut(3 * rows_of.len());
+                    for (c, &i) in rows_of.iter().enumerate() {
+                        part.backprop.rows(
+                            network,
+                            samples.inputs[i],
+                            samples.targets[i],
+                            &mut rows[3 * c * stride..3 * (c + 1) * stride],
+                            stride,
+                            &mut residuals[3 * c..3 * c + 3],
+                        );
+                    }
+                }
+                part.normal.finish();
+            });
+        for i in 0..p {
+            let row = system.lhs_row_mut(i);
+            for (k, a) in row.iter_mut().enumerate() {
+                *a = parts.iter().map(|part| part.normal.gram(i, i + k)).sum();
             }
+            system.rhs_mut()[i] = -parts
+                .iter()
+                .map(|part| part.normal.gradient(i))
+                .sum::<f64>();
         }
-        normal.finish();
-        let gram = DMatrix::from_fn(p, p, |i, j| normal.gram(i, j));
-        let gradient = DVector::from_fn(p, |i, _| normal.gradient(i));
         let mut accepted = false;
         while mu <= settings.mu_max {
-            let mut system = gram.clone();
-            for i in 0..p {
-                system[(i, i)] += mu;
-            }
-            let Some(ch) = system.cholesky() else {
+            let Some(step) = system.solve(mu) else {
                 mu *= 10.0;
                 continue;
             };
-            let step = ch.solve(&(-&gradient));
-            let candidate: Vec<f64> = params.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            let candidate: Vec<f64> = params.iter().zip(step).map(|(a, b)| a + b).collect();
             if trial.set_parameters(&candidate).is_err() {
                 break;
             }
-            let error = mean_square(&trial, samples, training);
+            let error = mean_square_parallel(&trial, samples, training);
             if error.is_finite() && error < train_error {
                 params = candidate;
                 std::mem::swap(network, &mut trial);
@@ -179,7 +221,7 @@ pub fn train(
             break;
         }
         iterations += 1;
-        let validation_error = mean_square(network, samples, validation);
+        let validation_error = mean_square_parallel(network, samples, validation);
         // A new best resets the count only when it is a real gain: a validation error that
         // creeps down by less than `min_gain` per step has converged.
         if validation_error < best.0 * (1.0 - settings.min_gain) {
