@@ -107,27 +107,14 @@ pub fn surface_blob(kind: ScalarKind, reference: &RefSurface) -> Vec<u8> {
     )
 }
 
-/// Frames arbitrary payload bytes by hand (header, payload, CRC) with arbitrary kind codes.
+/// Frames arbitrary payload bytes by hand (header, payload, CRC) with arbitrary kind codes, in
+/// the current format version.
 pub fn frame(model: u8, scalar: u8, payload: &[u8]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(payload.len() + 16);
-    out.extend_from_slice(&blob::MAGIC);
-    out.extend_from_slice(&blob::FORMAT_VERSION.to_le_bytes());
-    out.push(model);
-    out.push(scalar);
-    out.extend_from_slice(&u32::try_from(payload.len()).unwrap().to_le_bytes());
-    out.extend_from_slice(payload);
-    let crc = blob::crc32(&out);
-    out.extend_from_slice(&crc.to_le_bytes());
-    out
+    common::frame(blob::FORMAT_VERSION, model, scalar, payload)
 }
 
-/// Recomputes the CRC of a blob whose framing is otherwise intact.
-pub fn fix_crc(bytes: &mut [u8]) {
-    if let Some(body_len) = bytes.len().checked_sub(4) {
-        let crc = blob::crc32(&bytes[..body_len]);
-        bytes[body_len..].copy_from_slice(&crc.to_le_bytes());
-    }
-}
+#[allow(unused_imports)]
+pub use common::fix_crc;
 
 pub fn q16(x: f64) -> Q16 {
     Q16::from_num(x)

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 
 use super::kohonen::MAX_NEURONS;
 use super::points::CurvePoints;
-use super::schedule::Schedule;
+use super::schedule::{Schedule, check_settings};
 use super::som;
 
 /// Settings of [`train_map`].
@@ -100,27 +100,15 @@ pub fn train_map(
              {columns} × {rows}"
         )));
     }
-    if options.epochs == 0 {
-        return Err(Error::invalid(
-            "Kohonen map option epochs must be at least 1",
-        ));
-    }
-    if !(options.initial_rate > 0.0 && options.initial_rate <= 1.0) {
-        return Err(Error::invalid(format!(
-            "Kohonen map option initial_rate must lie in (0, 1], got {}",
-            options.initial_rate
-        )));
-    }
-    for (name, value) in [
-        ("initial_radius", options.initial_radius),
-        ("final_radius", options.final_radius),
-    ] {
-        if !(value.is_finite() && value > 0.0) {
-            return Err(Error::invalid(format!(
-                "Kohonen map option {name} must be finite and positive, got {value}"
-            )));
-        }
-    }
+    check_settings(
+        "Kohonen map",
+        options.epochs,
+        options.initial_rate,
+        &[
+            ("initial_radius", options.initial_radius),
+            ("final_radius", options.final_radius),
+        ],
+    )?;
     let n = points.len();
     let total = n
         .saturating_mul(options.epochs)

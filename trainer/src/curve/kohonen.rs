@@ -21,7 +21,7 @@ use crate::error::{Error, Result};
 
 use super::convergence::{Convergence, check_chain, point_spacing};
 use super::points::CurvePoints;
-use super::schedule::Schedule;
+use super::schedule::{Schedule, check_settings};
 use super::som;
 
 /// Most neurons a chain may have.
@@ -102,28 +102,17 @@ impl KohonenOptions {
                 "Kohonen option neurons_per_point must be at least 1 (m ≥ n)",
             ));
         }
-        if self.epochs == 0 {
-            return Err(Error::invalid("Kohonen option epochs must be at least 1"));
-        }
-        if !(self.initial_rate > 0.0 && self.initial_rate <= 1.0) {
-            return Err(Error::invalid(format!(
-                "Kohonen option initial_rate must lie in (0, 1], got {}",
-                self.initial_rate
-            )));
-        }
-        for (name, value) in [
-            ("initial_radius", self.initial_radius),
-            ("final_radius", self.final_radius),
-            ("epsilon", self.epsilon),
-            ("line_tolerance", self.line_tolerance),
-        ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(Error::invalid(format!(
-                    "Kohonen option {name} must be finite and positive, got {value}"
-                )));
-            }
-        }
-        Ok(())
+        check_settings(
+            "Kohonen",
+            self.epochs,
+            self.initial_rate,
+            &[
+                ("initial_radius", self.initial_radius),
+                ("final_radius", self.final_radius),
+                ("epsilon", self.epsilon),
+                ("line_tolerance", self.line_tolerance),
+            ],
+        )
     }
 
     /// m for `points` input points.

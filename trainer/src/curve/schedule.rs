@@ -41,3 +41,36 @@ pub(crate) fn gaussian_table(radius: f64, limit: usize, table: &mut Vec<f64>) {
 pub(crate) fn radius_block(total: usize) -> usize {
     (total / 1000).max(1)
 }
+
+/// Checks the settings every map schedule shares: `epochs` ≥ 1, the learning rate in (0, 1]
+/// and every named value in `positive` finite and > 0; `what` names the map in the message
+/// ("Kohonen option initial_rate must lie in (0, 1], got 1.5").
+///
+/// # Errors
+/// [`crate::error::Error::InvalidInput`] naming the offending setting.
+pub(crate) fn check_settings(
+    what: &str,
+    epochs: usize,
+    initial_rate: f64,
+    positive: &[(&str, f64)],
+) -> crate::error::Result<()> {
+    use crate::error::Error;
+    if epochs == 0 {
+        return Err(Error::invalid(format!(
+            "{what} option epochs must be at least 1"
+        )));
+    }
+    if !(initial_rate > 0.0 && initial_rate <= 1.0) {
+        return Err(Error::invalid(format!(
+            "{what} option initial_rate must lie in (0, 1], got {initial_rate}"
+        )));
+    }
+    for &(name, value) in positive {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(Error::invalid(format!(
+                "{what} option {name} must be finite and positive, got {value}"
+            )));
+        }
+    }
+    Ok(())
+}
