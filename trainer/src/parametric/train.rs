@@ -17,6 +17,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::network::SurfaceNetwork;
+use super::packed::{ForwardScratch, PackedNetwork};
 use crate::implicit::{DampedSystem, NormalEquations};
 
 /// Levenberg–Marquardt settings.
@@ -85,13 +86,18 @@ pub fn randomize(network: &mut SurfaceNetwork, seed: u64) {
 
 /// Mean squared coordinate error of `network` over the listed samples (0 for none).
 pub fn mean_square(network: &SurfaceNetwork, samples: &Samples, indices: &[usize]) -> f64 {
+    mean_square_packed(&PackedNetwork::new(network), samples, indices)
+}
+
+fn mean_square_packed(network: &PackedNetwork, samples: &Samples, indices: &[usize]) -> f64 {
     if indices.is_empty() {
         return 0.0;
     }
+    let mut scratch = ForwardScratch::default();
     let sum: f64 = indices
         .iter()
         .map(|&i| {
-            let y = network.forward_normalized(samples.inputs[i]);
+            let y = network.forward(samples.inputs[i], &mut scratch);
             (0..3)
                 .map(|a| (y[a] - samples.targets[i][a]).powi(2))
                 .sum::<f64>()
@@ -110,10 +116,11 @@ pub fn mean_square_parallel(network: &SurfaceNetwork, samples: &Samples, indices
     if indices.is_empty() {
         return 0.0;
     }
+    let packed = PackedNetwork::new(network);
     let part = indices.len().div_ceil(PARTS);
     let sums: Vec<f64> = indices
         .par_chunks(part)
-        .map(|chunk| mean_square(network, samples, chunk) * chunk.len() as f64)
+        .map(|chunk| mean_square_packed(&packed, samples, chunk) * chunk.len() as f64)
         .collect();
     sums.iter().sum::<f64>() / indices.len() as f64
 }
@@ -166,6 +173,7 @@ pub fn train(
         && train_error > settings.goal
         && fails < settings.max_fail
     {
+        let packed = PackedNetwork::new(network);
         parts
             .par_iter_mut()
             .zip(chunks.par_iter())
@@ -176,8 +184,8 @@ pub fn train(
                     for (c, &i) in rows_of.iter().enumerate() {
                         part.backprop.rows(
                             network,
-                            samples.inputs[i],
-                            samples.targets[i],
+                            &packed,
+                            (samples.inputs[i], samples.targets[i]),
                             &mut rows[3 * c * stride..3 * (c + 1) * stride],
                             stride,
                             &mut residuals[3 * c..3 * c + 3],
@@ -278,33 +286,14 @@ impl Backprop {
     fn rows(
         &mut self,
         network: &SurfaceNetwork,
-        input: [f64; 2],
-        target: [f64; 3],
+        packed: &PackedNetwork,
+        (input, target): ([f64; 2], [f64; 3]),
         rows: &mut [f64],
         stride: usize,
         residuals: &mut [f64],
     ) {
         let last = network.layers.len() - 1;
-        self.activations[0].copy_from_slice(&input);
-        let mut output = [0.0; 3];
-        for (li, l) in network.layers.iter().enumerate() {
-            for o in 0..l.outputs {
-                let row = &l.weights[o * l.inputs..(o + 1) * l.inputs];
-                let z = l.biases[o]
-                    + row
-                        .iter()
-                        .zip(&self.activations[li])
-                        .map(|(w, x)| w * x)
-                        .sum::<f64>();
-                if li < last {
-                    let (value, slope) = network.activation.value_and_derivative(z);
-                    self.slopes[li][o] = slope;
-                    self.activations[li + 1][o] = value;
-                } else {
-                    output[o] = z;
-                }
-            }
-        }
+        let output = packed.forward_recording(input, &mut self.activations, &mut self.slopes);
         for k in 0..3 {
             residuals[k] = output[k] - target[k];
             let row = &mut rows[k * stride..(k + 1) * stride];
