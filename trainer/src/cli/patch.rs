@@ -732,7 +732,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
                 source: if size <= neurosurf_trainer::parametric::PATCH_VERTICES {
                     "vertices"
                 } else {
-                    "samples"
+                    "subdivided"
                 },
                 embedding_seconds: None,
                 fitting_seconds: None,
