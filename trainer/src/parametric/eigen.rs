@@ -61,21 +61,28 @@ pub fn smallest_nonconstant(m: &SymmetricMatrix, wanted: usize) -> Result<Eigenp
     let mean_diagonal = trace / n as f64;
     // The shift must sit below λ₂ (dense samples have tiny LLE eigenvalues) but above the
     // rounding of M: try 10⁻¹²·tr(M)/n first and raise it when the factorization breaks down.
+    let compressed = m.compress()?;
     let mut factor = None;
     for exponent in [-12, -10, -8, -6] {
         let sigma = 10f64.powi(exponent) * mean_diagonal;
-        let mut shifted = m.clone();
-        for i in 0..n {
-            shifted.add(i, i, sigma);
-        }
-        if let Ok(f) = shifted.compress()?.cholesky() {
+        let shifted = match compressed.with_diagonal_added(sigma) {
+            Some(shifted) => shifted,
+            None => {
+                let mut shifted = m.clone();
+                for i in 0..n {
+                    shifted.add(i, i, sigma);
+                }
+                shifted.compress()?
+            }
+        };
+        if let Ok(f) = shifted.cholesky() {
             factor = Some(f);
             break;
         }
     }
     let factor =
         factor.ok_or_else(|| Error::invalid("the shifted embedding matrix cannot be factored"))?;
-    let m = m.compress()?;
+    let m = compressed;
     let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_e16e);
 
     let mut x: Vec<Vec<f64>> = (0..block)

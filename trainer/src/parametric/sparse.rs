@@ -5,7 +5,7 @@
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet, linalg::solvers::Llt};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet, linalg::solvers::Llt};
 
 use crate::error::{Error, Result};
 
@@ -46,11 +46,59 @@ impl SymmetricMatrix {
     }
 
     /// The compressed matrix.
+    ///
+    /// The entries are bucketed by column (a counting sort), each column sorted by row
+    /// (stable, so repeated entries add in the order they were given) and merged: linear in
+    /// the entries plus a small sort per column. faer's general triplet assembly sorted all
+    /// entries at once, a third of the embedding's time at 36 000 points.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for an entry outside the n × n matrix.
     pub fn compress(&self) -> Result<CompressedMatrix> {
-        let matrix =
-            SparseColMat::<usize, f64>::try_new_from_triplets(self.n, self.n, &self.entries)
-                .map_err(|e| Error::invalid(format!("sparse matrix assembly failed: {e:?}")))?;
-        Ok(CompressedMatrix { matrix })
+        let n = self.n;
+        if let Some(t) = self.entries.iter().find(|t| t.row >= n || t.col >= n) {
+            return Err(Error::invalid(format!(
+                "sparse entry ({}, {}) lies outside the {n} × {n} matrix",
+                t.row, t.col
+            )));
+        }
+        let mut start = vec![0usize; n + 1];
+        for t in &self.entries {
+            start[t.col + 1] += 1;
+        }
+        for j in 0..n {
+            start[j + 1] += start[j];
+        }
+        let mut next = start.clone();
+        let mut bucket = vec![(0usize, 0.0f64); self.entries.len()];
+        for t in &self.entries {
+            bucket[next[t.col]] = (t.row, t.val);
+            next[t.col] += 1;
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0usize);
+        let mut row_idx = Vec::with_capacity(self.entries.len());
+        let mut values: Vec<f64> = Vec::with_capacity(self.entries.len());
+        for j in 0..n {
+            let column = &mut bucket[start[j]..start[j + 1]];
+            column.sort_by_key(|e| e.0);
+            for &(row, value) in column.iter() {
+                match (row_idx.last(), values.last_mut()) {
+                    (Some(&last), Some(sum)) if row_idx.len() > col_ptr[j] && last == row => {
+                        *sum += value;
+                    }
+                    _ => {
+                        row_idx.push(row);
+                        values.push(value);
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        Ok(CompressedMatrix {
+            matrix: SparseColMat::new(symbolic, values),
+        })
     }
 }
 
@@ -73,6 +121,19 @@ impl CompressedMatrix {
                 y[rows[p]] += values[p] * xj;
             }
         }
+    }
+
+    /// A + σI, when every diagonal entry is stored (`None` otherwise).
+    pub fn with_diagonal_added(&self, sigma: f64) -> Option<CompressedMatrix> {
+        let mut shifted = self.matrix.clone();
+        let (symbolic, values) = shifted.parts_mut();
+        let (col_ptr, rows) = (symbolic.col_ptr(), symbolic.row_idx());
+        for j in 0..symbolic.ncols() {
+            let column = &rows[col_ptr[j]..col_ptr[j + 1]];
+            let at = column.binary_search(&j).ok()?;
+            values[col_ptr[j] + at] += sigma;
+        }
+        Some(CompressedMatrix { matrix: shifted })
     }
 
     /// Stored entries.
@@ -121,5 +182,45 @@ impl Cholesky {
                 *v = rhs[(i, j)];
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compression_adds_repeated_entries_and_shifts_the_diagonal() {
+        let mut m = SymmetricMatrix::new(3);
+        for (i, j, v) in [
+            (2, 2, 1.0),
+            (0, 0, 2.0),
+            (1, 0, -1.0),
+            (0, 1, -1.0),
+            (0, 0, 3.0),
+        ] {
+            m.add(i, j, v);
+        }
+        m.add(1, 1, 4.0);
+        m.add(2, 1, 0.5);
+        m.add(1, 2, 0.5);
+        let c = m.compress().unwrap();
+        assert_eq!(c.nonzeros(), 7);
+        let mut y = [0.0; 3];
+        c.multiply(&[1.0, 10.0, 100.0], &mut y);
+        assert_eq!(y, [5.0 - 10.0, -1.0 + 40.0 + 50.0, 5.0 + 100.0]);
+        let shifted = c.with_diagonal_added(0.25).unwrap();
+        shifted.multiply(&[1.0, 0.0, 0.0], &mut y);
+        assert_eq!(y, [5.25, -1.0, 0.0]);
+        let mut no_diagonal = SymmetricMatrix::new(2);
+        no_diagonal.add(0, 1, 1.0);
+        no_diagonal.add(1, 0, 1.0);
+        assert!(
+            no_diagonal
+                .compress()
+                .unwrap()
+                .with_diagonal_added(1.0)
+                .is_none()
+        );
     }
 }
