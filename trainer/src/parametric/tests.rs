@@ -171,7 +171,7 @@ fn topology_of(surface: SampleSurface) -> TopologySearch {
 
 #[test]
 fn topology_search_sizes_the_network_to_the_surface() {
-    // Measured: the plane gets 1 × 2 (15 weights), the wavy surface 2 × 7 (101).
+    // Measured: the plane gets 1 × 2 (15 weights), the wavy surface 1 × 12 (75).
     let plane = topology_of(SampleSurface::Plane);
     let wavy = topology_of(SampleSurface::Wavy);
     assert!(
@@ -185,6 +185,35 @@ fn topology_search_sizes_the_network_to_the_surface() {
         wavy.best()
     );
     assert!(plane.best().test_mse < 1e-5 && wavy.best().test_mse < 1e-4);
+}
+
+#[test]
+fn the_search_gives_the_same_network_on_any_thread_count() {
+    // 1 500 points: the candidates train on a 1 000-point subsample, then the chosen network
+    // is refined on all training points, so both parallel paths run.
+    let sample = sample_surface(SampleSurface::Wavy, 1500, 0.002, 5).unwrap();
+    let fit_on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                fit_network(
+                    &sample.points,
+                    &sample.parameters,
+                    &TopologyOptions {
+                        max_neurons: 6,
+                        ..TopologyOptions::default()
+                    },
+                )
+                .unwrap()
+            })
+    };
+    let (one, two) = (fit_on(1), fit_on(2));
+    assert!(one.search.candidates.len() >= 4);
+    assert_eq!(one.search, two.search);
+    assert_eq!(one.network, two.network);
+    assert_eq!(one.rms_error.to_bits(), two.rms_error.to_bits());
 }
 
 #[test]
