@@ -53,8 +53,8 @@ pub struct BenchmarkRow {
 /// `count` points of the bunny's back patch around vertex `seed` (see the module docs).
 ///
 /// # Errors
-/// [`Error::InvalidInput`] when the mesh has fewer than [`PATCH_VERTICES`] vertices or `seed`
-/// is out of range.
+/// [`Error::InvalidInput`] when the mesh has fewer than [`PATCH_VERTICES`] vertices, `seed`
+/// is out of range, or the subdivided patch has fewer than `count` points.
 pub fn back_patch_points(
     mesh: &Mesh,
     seed: u32,
@@ -76,8 +76,8 @@ pub fn back_patch_points(
             "vertices",
         ));
     }
-    // Denser than the patch's vertices: add every inner edge's midpoint (one 1-to-4
-    // subdivision of the patch, about 40 000 points on the scan's own surface), then keep the
+    // Denser than the patch's vertices: add the midpoint of every edge of the triangles
+    // inside the patch (one 1-to-4 subdivision, about 40 000 points on the scan's own surface), then keep the
     // `count` nearest to the seed.
     let mut inside = vec![false; n];
     for &i in &order[..PATCH_VERTICES] {

@@ -65,16 +65,10 @@ pub fn smallest_nonconstant(m: &SymmetricMatrix, wanted: usize) -> Result<Eigenp
     let mut factor = None;
     for exponent in [-12, -10, -8, -6] {
         let sigma = 10f64.powi(exponent) * mean_diagonal;
-        let shifted = match compressed.with_diagonal_added(sigma) {
-            Some(shifted) => shifted,
-            None => {
-                let mut shifted = m.clone();
-                for i in 0..n {
-                    shifted.add(i, i, sigma);
-                }
-                shifted.compress()?
-            }
-        };
+        // M's diagonal is ≥ 1 everywhere (each point's own row of I − W).
+        let shifted = compressed
+            .with_diagonal_added(sigma)
+            .ok_or_else(|| Error::invalid("the embedding matrix lacks a diagonal entry"))?;
         if let Ok(f) = shifted.cholesky() {
             factor = Some(f);
             break;

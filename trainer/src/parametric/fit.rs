@@ -85,7 +85,9 @@ pub fn fit_network(
     let search_training = subsample(&split.training, options.max_search_points);
     let (mut network, search) = search(&template, &samples, &split, &search_training, options)
         .ok_or_else(|| Error::invalid("no network configuration could be trained"))?;
-    if search_training.len() < split.training.len() {
+    // Refine on all training points with the full LM settings: the candidates saw a
+    // subsample, or (small sets) a short run of `search_train`.
+    if search_training.len() < split.training.len() || options.search_train != options.train {
         let mut refined = network.clone();
         train(
             &mut refined,

@@ -3,14 +3,16 @@
 //!
 //! The paper's step 5 adds a neuron and trains again, without saying from where. Training
 //! n_N + 1 neurons from fresh random weights repeats all the work that found the n_N-neuron
-//! fit; starting from that fit with one neuron added needs a fraction of the LM steps (the
-//! search at 10 000 points takes 10–20 steps per configuration instead of up to 100) and
-//! fits as well (see `README.md`, Table 2).
+//! fit; starting from that fit with one neuron added lets a short LM run continue it (see
+//! [`super::topology`] and `README.md`, Table 2).
 //!
 //! The new neuron of each hidden layer gets random incoming weights (U(−1, 1), as
-//! [`super::train::randomize`]), and every weight *leaving* a new neuron is 0, so the grown
-//! network computes exactly what the old one did. LM then moves those zero weights first:
-//! their Jacobian columns are the new neurons' activations, which are not zero.
+//! [`super::train::randomize`]) from every neuron below it, the new one included. The
+//! weights from a new neuron into the *old* neurons of the next layer are 0, and so are the
+//! output weights of the last hidden layer's new neuron, so no new neuron reaches the output
+//! and the grown network computes exactly what the old one did. LM then moves those zero
+//! weights first: their Jacobian columns are the new neurons' activations, which are not
+//! zero.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

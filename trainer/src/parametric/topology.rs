@@ -14,9 +14,10 @@
 //! n_N from the trained n_N − 1 network with one neuron added per layer, computing the same
 //! function ([`super::growth`]); the starts differ in the new neurons' weights. Training thus
 //! continues along the chain instead of repeating itself, so each configuration needs a
-//! short LM run (at most 30 steps, against up to 100 from random weights). On the bunny's
-//! 10 000-point patch this is 3.3× faster on one core and fits better (relative RMS
-//! 8.4·10⁻³ against 8.8·10⁻³; `README.md`, Table 2).
+//! short LM run (at most 30 steps, against up to 100 from random weights). Together with
+//! candidates on 1 000 instead of 2 000 points, this took the bunny's 10 000-point fit from
+//! 14.5 s to 3.4 s on one core, with a better fit (relative RMS 8.4·10⁻³ against 8.8·10⁻³;
+//! `README.md`, Table 2).
 //!
 //! The paper reports "the configuration with the best P_T"; test errors within `tolerance`
 //! of the best (or below `floor`) are treated as ties and the tie with the fewest weights
@@ -28,8 +29,9 @@
 //!
 //! Large sets: candidates are trained on a stratified subsample of at most
 //! [`TopologyOptions::max_search_points`] training points (the networks have at most a few
-//! hundred weights), and the chosen network is then refined on the whole training set with
-//! [`TopologyOptions::train`].
+//! hundred weights). The chosen network is then refined on the whole training set with
+//! [`TopologyOptions::train`] (also for small sets, whose candidates had the short
+//! `search_train` runs).
 
 use rayon::prelude::*;
 
@@ -96,8 +98,8 @@ impl Default for TopologyOptions {
 
 impl TopologyOptions {
     /// The search without warm starts: every configuration from random weights, trained until
-    /// the validation error converges (up to 100 LM steps, the refinement's settings). Slower
-    /// (4× at 10 000 points); hole filling uses it because its network must *extrapolate*
+    /// the validation error converges (up to 100 LM steps, the refinement's settings). Several
+    /// times slower on large sets; hole filling uses it because its network must *extrapolate*
     /// into the hole, and networks grown along the chain bend more there (fandisk holes: the
     /// worst new vertex 0.054 from the surface against 0.020).
     pub fn from_random_starts() -> Self {

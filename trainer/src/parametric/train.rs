@@ -140,6 +140,13 @@ pub fn train(
     validation: &[usize],
     settings: &TrainSettings,
 ) -> TrainReport {
+    if training.is_empty() {
+        return TrainReport {
+            iterations: 0,
+            training_mse: 0.0,
+            validation_mse: mean_square(network, samples, validation),
+        };
+    }
     let p = network.parameter_count();
     let mut params = network.parameters();
     let chunks: Vec<&[usize]> = training
