@@ -58,21 +58,12 @@ pub fn grow(network: &SurfaceNetwork, seed: u64) -> SurfaceNetwork {
 mod tests {
     use super::*;
     use crate::parametric::activation::Activation;
-    use crate::parametric::train::randomize;
+    use crate::parametric::train::random_network;
 
     #[test]
     fn a_grown_network_computes_the_same_function() {
         for hidden in [vec![1], vec![4], vec![3, 3], vec![2, 5, 4]] {
-            let mut net = SurfaceNetwork::zeros(
-                &hidden,
-                Activation::TanSig,
-                [0.0; 2],
-                [1.0; 2],
-                [0.0; 3],
-                1.0,
-            )
-            .unwrap();
-            randomize(&mut net, 7);
+            let net = random_network(&hidden, Activation::TanSig, 7);
             let grown = grow(&net, 11);
             let sizes: Vec<usize> = hidden.iter().map(|n| n + 1).collect();
             assert_eq!(grown.hidden_sizes(), sizes);

@@ -147,16 +147,13 @@ impl PackedNetwork {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::parametric::train::randomize;
+    use crate::parametric::train::random_network;
 
     #[test]
     fn agrees_with_the_reference_forward_pass() {
         for activation in Activation::ALL {
             for hidden in [vec![1], vec![7], vec![5, 9], vec![3, 12, 4]] {
-                let mut net =
-                    SurfaceNetwork::zeros(&hidden, activation, [0.0; 2], [1.0; 2], [0.0; 3], 1.0)
-                        .unwrap();
-                randomize(&mut net, 3);
+                let net = random_network(&hidden, activation, 3);
                 let packed = PackedNetwork::new(&net);
                 let mut scratch = ForwardScratch::default();
                 let mut activations: Vec<Vec<f64>> =
@@ -183,16 +180,7 @@ mod tests {
     #[test]
     #[ignore = "timing run: cargo test --release -p neurosurf-trainer --lib parametric::packed::tests::forward_pass_timing -- --ignored --nocapture"]
     fn forward_pass_timing() {
-        let mut net = SurfaceNetwork::zeros(
-            &[12, 12],
-            Activation::TanSig,
-            [0.0; 2],
-            [1.0; 2],
-            [0.0; 3],
-            1.0,
-        )
-        .unwrap();
-        randomize(&mut net, 3);
+        let net = random_network(&[12, 12], Activation::TanSig, 3);
         let inputs: Vec<[f64; 2]> = (0..100_000)
             .map(|k| [(k as f64 * 0.37).sin(), (k as f64 * 0.71).cos()])
             .collect();

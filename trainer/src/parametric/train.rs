@@ -84,6 +84,19 @@ pub fn randomize(network: &mut SurfaceNetwork, seed: u64) {
     }
 }
 
+/// A network of the given hidden sizes with unit normalization and [`randomize`]d weights.
+#[cfg(test)]
+pub(crate) fn random_network(
+    hidden: &[usize],
+    activation: super::activation::Activation,
+    seed: u64,
+) -> SurfaceNetwork {
+    let mut net = SurfaceNetwork::zeros(hidden, activation, [0.0; 2], [1.0; 2], [0.0; 3], 1.0)
+        .expect("positive sizes");
+    randomize(&mut net, seed);
+    net
+}
+
 /// Mean squared coordinate error of `network` over the listed samples (0 for none).
 pub fn mean_square(network: &SurfaceNetwork, samples: &Samples, indices: &[usize]) -> f64 {
     mean_square_packed(&PackedNetwork::new(network), samples, indices)
