@@ -1,8 +1,8 @@
 //! A network laid out for the training passes: every layer's weights transposed, so a layer
 //! is a sum of scaled columns (independent multiply–adds across its outputs, which vectorize)
 //! instead of one dot product per neuron (a chain of dependent additions). A 2 × 12 tan-sig
-//! network's forward pass takes 0.43–0.54× the reference's time (about 250 ns against
-//! 470–580 ns), half of it the 24 `exp` calls; `forward_pass_timing` prints the table (an
+//! network's forward pass takes 0.43–0.58× the reference's time (about 250–390 ns against
+//! 470–680 ns), half of it the 24 `exp` calls; `forward_pass_timing` prints the table (an
 //! inlined polynomial eˣ was tried: slower than glibc's FMA path). The forward and
 //! Jacobian passes of LM use it; the f64 reference evaluation stays in [`SurfaceNetwork`].
 //!
