@@ -307,6 +307,11 @@ impl Backprop {
     }
 
     /// Writes the three Jacobian rows (∂yₖ/∂params, stride apart) and residuals yₖ − tₖ.
+    ///
+    /// Row k's output-layer entries are the last hidden layer's values for output k's weights,
+    /// 1 for its bias and 0 for the other outputs'; below it, δ = W_out[k] back through the
+    /// layers (every entry written, so the rows need no clearing). The loops run over slices
+    /// (no indexing), which vectorize.
     fn rows(
         &mut self,
         network: &SurfaceNetwork,
@@ -318,43 +323,102 @@ impl Backprop {
     ) {
         let last = network.layers.len() - 1;
         let output = packed.forward_recording(input, &mut self.activations, &mut self.slopes);
+        let top = &network.layers[last];
+        let hidden = &self.activations[last];
         for k in 0..3 {
             residuals[k] = output[k] - target[k];
             let row = &mut rows[k * stride..(k + 1) * stride];
-            row.fill(0.0);
+            let out = &mut row[self.offsets[last]..][..top.parameter_count()];
+            out.fill(0.0);
+            out[k * top.inputs..(k + 1) * top.inputs].copy_from_slice(hidden);
+            out[top.weights.len() + k] = 1.0;
             let delta = &mut self.delta;
             delta.clear();
-            delta.resize(3, 0.0);
-            delta[k] = 1.0;
-            for li in (0..=last).rev() {
+            delta.extend_from_slice(&top.weights[k * top.inputs..(k + 1) * top.inputs]);
+            for li in (0..last).rev() {
                 let l = &network.layers[li];
-                if li < last {
-                    for (o, d) in delta.iter_mut().enumerate() {
-                        *d *= self.slopes[li][o];
-                    }
+                for (d, &slope) in delta.iter_mut().zip(&self.slopes[li]) {
+                    *d *= slope;
                 }
-                let base = self.offsets[li];
                 let x = &self.activations[li];
-                for (o, &d) in delta.iter().enumerate() {
-                    if d == 0.0 {
-                        continue;
-                    }
-                    let w = &mut row[base + o * l.inputs..base + (o + 1) * l.inputs];
+                let (weights, biases) =
+                    row[self.offsets[li]..][..l.parameter_count()].split_at_mut(l.weights.len());
+                for ((w, &d), b) in weights
+                    .chunks_exact_mut(l.inputs)
+                    .zip(delta.iter())
+                    .zip(biases.iter_mut())
+                {
                     for (wi, &xi) in w.iter_mut().zip(x) {
                         *wi = d * xi;
                     }
-                    row[base + l.weights.len() + o] = d;
+                    *b = d;
                 }
                 if li > 0 {
                     let previous = &mut self.previous;
                     previous.clear();
                     previous.resize(l.inputs, 0.0);
-                    for (o, &d) in delta.iter().enumerate() {
-                        for (i, pv) in previous.iter_mut().enumerate() {
-                            *pv += l.weights[o * l.inputs + i] * d;
+                    for (weights_of, &d) in l.weights.chunks_exact(l.inputs).zip(delta.iter()) {
+                        for (pv, &w) in previous.iter_mut().zip(weights_of) {
+                            *pv += w * d;
                         }
                     }
                     std::mem::swap(delta, previous);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parametric::activation::Activation;
+
+    /// Every Jacobian row against central differences of the reference forward pass.
+    #[test]
+    fn jacobian_rows_match_central_differences() {
+        let smooth = [Activation::LogSig, Activation::TanSig, Activation::RadBas];
+        for activation in smooth {
+            for hidden in [vec![5], vec![4, 6], vec![3, 5, 4]] {
+                let net = random_network(&hidden, activation, 11);
+                let p = net.parameter_count();
+                let stride = p.div_ceil(4) * 4;
+                let packed = PackedNetwork::new(&net);
+                let mut backprop = Backprop::new(&net);
+                let (input, target) = ([0.3, -0.6], [0.1, 0.2, -0.3]);
+                let mut rows = vec![f64::NAN; 3 * stride];
+                let mut residuals = [0.0; 3];
+                backprop.rows(
+                    &net,
+                    &packed,
+                    (input, target),
+                    &mut rows,
+                    stride,
+                    &mut residuals,
+                );
+                let y = net.forward_normalized(input);
+                let params = net.parameters();
+                let mut shifted = net.clone();
+                let h = 1e-6;
+                for j in 0..p {
+                    let mut at = |delta: f64| {
+                        let mut v = params.clone();
+                        v[j] += delta;
+                        shifted.set_parameters(&v).unwrap();
+                        shifted.forward_normalized(input)
+                    };
+                    let (plus, minus) = (at(h), at(-h));
+                    for k in 0..3 {
+                        let numeric = (plus[k] - minus[k]) / (2.0 * h);
+                        let analytic = rows[k * stride + j];
+                        assert!(
+                            (numeric - analytic).abs() < 1e-7 * (1.0 + numeric.abs()),
+                            "{activation:?} {hidden:?}: ∂y{k}/∂θ{j} {analytic} vs {numeric}"
+                        );
+                    }
+                }
+                for k in 0..3 {
+                    assert!((residuals[k] - (y[k] - target[k])).abs() < 1e-13);
                 }
             }
         }
