@@ -21,6 +21,8 @@ pub use features::decompose;
 pub use jacobian::{
     HiddenJet, InputJet, LANES, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows,
 };
+pub(crate) use jacobian::{Lanes, tanh_lanes};
+pub(crate) use lm::cpu_has_fma;
 pub use lm::{
     DampedSystem, DecayScale, LeastSquares, LmOptions, LmReport, NormalEquations, StopReason,
     levenberg_marquardt,

@@ -58,6 +58,7 @@ mod laplacian;
 mod mesh_graph;
 mod neighbors;
 mod network;
+mod normal;
 mod packed;
 mod picture;
 mod pipeline;

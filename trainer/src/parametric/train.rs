@@ -21,8 +21,10 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::network::SurfaceNetwork;
-use super::packed::{ForwardScratch, PackedNetwork};
-use crate::implicit::{DampedSystem, NormalEquations};
+use super::normal::OutputNormalEquations;
+use super::packed::{LaneRecord, PackedNetwork, gather};
+use crate::implicit::DampedSystem;
+use crate::implicit::LANES;
 
 /// Levenberg–Marquardt settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -110,16 +112,12 @@ fn mean_square_packed(network: &PackedNetwork, samples: &Samples, indices: &[usi
     if indices.is_empty() {
         return 0.0;
     }
-    let mut scratch = ForwardScratch::default();
-    let sum: f64 = indices
-        .iter()
-        .map(|&i| {
-            let y = network.forward(samples.inputs[i], &mut scratch);
-            (0..3)
-                .map(|a| (y[a] - samples.targets[i][a]).powi(2))
-                .sum::<f64>()
-        })
-        .sum();
+    let sum = network.squared_error_sum(
+        &samples.inputs,
+        &samples.targets,
+        indices,
+        &mut LaneRecord::default(),
+    );
     sum / (3 * indices.len()) as f64
 }
 
@@ -144,7 +142,7 @@ pub fn mean_square_parallel(network: &SurfaceNetwork, samples: &Samples, indices
 
 /// One part's Jacobian rows and normal equations.
 struct Part {
-    normal: NormalEquations,
+    normal: OutputNormalEquations,
     backprop: Backprop,
 }
 
@@ -171,9 +169,12 @@ pub fn train(
         .collect();
     let mut parts: Vec<Part> = chunks
         .iter()
-        .map(|_| Part {
-            normal: NormalEquations::single_precision(p),
-            backprop: Backprop::new(network),
+        .map(|_| {
+            let top = &network.layers[network.layers.len() - 1];
+            Part {
+                normal: OutputNormalEquations::new(p - top.parameter_count(), top.inputs),
+                backprop: Backprop::new(network),
+            }
         })
         .collect();
     let stride = parts[0].normal.stride();
@@ -203,31 +204,35 @@ pub fn train(
             .zip(chunks.par_iter())
             .for_each(|(part, chunk)| {
                 part.normal.clear();
-                for rows_of in chunk.chunks(part.normal.max_rows() / 3) {
-                    let (rows, residuals) = part.normal.rows_mut(3 * rows_of.len());
-                    for (c, &i) in rows_of.iter().enumerate() {
-                        part.backprop.rows(
-                            network,
-                            &packed,
-                            (samples.inputs[i], samples.targets[i]),
-                            &mut rows[3 * c * stride..3 * (c + 1) * stride],
-                            stride,
-                            &mut residuals[3 * c..3 * c + 3],
-                        );
+                for points in chunk.chunks(part.normal.max_points()) {
+                    let [(rows0, e0), (rows1, e1), (rows2, e2)] =
+                        part.normal.rows_mut(points.len());
+                    for (g, group) in points.chunks(LANES).enumerate() {
+                        part.backprop
+                            .record(&packed, gather(&samples.inputs, group));
+                        for (lane, &i) in group.iter().enumerate() {
+                            let c = g * LANES + lane;
+                            let at = c * stride..(c + 1) * stride;
+                            let mut residuals = [0.0; 3];
+                            part.backprop.rows(
+                                network,
+                                lane,
+                                samples.targets[i],
+                                [
+                                    &mut rows0[at.clone()],
+                                    &mut rows1[at.clone()],
+                                    &mut rows2[at],
+                                ],
+                                &mut residuals,
+                            );
+                            [e0[c], e1[c], e2[c]] = residuals;
+                        }
                     }
                 }
                 part.normal.finish();
             });
-        for i in 0..p {
-            let row = system.lhs_row_mut(i);
-            for (k, a) in row.iter_mut().enumerate() {
-                *a = parts.iter().map(|part| part.normal.gram(i, i + k)).sum();
-            }
-            system.rhs_mut()[i] = -parts
-                .iter()
-                .map(|part| part.normal.gradient(i))
-                .sum::<f64>();
-        }
+        let sums: Vec<&OutputNormalEquations> = parts.iter().map(|part| &part.normal).collect();
+        OutputNormalEquations::add_to(&sums, &mut system);
         let mut accepted = false;
         while mu <= settings.mu_max {
             let Some(step) = system.solve(mu) else {
@@ -274,10 +279,14 @@ pub fn train(
     }
 }
 
-/// Per-layer buffers of one forward/backward pass.
+/// Per-layer buffers of the forward pass over [`LANES`] points and one point's backward
+/// passes.
 struct Backprop {
+    /// The forward pass of the current group of points.
+    record: LaneRecord,
+    output: [crate::implicit::Lanes; 3],
+    /// One point's layer inputs and hidden slopes σ′(z), copied out of `record`.
     activations: Vec<Vec<f64>>,
-    /// Activation slopes σ'(z) of the hidden neurons, shared by the three backward passes.
     slopes: Vec<Vec<f64>>,
     offsets: Vec<usize>,
     /// ∂yₖ/∂(pre-activations) of the layer being visited, and of the one below it.
@@ -294,6 +303,8 @@ impl Backprop {
             at += l.parameter_count();
         }
         Backprop {
+            record: LaneRecord::default(),
+            output: [[0.0; LANES]; 3],
             activations: network.layers.iter().map(|l| vec![0.0; l.inputs]).collect(),
             slopes: network
                 .layers
@@ -306,32 +317,44 @@ impl Backprop {
         }
     }
 
-    /// Writes the three Jacobian rows (∂yₖ/∂params, stride apart) and residuals yₖ − tₖ.
-    ///
-    /// Row k's output-layer entries are the last hidden layer's values for output k's weights,
-    /// 1 for its bias and 0 for the other outputs'; below it, δ = W_out[k] back through the
-    /// layers (every entry written, so the rows need no clearing). The loops run over slices
-    /// (no indexing), which vectorize.
+    /// Runs the forward pass of up to [`LANES`] points (see [`gather`]).
+    fn record(&mut self, packed: &PackedNetwork, x0: [crate::implicit::Lanes; 2]) {
+        self.output = packed.forward(x0, &mut self.record);
+    }
+
+    /// Writes the three Jacobian rows of the recorded point in `lane` and its residuals
+    /// yₖ − tₖ. Row k holds ∂yₖ/∂(hidden parameters), then ∂yₖ/∂(output k's weights) (the
+    /// last hidden layer's values) and ∂yₖ/∂(output k's bias) = 1: the other outputs' columns
+    /// are zero and left out (see [`OutputNormalEquations`]). Below the output layer
+    /// δ = W_out[k] goes back through the layers; every entry is written, and the loops run
+    /// over slices (no indexing), which vectorize.
     fn rows(
         &mut self,
         network: &SurfaceNetwork,
-        packed: &PackedNetwork,
-        (input, target): ([f64; 2], [f64; 3]),
-        rows: &mut [f64],
-        stride: usize,
-        residuals: &mut [f64],
+        lane: usize,
+        target: [f64; 3],
+        rows: [&mut [f64]; 3],
+        residuals: &mut [f64; 3],
     ) {
         let last = network.layers.len() - 1;
-        let output = packed.forward_recording(input, &mut self.activations, &mut self.slopes);
+        for (point, recorded) in self.activations.iter_mut().zip(&self.record.inputs) {
+            for (v, r) in point.iter_mut().zip(recorded) {
+                *v = r[lane];
+            }
+        }
+        for (point, recorded) in self.slopes[..last].iter_mut().zip(&self.record.slopes) {
+            for (v, r) in point.iter_mut().zip(recorded) {
+                *v = r[lane];
+            }
+        }
+        let output = self.output.map(|o| o[lane]);
         let top = &network.layers[last];
         let hidden = &self.activations[last];
-        for k in 0..3 {
+        let below = self.offsets[last];
+        for (k, row) in rows.into_iter().enumerate() {
             residuals[k] = output[k] - target[k];
-            let row = &mut rows[k * stride..(k + 1) * stride];
-            let out = &mut row[self.offsets[last]..][..top.parameter_count()];
-            out.fill(0.0);
-            out[k * top.inputs..(k + 1) * top.inputs].copy_from_slice(hidden);
-            out[top.weights.len() + k] = 1.0;
+            row[below..below + top.inputs].copy_from_slice(hidden);
+            row[below + top.inputs] = 1.0;
             let delta = &mut self.delta;
             delta.clear();
             delta.extend_from_slice(&top.weights[k * top.inputs..(k + 1) * top.inputs]);
@@ -374,7 +397,8 @@ mod tests {
     use super::*;
     use crate::parametric::activation::Activation;
 
-    /// Every Jacobian row against central differences of the reference forward pass.
+    /// Every Jacobian row against central differences of the reference forward pass,
+    /// including the zeros the compact rows leave out.
     #[test]
     fn jacobian_rows_match_central_differences() {
         let smooth = [Activation::LogSig, Activation::TanSig, Activation::RadBas];
@@ -382,20 +406,17 @@ mod tests {
             for hidden in [vec![5], vec![4, 6], vec![3, 5, 4]] {
                 let net = random_network(&hidden, activation, 11);
                 let p = net.parameter_count();
-                let stride = p.div_ceil(4) * 4;
-                let packed = PackedNetwork::new(&net);
+                let n = *hidden.last().unwrap();
+                let below = p - 3 * n - 3;
                 let mut backprop = Backprop::new(&net);
                 let (input, target) = ([0.3, -0.6], [0.1, 0.2, -0.3]);
-                let mut rows = vec![f64::NAN; 3 * stride];
+                // The point in lane 2 of a group of three.
+                let inputs = [[0.9, 0.1], [-0.2, 0.5], input];
+                backprop.record(&PackedNetwork::new(&net), gather(&inputs, &[0, 1, 2]));
+                let mut rows = [(); 3].map(|_| vec![f64::NAN; below + n + 1]);
                 let mut residuals = [0.0; 3];
-                backprop.rows(
-                    &net,
-                    &packed,
-                    (input, target),
-                    &mut rows,
-                    stride,
-                    &mut residuals,
-                );
+                let [r0, r1, r2] = &mut rows;
+                backprop.rows(&net, 2, target, [r0, r1, r2], &mut residuals);
                 let y = net.forward_normalized(input);
                 let params = net.parameters();
                 let mut shifted = net.clone();
@@ -410,7 +431,17 @@ mod tests {
                     let (plus, minus) = (at(h), at(-h));
                     for k in 0..3 {
                         let numeric = (plus[k] - minus[k]) / (2.0 * h);
-                        let analytic = rows[k * stride + j];
+                        // Compact column of parameter j in row k, if it has one.
+                        let column = if j < below {
+                            Some(j)
+                        } else if (below + k * n..below + (k + 1) * n).contains(&j) {
+                            Some(j - k * n)
+                        } else if j == below + 3 * n + k {
+                            Some(below + n)
+                        } else {
+                            None
+                        };
+                        let analytic = column.map_or(0.0, |c| rows[k][c]);
                         assert!(
                             (numeric - analytic).abs() < 1e-7 * (1.0 + numeric.abs()),
                             "{activation:?} {hidden:?}: ∂y{k}/∂θ{j} {analytic} vs {numeric}"
