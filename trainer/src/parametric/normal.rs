@@ -102,6 +102,45 @@ impl OutputNormalEquations {
 mod tests {
     use super::*;
 
+    /// The column map follows the network's own parameter order: numbered parameters, read
+    /// back from the output layer's weights and biases.
+    #[test]
+    fn columns_map_to_the_networks_output_parameters() {
+        use crate::parametric::activation::Activation;
+        use crate::parametric::network::SurfaceNetwork;
+        for hidden in [vec![1], vec![4, 3], vec![2, 5, 6]] {
+            let mut net = SurfaceNetwork::zeros(
+                &hidden,
+                Activation::TanSig,
+                [0.0; 2],
+                [1.0; 2],
+                [0.0; 3],
+                1.0,
+            )
+            .unwrap();
+            let p = net.parameter_count();
+            let numbered: Vec<f64> = (0..p).map(|j| j as f64).collect();
+            net.set_parameters(&numbered).unwrap();
+            let top = net.layers.last().unwrap();
+            let n = top.inputs;
+            let below = p - top.parameter_count();
+            let layout = OutputNormalEquations::new(below, n);
+            for k in 0..3 {
+                for c in 0..below {
+                    assert_eq!(layout.parameter(k, c), c);
+                }
+                for i in 0..n {
+                    // weights[k·n + i]: output k's weight from hidden neuron i.
+                    assert_eq!(
+                        layout.parameter(k, below + i),
+                        top.weights[k * n + i] as usize
+                    );
+                }
+                assert_eq!(layout.parameter(k, below + n), top.biases[k] as usize);
+            }
+        }
+    }
+
     /// Compact rows of two parts, placed by `add_to`, against JᵀJ and Jᵀe of the full rows.
     #[test]
     fn the_split_sums_equal_the_full_normal_equations() {

@@ -1,14 +1,16 @@
 //! Levenberg–Marquardt training of one [`SurfaceNetwork`] with early stopping on the
 //! validation set (§5.2 step 3: "train until the validation performance converges").
 //!
-//! The residuals are the 3·N normalized coordinate errors y(xᵢ) − tᵢ of the training points;
-//! J's rows come from one forward pass and three backward passes per point and are multiplied
-//! into JᵀJ a block at a time by the implicit trainer's [`NormalEquations`] (AVX2/FMA SYRK),
-//! in [`PARTS`] parts of the training set that run in parallel. The products run in f32
-//! ([`NormalEquations::single_precision`], about twice as fast: JᵀJ only steers the step,
-//! whose acceptance is decided by the f64 error); Jᵀe and every error stay in f64. On the
-//! bunny's 10 000-point patch this gives the same fit to three digits (relative RMS
-//! 8.37·10⁻³) in 0.79–0.89× the fitting time (`README.md`, Table 2). Each step solves
+//! The residuals are the 3·N normalized coordinate errors y(xᵢ) − tᵢ of the training points.
+//! J's rows come from one forward pass per four points ([`PackedNetwork::forward`], one AVX2
+//! lane per point) and three backward passes per point; row k leaves out the other outputs'
+//! weights, which it does not touch, and goes to output k's normal equations
+//! ([`OutputNormalEquations`]), in [`PARTS`] parts of the training set that run in parallel.
+//! The products run in f32 ([`crate::implicit::NormalEquations::single_precision`], about
+//! twice as fast: JᵀJ only steers the step, whose acceptance is decided by the f64 error); Jᵀe
+//! and every error stay in f64. On the bunny's 10 000-point patch the f32 products alone gave
+//! the same fit to three digits (relative RMS 8.37·10⁻³) in 0.79–0.89× the fitting time
+//! (`README.md`, the list under Table 2). Each step solves
 //! (JᵀJ + μI)Δ = −Jᵀe by the implicit trainer's blocked Cholesky ([`DampedSystem`]; the
 //! networks have at most a few hundred weights); μ is divided by 10 after a step that lowers the training error and
 //! multiplied by 10 otherwise (MATLAB's `trainlm`, which the paper used). After every
@@ -326,7 +328,7 @@ impl Backprop {
     /// yₖ − tₖ. Row k holds ∂yₖ/∂(hidden parameters), then ∂yₖ/∂(output k's weights) (the
     /// last hidden layer's values) and ∂yₖ/∂(output k's bias) = 1: the other outputs' columns
     /// are zero and left out (see [`OutputNormalEquations`]). Below the output layer
-    /// δ = W_out[k] goes back through the layers; every entry is written, and the loops run
+    /// `δ = W_out[k]` goes back through the layers; every entry is written, and the loops run
     /// over slices (no indexing), which vectorize.
     fn rows(
         &mut self,
@@ -397,11 +399,14 @@ mod tests {
     use super::*;
     use crate::parametric::activation::Activation;
 
-    /// Every Jacobian row against central differences of the reference forward pass,
-    /// including the zeros the compact rows leave out.
+    /// Every Jacobian row, in each lane of a group of four, against central differences of the
+    /// reference forward pass (the columns a compact row leaves out must have a zero
+    /// derivative).
     #[test]
     fn jacobian_rows_match_central_differences() {
         let smooth = [Activation::LogSig, Activation::TanSig, Activation::RadBas];
+        let inputs = [[0.9, 0.1], [-0.2, 0.5], [0.3, -0.6], [-0.7, -0.8]];
+        let target = [0.1, 0.2, -0.3];
         for activation in smooth {
             for hidden in [vec![5], vec![4, 6], vec![3, 5, 4]] {
                 let net = random_network(&hidden, activation, 11);
@@ -409,47 +414,47 @@ mod tests {
                 let n = *hidden.last().unwrap();
                 let below = p - 3 * n - 3;
                 let mut backprop = Backprop::new(&net);
-                let (input, target) = ([0.3, -0.6], [0.1, 0.2, -0.3]);
-                // The point in lane 2 of a group of three.
-                let inputs = [[0.9, 0.1], [-0.2, 0.5], input];
-                backprop.record(&PackedNetwork::new(&net), gather(&inputs, &[0, 1, 2]));
-                let mut rows = [(); 3].map(|_| vec![f64::NAN; below + n + 1]);
-                let mut residuals = [0.0; 3];
-                let [r0, r1, r2] = &mut rows;
-                backprop.rows(&net, 2, target, [r0, r1, r2], &mut residuals);
-                let y = net.forward_normalized(input);
-                let params = net.parameters();
-                let mut shifted = net.clone();
-                let h = 1e-6;
-                for j in 0..p {
-                    let mut at = |delta: f64| {
-                        let mut v = params.clone();
-                        v[j] += delta;
-                        shifted.set_parameters(&v).unwrap();
-                        shifted.forward_normalized(input)
-                    };
-                    let (plus, minus) = (at(h), at(-h));
-                    for k in 0..3 {
-                        let numeric = (plus[k] - minus[k]) / (2.0 * h);
-                        // Compact column of parameter j in row k, if it has one.
-                        let column = if j < below {
-                            Some(j)
-                        } else if (below + k * n..below + (k + 1) * n).contains(&j) {
-                            Some(j - k * n)
-                        } else if j == below + 3 * n + k {
-                            Some(below + n)
-                        } else {
-                            None
+                backprop.record(&PackedNetwork::new(&net), gather(&inputs, &[0, 1, 2, 3]));
+                for (lane, &input) in inputs.iter().enumerate() {
+                    let mut rows = [(); 3].map(|_| vec![f64::NAN; below + n + 1]);
+                    let mut residuals = [0.0; 3];
+                    let [r0, r1, r2] = &mut rows;
+                    backprop.rows(&net, lane, target, [r0, r1, r2], &mut residuals);
+                    let y = net.forward_normalized(input);
+                    let params = net.parameters();
+                    let mut shifted = net.clone();
+                    let h = 1e-6;
+                    for j in 0..p {
+                        let mut at = |delta: f64| {
+                            let mut v = params.clone();
+                            v[j] += delta;
+                            shifted.set_parameters(&v).unwrap();
+                            shifted.forward_normalized(input)
                         };
-                        let analytic = column.map_or(0.0, |c| rows[k][c]);
-                        assert!(
-                            (numeric - analytic).abs() < 1e-7 * (1.0 + numeric.abs()),
-                            "{activation:?} {hidden:?}: ∂y{k}/∂θ{j} {analytic} vs {numeric}"
-                        );
+                        let (plus, minus) = (at(h), at(-h));
+                        for k in 0..3 {
+                            let numeric = (plus[k] - minus[k]) / (2.0 * h);
+                            // Compact column of parameter j in row k, if it has one.
+                            let column = if j < below {
+                                Some(j)
+                            } else if (below + k * n..below + (k + 1) * n).contains(&j) {
+                                Some(j - k * n)
+                            } else if j == below + 3 * n + k {
+                                Some(below + n)
+                            } else {
+                                None
+                            };
+                            let analytic = column.map_or(0.0, |c| rows[k][c]);
+                            assert!(
+                                (numeric - analytic).abs() < 1e-7 * (1.0 + numeric.abs()),
+                                "{activation:?} {hidden:?} lane {lane}: ∂y{k}/∂θ{j} \
+                                 {analytic} vs {numeric}"
+                            );
+                        }
                     }
-                }
-                for k in 0..3 {
-                    assert!((residuals[k] - (y[k] - target[k])).abs() < 1e-13);
+                    for k in 0..3 {
+                        assert!((residuals[k] - (y[k] - target[k])).abs() < 1e-13);
+                    }
                 }
             }
         }
