@@ -25,8 +25,7 @@ use rayon::prelude::*;
 use super::network::SurfaceNetwork;
 use super::normal::OutputNormalEquations;
 use super::packed::{LaneRecord, PackedNetwork, gather};
-use crate::implicit::DampedSystem;
-use crate::implicit::LANES;
+use crate::implicit::{DampedSystem, LANES, Lanes};
 
 /// Levenberg–Marquardt settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -286,7 +285,7 @@ pub fn train(
 struct Backprop {
     /// The forward pass of the current group of points.
     record: LaneRecord,
-    output: [crate::implicit::Lanes; 3],
+    output: [Lanes; 3],
     /// One point's layer inputs and hidden slopes σ′(z), copied out of `record`.
     activations: Vec<Vec<f64>>,
     slopes: Vec<Vec<f64>>,
@@ -320,7 +319,7 @@ impl Backprop {
     }
 
     /// Runs the forward pass of up to [`LANES`] points (see [`gather`]).
-    fn record(&mut self, packed: &PackedNetwork, x0: [crate::implicit::Lanes; 2]) {
+    fn record(&mut self, packed: &PackedNetwork, x0: [Lanes; 2]) {
         self.output = packed.forward(x0, &mut self.record);
     }
 
