@@ -8,6 +8,12 @@
 //! compiler unrolls the rows, keeps a layer's inputs in registers and drops all checks. The
 //! kernels return their layers by value, computed neuron by neuron, so no buffer is zeroed
 //! before it is written (see `unwritten`).
+//!
+//! A scalar may bring target kernels for whole layers ([`Scalar::affine_kernel`],
+//! [`Scalar::transposed_kernel`]): for single points whose layer shape one of them covers, the
+//! loops below hand the products to it and only apply the activations. f32 on a Cortex-M4F has
+//! them for the N = 9 shapes (`neurosurf-m4f`); they compute the loops' exact bits, so which
+//! path ran never shows in a result.
 
 use crate::implicit::DenseLayout;
 use crate::scalar::Scalar;
@@ -37,6 +43,13 @@ pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
     if count == 0 || inputs.0.len() + inputs.1.len() != count {
         return [[S::ZERO; L]; OUT];
     }
+    if S::TARGET_KERNELS
+        && L == 1
+        && inputs.1.is_empty()
+        && let Some(out) = forward_by_kernel(weights, biases, inputs.0)
+    {
+        return out;
+    }
     let split = inputs.0.len();
     let mut out = unwritten();
     for ((out, row), &bias) in out.iter_mut().zip(weights.chunks_exact(count)).zip(biases) {
@@ -49,6 +62,93 @@ pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
         }
     }
     out
+}
+
+/// [`forward`] for one point through the scalar's target kernel, when it has one for the
+/// layer's shape (`OUT` outputs, 3 or 9 inputs); `None` otherwise.
+#[inline(always)]
+fn forward_by_kernel<S: Scalar, const L: usize, const OUT: usize>(
+    weights: &[S],
+    biases: &[S],
+    x: &[[S; L]],
+) -> Option<[[S; L]; OUT]> {
+    let acc = match x.len() {
+        3 => affine_kernel::<S, 3, OUT>(weights, biases, x.as_flattened())?,
+        9 => affine_kernel::<S, 9, OUT>(weights, biases, x.as_flattened())?,
+        _ => return None,
+    };
+    let mut out = unwritten::<S, L, OUT>();
+    activate::<S, L>(&mut out, &acc);
+    Some(out)
+}
+
+/// `out[j] = a(acc[j])`: a layer's activations as one loop, not inlined. Unrolled into the
+/// caller, the nine activations were straight-line code in which the compiler reloaded the
+/// activation's constants for every neuron (~45 instructions each on the M4F); as a loop it
+/// keeps them in registers (~33).
+#[inline(never)]
+fn activate<S: Scalar, const L: usize>(out: &mut [[S; L]], acc: &[S::Acc]) {
+    for (out, &acc) in out.iter_mut().zip(acc) {
+        *out = [S::activation_from_acc(acc); L];
+    }
+}
+
+/// [`Scalar::affine_kernel`] on slices of exactly the shape `(OUT, IN)`.
+#[inline(always)]
+fn affine_kernel<S: Scalar, const IN: usize, const OUT: usize>(
+    weights: &[S],
+    biases: &[S],
+    x: &[S],
+) -> Option<[S::Acc; OUT]> {
+    let (rows, _) = weights.as_chunks::<IN>();
+    if rows.len() != OUT || biases.len() != OUT || x.len() != IN {
+        return None;
+    }
+    S::affine_kernel::<IN, OUT>(rows.first_chunk()?, biases.first_chunk()?, x.first_chunk()?)
+}
+
+/// [`transposed`] over all columns for one point through the scalar's target kernel, when it
+/// has one for the layer's shape; `None` otherwise.
+#[inline(always)]
+fn transposed_by_kernel<S: Scalar, const L: usize, const K: usize>(
+    weights: &[S],
+    count: usize,
+    g: &[[S; L]],
+) -> Option<[[S; L]; K]> {
+    let g = g.as_flattened();
+    let mut out = unwritten::<S, L, K>();
+    match (g.len(), count) {
+        (9, 9) => fill(&mut out, transposed_kernel::<S, 9, 9>(weights, g)?),
+        (9, 3) => fill(&mut out, transposed_kernel::<S, 3, 9>(weights, g)?),
+        (1, 9) => fill(&mut out, transposed_kernel::<S, 9, 1>(weights, g)?),
+        _ => return None,
+    }
+    .then_some(out)
+}
+
+/// [`Scalar::transposed_kernel`] on slices of exactly the shape `(OUT, IN)`.
+#[inline(always)]
+fn transposed_kernel<S: Scalar, const IN: usize, const OUT: usize>(
+    weights: &[S],
+    g: &[S],
+) -> Option<[S::Acc; IN]> {
+    let (rows, _) = weights.as_chunks::<IN>();
+    if rows.len() != OUT || g.len() != OUT {
+        return None;
+    }
+    S::transposed_kernel::<IN, OUT>(rows.first_chunk()?, g.first_chunk()?)
+}
+
+/// Writes `acc`, rounded, into the first slots of `out`; false when it does not fit.
+#[inline(always)]
+fn fill<S: Scalar, const L: usize, const IN: usize>(out: &mut [[S; L]], acc: [S::Acc; IN]) -> bool {
+    if IN > out.len() {
+        return false;
+    }
+    for (out, acc) in out.iter_mut().zip(acc) {
+        *out = [S::from_acc(acc); L];
+    }
+    true
 }
 
 /// A layer buffer whose slots below the width are all written before they are read, filled
@@ -98,6 +198,14 @@ pub(crate) fn transposed<S: Scalar, const L: usize, const K: usize, const EXACT:
     };
     if count == 0 {
         return [[S::ZERO; L]; K];
+    }
+    if S::TARGET_KERNELS
+        && L == 1
+        && first == 0
+        && columns == count
+        && let Some(out) = transposed_by_kernel(weights, count, g)
+    {
+        return out;
     }
     let mut out = unwritten();
     let mut done = 0;

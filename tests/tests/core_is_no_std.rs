@@ -58,6 +58,32 @@ fn no_crate_in_the_core_graph_enables_std_or_alloc() {
     }
 }
 
+/// The core forbids `unsafe`; the one crate of ours it relies on for it, `neurosurf-m4f` (the
+/// Cortex-M4F assembly kernels), denies it everywhere except its kernel module.
+#[test]
+fn unsafe_code_lives_only_in_the_m4f_kernel_module() {
+    let src = workspace().join("core/m4f/src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).expect("core/m4f/src/lib.rs");
+    assert!(lib.contains("#![no_std]"));
+    assert!(lib.contains("#![deny(unsafe_code)]"));
+    let mut with_unsafe = Vec::new();
+    for entry in std::fs::read_dir(&src).expect("readable dir") {
+        let path = entry.expect("entry").path();
+        let text = std::fs::read_to_string(&path).expect("readable file");
+        if text.lines().any(|line| {
+            let code = line.split("//").next().unwrap_or("");
+            code.contains("unsafe ") || code.contains("unsafe_code)]") && code.contains("allow")
+        }) {
+            with_unsafe.push(path.file_name().expect("file name").to_owned());
+        }
+    }
+    assert_eq!(
+        with_unsafe,
+        ["layers.rs"],
+        "unsafe outside the kernel module"
+    );
+}
+
 #[test]
 fn core_sources_declare_no_std_and_never_name_std_or_alloc() {
     let src = workspace().join("core/src");

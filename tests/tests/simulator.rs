@@ -1,6 +1,6 @@
 //! The core on a simulated Cortex-M4F (QEMU mps2-an386), against the same core on the host:
 //! trained models go through blobs to the target, and what comes back must be what the host
-//! computes — bit for bit in Q16.16, within 2 ulp in f32 — while bad blobs and bad requests
+//! computes — bit for bit, in Q16.16 and in f32 (the issue allows 2 ulp) — while bad blobs and bad requests
 //! come back as their error codes, and a hang as a time-out, never as a wrong answer.
 //!
 //! These tests install the toolchain on first use (`firmware-sim/scripts/setup.sh`).
@@ -98,21 +98,32 @@ fn angle_degrees(a: [f64; 3], b: [f64; 3]) -> f64 {
         .to_degrees()
 }
 
-#[test]
-fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
+/// Runs the torus and the head on the target in `scalar`, single points and batches, field and
+/// field + gradient, and asserts that every result is the host core's, bit for bit.
+fn assert_target_equals_host(scalar: ScalarKind, precision: Precision, seed: u64) {
     let sim = simulator();
     for (name, trained, shape) in [("torus", torus(), TORUS), ("head", head(), Shape::Head)] {
-        let points = queries(&shape, 21);
-        let bytes = blob(&trained, ScalarKind::Q16_16);
-        let expected = host(&bytes, &points, Precision::Q16);
+        let points = queries(&shape, seed);
+        let bytes = blob(&trained, scalar);
+        let expected = host(&bytes, &points, precision);
         let points_f32 = as_f32(&points);
         for mode in [Mode::Batch, Mode::Single] {
             let job = Job {
                 mode,
-                ..Job::field_gradient(&bytes, ScalarKind::Q16_16, &points_f32)
+                ..Job::field_gradient(&bytes, scalar, &points_f32)
             };
-            let run = sim.run(&job).unwrap();
-            assert_eq!(run.samples(), expected, "{name}, {mode:?}");
+            let samples = sim.run(&job).unwrap().samples();
+            let mut worst = 0;
+            for (got, want) in samples.iter().zip(&expected) {
+                worst = worst.max(ulps(got.0, want.0));
+                for k in 0..3 {
+                    worst = worst.max(ulps(got.1[k], want.1[k]));
+                }
+            }
+            eprintln!(
+                "{name}, {scalar:?}, {mode:?}: worst difference target vs host: {worst} f32 ulp"
+            );
+            assert_eq!(samples, expected, "{name}, {scalar:?}, {mode:?}");
             let fields = sim
                 .run(&Job {
                     op: Op::Field,
@@ -121,35 +132,26 @@ fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
                 .unwrap()
                 .values();
             let expected_fields: Vec<f64> = expected.iter().map(|s| s.0).collect();
-            assert_eq!(fields, expected_fields, "{name}, field only, {mode:?}");
+            assert_eq!(
+                fields, expected_fields,
+                "{name}, {scalar:?}, field only, {mode:?}"
+            );
         }
     }
 }
 
 #[test]
-fn f32_on_the_target_agrees_with_the_host_within_2_ulp() {
-    let sim = simulator();
-    for (name, trained, shape) in [("torus", torus(), TORUS), ("head", head(), Shape::Head)] {
-        let points = queries(&shape, 22);
-        let bytes = blob(&trained, ScalarKind::F32);
-        let expected = host(&bytes, &points, Precision::F32);
-        let run = sim
-            .run(&Job::field_gradient(
-                &bytes,
-                ScalarKind::F32,
-                &as_f32(&points),
-            ))
-            .unwrap();
-        let mut worst = 0;
-        for (got, want) in run.samples().iter().zip(&expected) {
-            worst = worst.max(ulps(got.0, want.0));
-            for k in 0..3 {
-                worst = worst.max(ulps(got.1[k], want.1[k]));
-            }
-        }
-        eprintln!("{name}: worst f32 difference target vs host: {worst} ulp");
-        assert!(worst <= 2, "{name}: {worst} ulp");
-    }
+fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
+    assert_target_equals_host(ScalarKind::Q16_16, Precision::Q16, 21);
+}
+
+/// The issue allows 2 ulp; the design gives 0 and this test holds it to that: the f32 path is
+/// IEEE `+ − × ÷` in a fixed order on both machines, and the target's assembly kernels
+/// (`neurosurf-m4f`: `vmla`, the non-fused multiply–accumulate) round exactly like the host's
+/// `acc + w * x`. Single points run those kernels, eight-lane field batches the portable loops.
+#[test]
+fn f32_on_the_target_equals_the_host_bit_for_bit() {
+    assert_target_equals_host(ScalarKind::F32, Precision::F32, 22);
 }
 
 #[test]

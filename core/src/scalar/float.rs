@@ -107,6 +107,23 @@ impl Scalar for f32 {
         -CURVATURE * a * slope
     }
 
+    const TARGET_KERNELS: bool = super::kernels_f32::AVAILABLE;
+    #[inline(always)]
+    fn affine_kernel<const IN: usize, const OUT: usize>(
+        w: &[[f32; IN]; OUT],
+        b: &[f32; OUT],
+        x: &[f32; IN],
+    ) -> Option<[f32; OUT]> {
+        super::kernels_f32::affine(w, b, x)
+    }
+    #[inline(always)]
+    fn transposed_kernel<const IN: usize, const OUT: usize>(
+        w: &[[f32; IN]; OUT],
+        g: &[f32; OUT],
+    ) -> Option<[f32; IN]> {
+        super::kernels_f32::transposed(w, g)
+    }
+
     #[inline]
     fn sqrt(self) -> Self {
         if self > 0.0 { math::sqrtf(self) } else { 0.0 }

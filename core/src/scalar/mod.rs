@@ -26,6 +26,7 @@ mod activation_table;
 mod exp_f32;
 mod exp_q16;
 mod float;
+mod kernels_f32;
 mod q16;
 
 pub use q16::Q16;
@@ -211,6 +212,35 @@ pub trait Scalar:
     fn activation_slope(a: Self) -> Self;
     /// a″(H), computed from `a = a(H)` and `slope = a′(H)`: a″ = −(4/3)·a·a′/1.7159.
     fn activation_curvature(a: Self, slope: Self) -> Self;
+
+    /// Whether this scalar has target kernels on the machine compiled for
+    /// ([`Scalar::affine_kernel`], [`Scalar::transposed_kernel`]); the layer loops only ask
+    /// when it does.
+    const TARGET_KERNELS: bool = false;
+    /// `b + W·x` (W row-major, one row per output) by a kernel written for the target, when
+    /// there is one for this shape; `None` means "use the portable loop". A kernel computes
+    /// exactly the portable loop's bits: each output starts at its bias and accumulates
+    /// [`Scalar::mac`] over the inputs in order. (f32 on a Cortex-M4F: the `neurosurf-m4f`
+    /// assembly for the width-9 layers.)
+    #[inline(always)]
+    fn affine_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        b: &[Self; OUT],
+        x: &[Self; IN],
+    ) -> Option<[Self::Acc; OUT]> {
+        let _ = (w, b, x);
+        None
+    }
+    /// `Wᵀ·g` by a target kernel, like [`Scalar::affine_kernel`]: each output starts at
+    /// `ZERO.to_acc()` and accumulates [`Scalar::mac`] over the rows in order.
+    #[inline(always)]
+    fn transposed_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        g: &[Self; OUT],
+    ) -> Option<[Self::Acc; IN]> {
+        let _ = (w, g);
+        None
+    }
 
     /// Square root; 0 for negative inputs.
     fn sqrt(self) -> Self;
