@@ -64,6 +64,9 @@ pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
     out
 }
 
+/// The layer width the target kernels are written for (their shapes: 9×3, 9×9 and 1×9).
+pub(crate) const KERNEL_WIDTH: usize = 9;
+
 /// [`forward`] for one point through the scalar's target kernel, when it has one for the
 /// layer's shape (`OUT` outputs, 3 or 9 inputs); `None` otherwise.
 #[inline(always)]
