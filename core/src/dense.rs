@@ -88,7 +88,7 @@ fn forward_by_kernel<S: Scalar, const L: usize, const OUT: usize>(
 /// `out[j] = a(acc[j])`: a layer's activations as one loop, not inlined. Unrolled into the
 /// caller, the nine activations were straight-line code in which the compiler reloaded the
 /// activation's constants for every neuron (~45 instructions each on the M4F); as a loop it
-/// keeps them in registers (~33).
+/// keeps them in registers (~37, loop and sign included).
 #[inline(never)]
 fn activate<S: Scalar, const L: usize>(out: &mut [[S; L]], acc: &[S::Acc]) {
     for (out, &acc) in out.iter_mut().zip(acc) {

@@ -3,11 +3,13 @@
 //! s18–s26. Rows are unrolled: the assembly has no loop, no branch and no counter.
 //!
 //! Operands are pointers only, and each kernel saves and restores the FPU registers it uses
-//! (`vpush`/`vpop`, one instruction each): Rust 1.96 (Debian's, which builds the firmware)
-//! refuses FPU register operands and clobbers on `thumbv7em-none-eabihf` ("register class
-//! `sreg` requires the `vfp2` target feature", fixed upstream by rust-lang/rust#159988), so the
-//! compiler cannot be told which ones are clobbered. Inputs are read from and results written to
-//! memory, where the caller's layers live anyway.
+//! (`vpush`/`vpop`, one instruction each, an even count of registers so the stack stays 8-byte
+//! aligned): Rust 1.96 (Debian's, which builds the firmware) refuses FPU register operands and
+//! clobbers on `thumbv7em-none-eabihf` ("register class `sreg` requires the `vfp2` target
+//! feature", fixed upstream by rust-lang/rust#159988), so the compiler cannot be told which ones
+//! are clobbered. Inputs are read from and results written to memory, where the caller's layers
+//! live anyway. No block claims `preserves_flags`: `vmla` sets the FPSCR's sticky exception
+//! flags.
 #![allow(unsafe_code)]
 
 use core::arch::asm;
@@ -135,7 +137,7 @@ pub fn affine_9x9(w: &[[f32; 9]; 9], b: &[f32; 9], x: &[f32; 9]) -> [f32; 9] {
     // FPU register it uses.
     unsafe {
         asm!(
-            "vpush {{s0-s26}}",
+            "vpush {{s0-s27}}",
             "vldmia {x}, {{s0-s8}}",
             "vldmia {b}, {{s9-s17}}",
             forward_row9!("s9"),
@@ -148,12 +150,11 @@ pub fn affine_9x9(w: &[[f32; 9]; 9], b: &[f32; 9], x: &[f32; 9]) -> [f32; 9] {
             forward_row9!("s16"),
             forward_row9!("s17"),
             "vstmia {out}, {{s9-s17}}",
-            "vpop {{s0-s26}}",
+            "vpop {{s0-s27}}",
             w = inout(reg) w.as_ptr() => _,
             b = in(reg) b.as_ptr(),
             x = in(reg) x.as_ptr(),
             out = in(reg) out.as_mut_ptr(),
-            options(preserves_flags),
         );
         out.assume_init()
     }
@@ -168,7 +169,7 @@ pub fn affine_9x3(w: &[[f32; 3]; 9], b: &[f32; 9], x: &[f32; 3]) -> [f32; 9] {
     // FPU register it uses.
     unsafe {
         asm!(
-            "vpush {{s0-s20}}",
+            "vpush {{s0-s21}}",
             "vldmia {x}, {{s0-s2}}",
             "vldmia {b}, {{s9-s17}}",
             forward_row3!("s9"),
@@ -181,12 +182,11 @@ pub fn affine_9x3(w: &[[f32; 3]; 9], b: &[f32; 9], x: &[f32; 3]) -> [f32; 9] {
             forward_row3!("s16"),
             forward_row3!("s17"),
             "vstmia {out}, {{s9-s17}}",
-            "vpop {{s0-s20}}",
+            "vpop {{s0-s21}}",
             w = inout(reg) w.as_ptr() => _,
             b = in(reg) b.as_ptr(),
             x = in(reg) x.as_ptr(),
             out = in(reg) out.as_mut_ptr(),
-            options(preserves_flags),
         );
         out.assume_init()
     }
@@ -200,17 +200,16 @@ pub fn affine_1x9(w: &[f32; 9], b: &f32, x: &[f32; 9]) -> f32 {
     // `out` (lengths fixed by the types), and restores every FPU register it uses.
     unsafe {
         asm!(
-            "vpush {{s0-s26}}",
+            "vpush {{s0-s27}}",
             "vldmia {x}, {{s0-s8}}",
             "vldr s9, [{b}]",
             forward_row9!("s9"),
             "vstr s9, [{out}]",
-            "vpop {{s0-s26}}",
+            "vpop {{s0-s27}}",
             w = inout(reg) w.as_ptr() => _,
             b = in(reg) core::ptr::from_ref(b),
             x = in(reg) x.as_ptr(),
             out = in(reg) out.as_mut_ptr(),
-            options(preserves_flags),
         );
         out.assume_init()
     }
@@ -225,7 +224,7 @@ pub fn transposed_9x9(w: &[[f32; 9]; 9], g: &[f32; 9]) -> [f32; 9] {
     // every FPU register it uses.
     unsafe {
         asm!(
-            "vpush {{s0-s26}}",
+            "vpush {{s0-s27}}",
             "vldmia {g}, {{s0-s8}}",
             "vldmia {z}, {{s9-s17}}",
             transposed_row9!("s0"),
@@ -238,12 +237,11 @@ pub fn transposed_9x9(w: &[[f32; 9]; 9], g: &[f32; 9]) -> [f32; 9] {
             transposed_row9!("s7"),
             transposed_row9!("s8"),
             "vstmia {out}, {{s9-s17}}",
-            "vpop {{s0-s26}}",
+            "vpop {{s0-s27}}",
             w = inout(reg) w.as_ptr() => _,
             g = in(reg) g.as_ptr(),
             z = in(reg) ZEROS.as_ptr(),
             out = in(reg) out.as_mut_ptr(),
-            options(preserves_flags),
         );
         out.assume_init()
     }
@@ -259,7 +257,7 @@ pub fn transposed_9x3(w: &[[f32; 3]; 9], g: &[f32; 9]) -> [f32; 3] {
     // register it uses.
     unsafe {
         asm!(
-            "vpush {{s0-s20}}",
+            "vpush {{s0-s21}}",
             "vldmia {g}, {{s0-s8}}",
             "vldmia {z}, {{s9-s11}}",
             transposed_row3!("s0"),
@@ -272,12 +270,11 @@ pub fn transposed_9x3(w: &[[f32; 3]; 9], g: &[f32; 9]) -> [f32; 3] {
             transposed_row3!("s7"),
             transposed_row3!("s8"),
             "vstmia {out}, {{s9-s11}}",
-            "vpop {{s0-s20}}",
+            "vpop {{s0-s21}}",
             w = inout(reg) w.as_ptr() => _,
             g = in(reg) g.as_ptr(),
             z = in(reg) ZEROS.as_ptr(),
             out = in(reg) out.as_mut_ptr(),
-            options(preserves_flags),
         );
         out.assume_init()
     }
@@ -291,17 +288,16 @@ pub fn transposed_1x9(w: &[f32; 9], g: &f32) -> [f32; 9] {
     // words of `out` (lengths fixed by the types), and restores every FPU register it uses.
     unsafe {
         asm!(
-            "vpush {{s0-s26}}",
+            "vpush {{s0-s27}}",
             "vldr s0, [{g}]",
             "vldmia {z}, {{s9-s17}}",
             transposed_row9!("s0"),
             "vstmia {out}, {{s9-s17}}",
-            "vpop {{s0-s26}}",
+            "vpop {{s0-s27}}",
             w = inout(reg) w.as_ptr() => _,
             g = in(reg) core::ptr::from_ref(g),
             z = in(reg) ZEROS.as_ptr(),
             out = in(reg) out.as_mut_ptr(),
-            options(preserves_flags),
         );
         out.assume_init()
     }

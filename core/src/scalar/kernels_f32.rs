@@ -14,7 +14,7 @@ pub(super) fn affine<const IN: usize, const OUT: usize>(
     b: &[f32; OUT],
     x: &[f32; IN],
 ) -> Option<[f32; OUT]> {
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     {
         use neurosurf_m4f as m4f;
         let w = w.as_flattened();
@@ -50,7 +50,7 @@ pub(super) fn transposed<const IN: usize, const OUT: usize>(
     w: &[[f32; IN]; OUT],
     g: &[f32; OUT],
 ) -> Option<[f32; IN]> {
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     {
         use neurosurf_m4f as m4f;
         let w = w.as_flattened();
@@ -69,14 +69,14 @@ pub(super) fn transposed<const IN: usize, const OUT: usize>(
 }
 
 /// The first `R` rows of `C` weights of a row-major matrix.
-#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 #[inline(always)]
 fn rows<const C: usize, const R: usize>(flat: &[f32]) -> Option<&[[f32; C]; R]> {
     flat.as_chunks::<C>().0.first_chunk::<R>()
 }
 
 /// `a` as an array of length `B` (the caller's shape), when `A == B`.
-#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 #[inline(always)]
 fn resize<const A: usize, const B: usize>(a: [f32; A]) -> Option<[f32; B]> {
     <[f32; B]>::try_from(a.as_slice()).ok()
