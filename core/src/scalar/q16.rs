@@ -45,6 +45,13 @@ fn round_q32(acc: i64) -> Q16 {
     saturate(acc.wrapping_add(HALF_BITS) >> 16)
 }
 
+/// round(x·y/2³²), ties up: the high word of a rounded 32×32→64-bit product (`smmulr` on
+/// ARMv7E-M).
+#[inline(always)]
+fn high_word_rounded(x: i32, y: i32) -> i32 {
+    ((i64::from(x) * i64::from(y) + (1 << 31)) >> 32) as i32
+}
+
 /// a(H) for H = `bits`·2⁻¹⁶: the table entry below |H| interpolated linearly towards the next,
 /// the sign restored (odd symmetry).
 #[inline(always)]
@@ -185,9 +192,13 @@ impl Scalar for Q16 {
             let square = a.mul(a);
             return Q16::from_bits(SLOPE_OFFSET).sub(Q16::from_bits(SLOPE_SQUARE).mul(square));
         }
-        let square = (bits * bits + HALF_BITS) >> 16;
-        let scaled = (i64::from(SLOPE_SQUARE) * square + HALF_BITS) >> 16;
-        Q16::from_bits((i64::from(SLOPE_OFFSET) - scaled) as i32)
+        // round(x·y/2¹⁶) as the rounded high word of (x·2^k)·(y·2^(16−k)): one `smmulr` on
+        // the M4 instead of a 64-bit product, rounding and shift; the same bits (|a| ≤ 2 keeps
+        // a·2⁸ below 2²⁶, a² ≤ 4 keeps a²·2² below 2²¹, and SLOPE_SQUARE·2¹⁴ < 2²⁹).
+        let scaled_a = (bits as i32) << 8;
+        let square = high_word_rounded(scaled_a, scaled_a);
+        let scaled = high_word_rounded(SLOPE_SQUARE << 14, square << 2);
+        Q16::from_bits(SLOPE_OFFSET - scaled)
     }
     #[inline]
     fn activation_curvature(a: Self, slope: Self) -> Self {
@@ -264,11 +275,22 @@ fn isqrt(n: u64) -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{Q16, isqrt};
+    use super::{HALF_BITS, Q16, SLOPE_OFFSET, SLOPE_SQUARE, isqrt};
     use crate::scalar::Scalar;
 
     /// The fused epilogue equals rounding, saturating and then the activation, around every
     /// boundary it special-cases (|H| = 10, the i32 range) and on a sweep in between.
+    #[test]
+    fn slope_by_high_words_equals_the_64_bit_formula() {
+        for bits in -(2_i64 << 16)..=(2 << 16) {
+            let square = (bits * bits + HALF_BITS) >> 16;
+            let scaled = (i64::from(SLOPE_SQUARE) * square + HALF_BITS) >> 16;
+            let expected = (i64::from(SLOPE_OFFSET) - scaled) as i32;
+            let slope = Q16::activation_slope(Q16::from_bits(bits as i32));
+            assert_eq!(slope.to_bits(), expected, "a bits {bits}");
+        }
+    }
+
     #[test]
     fn activation_from_acc_is_activation_of_from_acc() {
         let check = |acc: i64| {
