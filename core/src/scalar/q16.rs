@@ -184,9 +184,9 @@ impl Scalar for Q16 {
     }
     #[inline]
     fn activation_slope(a: Self) -> Self {
-        // For an activation output |a| ≤ 1.7159 nothing here can saturate, so plain i64
-        // arithmetic gives exactly the saturating a·a, SLOPE_SQUARE·(a·a) and the difference.
-        // Other inputs (not produced by `activation`) fall back to the saturating path.
+        // For |a| ≤ 2 (every activation output: |a| ≤ 1.7159) nothing here can saturate, so
+        // exact integer products give the saturating a·a, SLOPE_SQUARE·(a·a) and the
+        // difference. Other inputs (not produced by `activation`) take the saturating path.
         let bits = i64::from(a.to_bits());
         if bits.unsigned_abs() > 2 << 16 {
             let square = a.mul(a);
@@ -278,8 +278,7 @@ mod tests {
     use super::{HALF_BITS, Q16, SLOPE_OFFSET, SLOPE_SQUARE, isqrt};
     use crate::scalar::Scalar;
 
-    /// The fused epilogue equals rounding, saturating and then the activation, around every
-    /// boundary it special-cases (|H| = 10, the i32 range) and on a sweep in between.
+    /// The slope's `smmulr` form equals the 64-bit formula it replaced, for every a in [−2, 2].
     #[test]
     fn slope_by_high_words_equals_the_64_bit_formula() {
         for bits in -(2_i64 << 16)..=(2 << 16) {
@@ -291,6 +290,8 @@ mod tests {
         }
     }
 
+    /// The fused epilogue equals rounding, saturating and then the activation, around every
+    /// boundary it special-cases (|H| = 10, the i32 range) and on a sweep in between.
     #[test]
     fn activation_from_acc_is_activation_of_from_acc() {
         let check = |acc: i64| {
