@@ -236,3 +236,29 @@ fn f32_activation_scan() {
         );
     }
 }
+
+/// Every `f32` in [0, 16] (past saturation), in order: the f32 activation's largest error, its
+/// largest step *down* between neighbouring inputs (it is monotone only to within its error)
+/// and its largest |a(H) + a(−H)| (odd only to within it). About 1.1·10⁹ inputs, so ignored by
+/// default: `cargo test --release -p neurosurf-core --test activation -- --ignored --nocapture`.
+/// Measured: error 2.855·10⁻⁷, step down 3.6·10⁻⁷, asymmetry 2.4·10⁻⁷.
+#[test]
+#[ignore = "exhaustive over 1.1e9 inputs: run on demand"]
+fn f32_activation_exhaustive_monotonicity_and_symmetry() {
+    let (mut error, mut step_down, mut asymmetry) = (0.0_f64, 0.0_f32, 0.0_f32);
+    let mut previous = <f32 as Scalar>::activation(0.0);
+    for bits in 0..=16.0_f32.to_bits() {
+        let h = f32::from_bits(bits);
+        let a = <f32 as Scalar>::activation(h);
+        error = error.max((f64::from(a) - exact(f64::from(h)).0).abs());
+        step_down = step_down.max(previous - a);
+        asymmetry = asymmetry.max((a + <f32 as Scalar>::activation(-h)).abs());
+        previous = a;
+    }
+    println!(
+        "f32 over [0, 16]: error {error:.4e}, step down {step_down:.3e}, asymmetry {asymmetry:.3e}"
+    );
+    assert!(error <= F32_ACTIVATION_MAX_ERROR);
+    assert!(f64::from(step_down) <= 2.0 * F32_ACTIVATION_MAX_ERROR);
+    assert!(f64::from(asymmetry) <= 2.0 * F32_ACTIVATION_MAX_ERROR);
+}

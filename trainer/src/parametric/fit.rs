@@ -23,6 +23,10 @@ pub struct SurfaceFit {
     pub rms_error: f64,
     /// The same as a fraction of the points' bounding-box diagonal.
     pub relative_rms_error: f64,
+    /// Wall-clock seconds of the §5.2 search (timing only, not a result).
+    pub search_seconds: f64,
+    /// Wall-clock seconds of the final refinement on all training points (timing only).
+    pub refinement_seconds: f64,
 }
 
 /// Fits (u, v) → p to `points` at `parameters` with the §5.2 topology search.
@@ -83,10 +87,13 @@ pub fn fit_network(
     };
     let split = stratified_split(parameters, options.seed);
     let search_training = subsample(&split.training, options.max_search_points);
+    let started = std::time::Instant::now();
     let (mut network, search) = search(&template, &samples, &split, &search_training, options)
         .ok_or_else(|| Error::invalid("no network configuration could be trained"))?;
     // Refine on all training points with the full LM settings: the candidates saw a
     // subsample, or (small sets) a short run of `search_train`.
+    let search_seconds = started.elapsed().as_secs_f64();
+    let started = std::time::Instant::now();
     if search_training.len() < split.training.len() || options.search_train != options.train {
         let mut refined = network.clone();
         train(
@@ -101,6 +108,7 @@ pub fn fit_network(
             network = refined;
         }
     }
+    let refinement_seconds = started.elapsed().as_secs_f64();
     let all: Vec<usize> = (0..points.len()).collect();
     let rms_error = mean_square(&network, &samples, &all).sqrt() * half * 3f64.sqrt();
     let diagonal = (0..3)
@@ -113,6 +121,8 @@ pub fn fit_network(
         split,
         rms_error,
         relative_rms_error: rms_error / diagonal,
+        search_seconds,
+        refinement_seconds,
     })
 }
 
