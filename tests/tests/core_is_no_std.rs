@@ -81,22 +81,14 @@ fn unsafe_code_lives_only_in_the_m4f_kernel_module() {
         })
     };
     let mut lifted = Vec::new();
-    let mut stack = vec![src];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).expect("readable dir") {
-            let path = entry.expect("entry").path();
-            if path.is_dir() {
-                stack.push(path);
-                continue;
-            }
-            let bytes = std::fs::read(&path).expect("readable file");
-            let text = String::from_utf8_lossy(&bytes);
-            if text
-                .lines()
-                .any(|line| lifts(line.split("//").next().unwrap_or("")))
-            {
-                lifted.push(path.file_name().expect("file name").to_owned());
-            }
+    for path in files_below(src) {
+        let bytes = std::fs::read(&path).expect("readable file");
+        let text = String::from_utf8_lossy(&bytes);
+        if text
+            .lines()
+            .any(|line| lifts(line.split("//").next().unwrap_or("")))
+        {
+            lifted.push(path.file_name().expect("file name").to_owned());
         }
     }
     assert_eq!(
@@ -112,32 +104,44 @@ fn core_sources_declare_no_std_and_never_name_std_or_alloc() {
     let lib = std::fs::read_to_string(src.join("lib.rs")).expect("core/src/lib.rs");
     assert!(lib.contains("#![no_std]"));
     assert!(lib.contains("#![forbid(unsafe_code)]"));
-    let mut stack = vec![src];
     let mut files = 0;
+    for path in files_below(src) {
+        if path.extension().is_none_or(|e| e != "rs") {
+            continue;
+        }
+        files += 1;
+        let text = std::fs::read_to_string(&path).expect("readable file");
+        for (n, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            for banned in ["std::", "alloc::", "extern crate std", "extern crate alloc"] {
+                let hit = code.match_indices(banned).any(|(i, _)| {
+                    // `core::` paths that end in `std` (none today) would be fine; only
+                    // a path segment that starts the identifier counts.
+                    i == 0
+                        || !code.as_bytes()[i - 1].is_ascii_alphanumeric()
+                            && code.as_bytes()[i - 1] != b'_'
+                            && code.as_bytes()[i - 1] != b':'
+                });
+                assert!(!hit, "{}:{}: names {banned}: {line}", path.display(), n + 1);
+            }
+        }
+    }
+    assert!(files > 5, "only {files} source files found");
+}
+
+/// Every file in `dir` and its subfolders.
+fn files_below(dir: std::path::PathBuf) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir];
     while let Some(dir) = stack.pop() {
         for entry in std::fs::read_dir(&dir).expect("readable dir") {
             let path = entry.expect("entry").path();
             if path.is_dir() {
                 stack.push(path);
-            } else if path.extension().is_some_and(|e| e == "rs") {
-                files += 1;
-                let text = std::fs::read_to_string(&path).expect("readable file");
-                for (n, line) in text.lines().enumerate() {
-                    let code = line.split("//").next().unwrap_or("");
-                    for banned in ["std::", "alloc::", "extern crate std", "extern crate alloc"] {
-                        let hit = code.match_indices(banned).any(|(i, _)| {
-                            // `core::` paths that end in `std` (none today) would be fine; only
-                            // a path segment that starts the identifier counts.
-                            i == 0
-                                || !code.as_bytes()[i - 1].is_ascii_alphanumeric()
-                                    && code.as_bytes()[i - 1] != b'_'
-                                    && code.as_bytes()[i - 1] != b':'
-                        });
-                        assert!(!hit, "{}:{}: names {banned}: {line}", path.display(), n + 1);
-                    }
-                }
+            } else {
+                files.push(path);
             }
         }
     }
-    assert!(files > 5, "only {files} source files found");
+    files
 }
