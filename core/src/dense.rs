@@ -270,7 +270,7 @@ pub(crate) fn through_activation<S: Scalar, const L: usize>(
 ) {
     for (delta, output) in delta.iter_mut().zip(outputs) {
         for (d, &a) in delta.iter_mut().zip(output) {
-            *d = d.mul(S::activation_slope(a));
+            *d = S::times_slope(*d, a);
         }
     }
 }

@@ -210,6 +210,13 @@ pub trait Scalar:
     }
     /// a′(H), computed from `a = a(H)`: a′ = (2/3)(1.7159 − a²/1.7159).
     fn activation_slope(a: Self) -> Self;
+    /// `delta · a′(H)`, with a′ computed from `a = a(H)`: the chain rule through a neuron in the
+    /// backward pass, exactly `delta.mul(activation_slope(a))`, bit for bit (an
+    /// implementation may fuse the two).
+    #[inline(always)]
+    fn times_slope(delta: Self, a: Self) -> Self {
+        delta.mul(Self::activation_slope(a))
+    }
     /// a″(H), computed from `a = a(H)` and `slope = a′(H)`: a″ = −(4/3)·a·a′/1.7159.
     fn activation_curvature(a: Self, slope: Self) -> Self;
 

@@ -52,6 +52,20 @@ fn high_word_rounded(x: i32, y: i32) -> i32 {
     ((i64::from(x) * i64::from(y) + (1 << 31)) >> 32) as i32
 }
 
+/// a′ = SLOPE_OFFSET − round(SLOPE_SQUARE·round(a²)) in bits, for |a| ≤ 2 (every activation
+/// output: |a| ≤ 1.7159), where nothing can saturate: exactly the saturating
+/// `SLOPE_OFFSET − SLOPE_SQUARE·(a·a)`.
+///
+/// Each round(x·y/2¹⁶) is the rounded high word of (x·2^k)·(y·2^(16−k)): one `smmulr` on the
+/// M4 instead of a 64-bit product, rounding and shift. |a| ≤ 2 keeps a·2⁸ below 2²⁶; a² ≤ 4
+/// in bits is below 2¹⁹, and SLOPE_SQUARE·2¹⁶ below 2³¹ (0.3885·2³²).
+#[inline(always)]
+fn slope_bits(a: i32) -> i32 {
+    let scaled_a = a << 8;
+    let square = high_word_rounded(scaled_a, scaled_a);
+    SLOPE_OFFSET - high_word_rounded(SLOPE_SQUARE << 16, square)
+}
+
 /// a(H) for H = `bits`·2⁻¹⁶: the table entry below |H| interpolated linearly towards the next,
 /// the sign restored (odd symmetry).
 #[inline(always)]
@@ -192,13 +206,24 @@ impl Scalar for Q16 {
             let square = a.mul(a);
             return Q16::from_bits(SLOPE_OFFSET).sub(Q16::from_bits(SLOPE_SQUARE).mul(square));
         }
-        // round(x·y/2¹⁶) as the rounded high word of (x·2^k)·(y·2^(16−k)): one `smmulr` on
-        // the M4 instead of a 64-bit product, rounding and shift; the same bits (|a| ≤ 2 keeps
-        // a·2⁸ below 2²⁶, a² ≤ 4 keeps a²·2² below 2²¹, and SLOPE_SQUARE·2¹⁴ < 2²⁹).
-        let scaled_a = (bits as i32) << 8;
-        let square = high_word_rounded(scaled_a, scaled_a);
-        let scaled = high_word_rounded(SLOPE_SQUARE << 14, square << 2);
-        Q16::from_bits(SLOPE_OFFSET - scaled)
+        Q16::from_bits(slope_bits(bits as i32))
+    }
+    #[inline(always)]
+    fn times_slope(delta: Self, a: Self) -> Self {
+        // The common case as two rounded high words: for |a| ≤ 2 the slope is `slope_bits`
+        // (|a′| ≤ 1.144, below 2¹⁷ in bits), and for |δ| < 2¹³ (2²⁹ in bits) the product
+        // round(δ·a′/2¹⁶) is the rounded high word of (δ·2²)·(a′·2¹⁴), both factors below 2³¹,
+        // and cannot saturate (|δ·a′| < 2¹⁴). The same bits as `mul`, which rounds
+        // (δ·a′ + 2¹⁵)/2¹⁶ down: (δ·a′·2¹⁶ + 2³¹)/2³² is that quotient.
+        let (delta_bits, a_bits) = (delta.to_bits(), a.to_bits());
+        // |a| ≤ 2·2¹⁶ and |δ| < 2²⁹ as one add and one unsigned compare each.
+        let a_in_range = a_bits.wrapping_add(2 << 16) as u32 <= 4 << 16;
+        let delta_in_range = (delta_bits.wrapping_add(1 << 29) as u32) < 1 << 30;
+        if a_in_range && delta_in_range {
+            let slope = slope_bits(a_bits);
+            return Q16::from_bits(high_word_rounded(delta_bits << 2, slope << 14));
+        }
+        delta.mul(Self::activation_slope(a))
     }
     #[inline]
     fn activation_curvature(a: Self, slope: Self) -> Self {
@@ -287,6 +312,50 @@ mod tests {
             let expected = (i64::from(SLOPE_OFFSET) - scaled) as i32;
             let slope = Q16::activation_slope(Q16::from_bits(bits as i32));
             assert_eq!(slope.to_bits(), expected, "a bits {bits}");
+        }
+    }
+
+    /// The fused backward step equals `delta.mul(activation_slope(a))` for every a in
+    /// [−2.5, 2.5] (the fast path ends at 2) against deltas around every boundary it tests
+    /// (|δ| = 2²⁹ in bits, 0, the i32 range) and spread over the range.
+    #[test]
+    fn times_slope_is_delta_times_the_slope() {
+        let edge = 1_i32 << 29;
+        let mut deltas = [0_i32; 82];
+        let fixed = [
+            0,
+            1,
+            -1,
+            i32::MAX,
+            i32::MIN,
+            i32::MIN + 1,
+            1 << 16,
+            -(1 << 16),
+        ];
+        let edges = (-3..=3).flat_map(|d| [edge + d, -edge + d]);
+        let mut x = 0x2545_F491_4F6C_DD1D_u64;
+        let spread = core::iter::repeat_with(|| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x as i32) >> (x % 31)
+        });
+        for (slot, d) in deltas
+            .iter_mut()
+            .zip(fixed.into_iter().chain(edges).chain(spread))
+        {
+            *slot = d;
+        }
+        for a_bits in -(5_i32 << 15)..=(5 << 15) {
+            let a = Q16::from_bits(a_bits);
+            for &d in &deltas {
+                let delta = Q16::from_bits(d);
+                assert_eq!(
+                    Q16::times_slope(delta, a),
+                    delta.mul(Q16::activation_slope(a)),
+                    "delta bits {d}, a bits {a_bits}"
+                );
+            }
         }
     }
 
