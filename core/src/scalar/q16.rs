@@ -2,10 +2,11 @@
 //!
 //! Designed for a Cortex-M4 without relying on its FPU: products are 32×32→64-bit
 //! (`SMULL`/`SMLAL`), dot products accumulate in Q32.32 and are rounded once, the activation is
-//! a 641-entry table with linear interpolation (no division anywhere in a neuron). Every
-//! operation saturates at the ends of the range instead of wrapping.
+//! a 641-entry table (padded to H = 16, so a masked index needs no bounds check) with linear
+//! interpolation (no division anywhere in a neuron). Every operation saturates at the ends of
+//! the range instead of wrapping.
 
-use super::activation_table::{FRACTION_BITS, LAST, TABLE};
+use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, TABLE};
 use super::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN, Scalar, ScalarKind};
 
 /// Signed Q16.16 fixed point: range [−32768, 32768), resolution 2⁻¹⁶ ≈ 1.5·10⁻⁵.
@@ -71,16 +72,24 @@ fn slope_bits(a: i32) -> i32 {
 #[inline(always)]
 fn activation_bits(bits: i32) -> i32 {
     let magnitude = bits.unsigned_abs();
-    let index = (magnitude >> FRACTION_BITS) as usize;
-    let value = if index >= LAST {
+    let value = if magnitude >> (FRACTION_BITS + INDEX_BITS) != 0 {
         TABLE.get(LAST).copied().unwrap_or(0)
     } else {
-        let lower = TABLE.get(index).copied().unwrap_or(0);
-        let upper = TABLE.get(index + 1).copied().unwrap_or(lower);
-        let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
-        lower + (((upper - lower) * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
+        interpolate(magnitude)
     };
     if bits < 0 { -value } else { value }
+}
+
+/// a(|H|) for |H| = `magnitude`·2⁻¹⁶ below 16 (larger magnitudes wrap the index): the index
+/// is masked to [`INDEX_BITS`] bits, so the table reads need no bounds checks (one `ubfx` on
+/// the M4).
+#[inline(always)]
+fn interpolate(magnitude: u32) -> i32 {
+    let index = ((magnitude >> FRACTION_BITS) & ((1 << INDEX_BITS) - 1)) as usize;
+    let lower = TABLE.get(index).copied().unwrap_or(0);
+    let upper = TABLE.get(index + 1).copied().unwrap_or(lower);
+    let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
+    lower + (((upper - lower) * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
 }
 
 impl Scalar for Q16 {
@@ -190,7 +199,10 @@ impl Scalar for Q16 {
         let rounded = acc.wrapping_add(HALF_BITS);
         let high = (rounded >> 32) as i32;
         Q16::from_bits(if (high as u32).wrapping_add(10) < 20 {
-            activation_bits((rounded >> 16) as i32)
+            // |H| ≤ 10: within the table's 16, no second range check.
+            let bits = (rounded >> 16) as i32;
+            let value = interpolate(bits.unsigned_abs());
+            if bits < 0 { -value } else { value }
         } else {
             let last = TABLE.get(LAST).copied().unwrap_or(0);
             if high < 0 { -last } else { last }
@@ -300,7 +312,10 @@ fn isqrt(n: u64) -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{HALF_BITS, Q16, SLOPE_OFFSET, SLOPE_SQUARE, isqrt};
+    use super::{
+        FRACTION_BITS, HALF_BITS, LAST, Q16, SLOPE_OFFSET, SLOPE_SQUARE, TABLE, activation_bits,
+        isqrt,
+    };
     use crate::scalar::Scalar;
 
     /// The slope's `smmulr` form equals the 64-bit formula it replaced, for every a in [−2, 2].
@@ -312,6 +327,30 @@ mod tests {
             let expected = (i64::from(SLOPE_OFFSET) - scaled) as i32;
             let slope = Q16::activation_slope(Q16::from_bits(bits as i32));
             assert_eq!(slope.to_bits(), expected, "a bits {bits}");
+        }
+    }
+
+    /// The masked, padded table gives the bits of the checked 641-entry lookup it replaced,
+    /// for every H below 32 in magnitude and at the ends of the range.
+    #[test]
+    #[allow(clippy::indexing_slicing)] // the reference as it was written, with its checks
+    fn masked_table_lookup_equals_the_checked_one() {
+        let checked = |bits: i32| -> i32 {
+            let magnitude = bits.unsigned_abs();
+            let index = (magnitude >> FRACTION_BITS) as usize;
+            let table = &TABLE[..=LAST];
+            let value = if index >= LAST {
+                table[LAST]
+            } else {
+                let (lower, upper) = (table[index], table[index + 1]);
+                let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
+                lower + (((upper - lower) * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
+            };
+            if bits < 0 { -value } else { value }
+        };
+        let extremes = [i32::MIN, i32::MIN + 1, i32::MAX, i32::MAX - 1];
+        for bits in (-(1 << 21)..=(1 << 21)).chain(extremes) {
+            assert_eq!(activation_bits(bits), checked(bits), "H bits {bits}");
         }
     }
 
