@@ -173,7 +173,10 @@ impl Scalar for Q16 {
 
     #[inline(always)]
     fn to_acc(self) -> i64 {
-        i64::from(self.to_bits()) << 16
+        // `i64::from(bits) << 16` as its two words (high = bits >> 16, low = bits << 16): the
+        // M4 code then has one shift per word instead of four instructions for the 64-bit shift.
+        let bits = self.to_bits();
+        (i64::from(bits >> 16) << 32) | i64::from((bits << 16) as u32)
     }
     #[inline(always)]
     fn mac(acc: i64, a: Self, b: Self) -> i64 {
@@ -351,6 +354,40 @@ mod tests {
         let extremes = [i32::MIN, i32::MIN + 1, i32::MAX, i32::MAX - 1];
         for bits in (-(1 << 21)..=(1 << 21)).chain(extremes) {
             assert_eq!(activation_bits(bits), checked(bits), "H bits {bits}");
+        }
+    }
+
+    /// The accumulator built from two words equals the 64-bit shift.
+    #[test]
+    fn to_acc_is_the_value_shifted_into_q32_32() {
+        let mut x = 0x2545_F491_4F6C_DD1D_u64;
+        let spread = core::iter::repeat_with(|| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x as i32
+        });
+        let edges = [
+            0,
+            1,
+            -1,
+            i32::MAX,
+            i32::MIN,
+            0xFFFF,
+            -0x10000,
+            0x8000,
+            -0x8000,
+        ];
+        for bits in edges
+            .into_iter()
+            .chain((-70_000..70_000).step_by(7))
+            .chain(spread.take(100_000))
+        {
+            assert_eq!(
+                Q16::from_bits(bits).to_acc(),
+                i64::from(bits) << 16,
+                "bits {bits}"
+            );
         }
     }
 
