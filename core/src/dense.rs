@@ -134,7 +134,7 @@ fn transposed_by_kernel<S: Scalar, const L: usize, const K: usize>(
 fn transposed_kernel<S: Scalar, const IN: usize, const OUT: usize>(
     weights: &[S],
     g: &[S],
-) -> Option<[S::Acc; IN]> {
+) -> Option<[S; IN]> {
     let (rows, _) = weights.as_chunks::<IN>();
     if rows.len() != OUT || g.len() != OUT {
         return None;
@@ -142,14 +142,14 @@ fn transposed_kernel<S: Scalar, const IN: usize, const OUT: usize>(
     S::transposed_kernel::<IN, OUT>(rows.first_chunk()?, g.first_chunk()?)
 }
 
-/// Writes `acc`, rounded, into the first slots of `out`; false when it does not fit.
+/// Writes `values` into the first slots of `out`; false when they do not fit.
 #[inline(always)]
-fn fill<S: Scalar, const L: usize, const IN: usize>(out: &mut [[S; L]], acc: [S::Acc; IN]) -> bool {
+fn fill<S: Scalar, const L: usize, const IN: usize>(out: &mut [[S; L]], values: [S; IN]) -> bool {
     if IN > out.len() {
         return false;
     }
-    for (out, acc) in out.iter_mut().zip(acc) {
-        *out = [S::from_acc(acc); L];
+    for (out, value) in out.iter_mut().zip(values) {
+        *out = [value; L];
     }
     true
 }

@@ -1,7 +1,8 @@
 //! # neurosurf-m4f
 //!
 //! The dense-layer products of `neurosurf-core`'s width-9 implicit modules, written for the
-//! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly. On every other target this
+//! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly, and the Q16.16 transposes
+//! for its integer multiply–accumulate. On every other target this
 //! crate is empty and the core runs its portable loops.
 //!
 //! Why assembly: the portable loop compiles to three instructions per multiply–accumulate on the
@@ -26,8 +27,10 @@
 //! reads are fixed by the types. The assembly reads through those pointers, writes exactly the
 //! result buffer it then returns (a `MaybeUninit` every element of which it stores), pushes and
 //! pops 88–112 bytes of stack, restores every FPU register it uses, and changes only the FPSCR's
-//! sticky exception flags (so no block claims `preserves_flags`). That is the whole unsafe
-//! surface, in one module.
+//! sticky exception flags (so no block claims `preserves_flags`). The Q16.16 blocks declare every
+//! general register they change, save r6 and r7 (which Rust does not let them declare) on the
+//! stack for their duration, and change the APSR flags. That is the whole unsafe surface, in two
+//! modules.
 //!
 //! The kernels are compiled for bare-metal hard-float ARM (`target_arch = "arm"`,
 //! `target_abi = "eabihf"`, `target_os = "none"`: the Cortex-M4F/M7 targets); their bits are
@@ -44,13 +47,35 @@
 //! | `transposed_9x9` | `Wᵀ·g`, W 9×9 | 81 | 95 |
 //! | `transposed_9x3` | `Wᵀ·g`, W 9×3 | 27 | 41 |
 //! | `transposed_1x9` | `wᵀ·g`, w 1×9 | 9 | 15 |
+//!
+//! **Q16.16** (`fixed_layers.rs`, `I16F16` in and out): the three transposes, rounded like the
+//! core's `Scalar::from_acc` (add 2¹⁵, shift by 16, saturate), which is what the core's
+//! backward pass does with each of them. The nine values of g sit in r0–r8, so each product is
+//! one `ldr` of the weight at a constant offset and one `smull` / `smlal` into a 64-bit
+//! accumulator (exact: the same sum as the portable `i64` loop), and a column's rounding is six
+//! instructions with its saturation out of line. The forward products have no kernel: the
+//! compiler's code is already two instructions per product there (a 64-bit accumulator leaves
+//! too few registers to hold a layer's inputs either way).
+//!
+//! | function | computes | multiply–accumulates | instructions |
+//! |---|---|---:|---:|
+//! | `q16_transposed_9x9` | `round(Wᵀ·g)`, W 9×9 | 81 | 238 |
+//! | `q16_transposed_9x3` | `round(Wᵀ·g)`, W 9×3 | 27 | 82 |
+//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 | 9 | 91 |
+//!
+//! The simulator tests hold the Q16.16 kernels to the host's bits too, a model built to
+//! saturate every column included.
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+mod fixed_layers;
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 mod layers;
 
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+pub use fixed_layers::{q16_transposed_1x9, q16_transposed_9x3, q16_transposed_9x9};
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 pub use layers::{
     affine_1x9, affine_9x3, affine_9x9, transposed_1x9, transposed_9x3, transposed_9x9,

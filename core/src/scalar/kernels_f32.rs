@@ -16,6 +16,7 @@ pub(super) fn affine<const IN: usize, const OUT: usize>(
 ) -> Option<[f32; OUT]> {
     #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     {
+        use super::kernel_shapes::{resize, rows};
         use neurosurf_m4f as m4f;
         let w = w.as_flattened();
         return match (OUT, IN) {
@@ -52,6 +53,7 @@ pub(super) fn transposed<const IN: usize, const OUT: usize>(
 ) -> Option<[f32; IN]> {
     #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     {
+        use super::kernel_shapes::{resize, rows};
         use neurosurf_m4f as m4f;
         let w = w.as_flattened();
         return match (OUT, IN) {
@@ -66,18 +68,4 @@ pub(super) fn transposed<const IN: usize, const OUT: usize>(
         let _ = (w, g);
         None
     }
-}
-
-/// The first `R` rows of `C` weights of a row-major matrix.
-#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-#[inline(always)]
-fn rows<const C: usize, const R: usize>(flat: &[f32]) -> Option<&[[f32; C]; R]> {
-    flat.as_chunks::<C>().0.first_chunk::<R>()
-}
-
-/// `a` as an array of length `B` (the caller's shape), when `A == B`.
-#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-#[inline(always)]
-fn resize<const A: usize, const B: usize>(a: [f32; A]) -> Option<[f32; B]> {
-    <[f32; B]>::try_from(a.as_slice()).ok()
 }

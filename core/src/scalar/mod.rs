@@ -26,7 +26,10 @@ mod activation_table;
 mod exp_f32;
 mod exp_q16;
 mod float;
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+mod kernel_shapes;
 mod kernels_f32;
+mod kernels_q16;
 mod q16;
 
 pub use q16::Q16;
@@ -238,13 +241,14 @@ pub trait Scalar:
         let _ = (w, b, x);
         None
     }
-    /// `Wᵀ·g` by a target kernel, like [`Scalar::affine_kernel`]: each output starts at
-    /// `ZERO.to_acc()` and accumulates [`Scalar::mac`] over the rows in order.
+    /// `Wᵀ·g` by a target kernel, like [`Scalar::affine_kernel`], rounded: each output is
+    /// [`Scalar::from_acc`] of `ZERO.to_acc()` accumulating [`Scalar::mac`] over the rows in
+    /// order. (f32 and Q16.16 on a Cortex-M4F: the width-9 transposes.)
     #[inline(always)]
     fn transposed_kernel<const IN: usize, const OUT: usize>(
         w: &[[Self; IN]; OUT],
         g: &[Self; OUT],
-    ) -> Option<[Self::Acc; IN]> {
+    ) -> Option<[Self; IN]> {
         let _ = (w, g);
         None
     }

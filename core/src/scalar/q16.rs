@@ -245,6 +245,15 @@ impl Scalar for Q16 {
         Q16::from_bits(CURVATURE).mul(a).mul(slope).neg()
     }
 
+    const TARGET_KERNELS: bool = super::kernels_q16::AVAILABLE;
+    #[inline(always)]
+    fn transposed_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Q16; IN]; OUT],
+        g: &[Q16; OUT],
+    ) -> Option<[Q16; IN]> {
+        super::kernels_q16::transposed(w, g)
+    }
+
     #[inline]
     fn sqrt(self) -> Self {
         let bits = self.to_bits();

@@ -1,0 +1,35 @@
+//! Q16.16's target kernels: on a Cortex-M4F (bare-metal hard-float ARM, the `neurosurf-m4f`
+//! targets), the width-9 transposed products run as the `neurosurf-m4f` assembly (the values of
+//! g in registers, one `ldr` + `smlal` per product, the rounding to Q16.16 per column: the same
+//! bits as the portable loop and `from_acc`); everywhere else there are none. The forward
+//! products have no kernel: the compiler's code is already two instructions per product there.
+
+/// Whether this build has the kernels.
+pub(super) const AVAILABLE: bool = neurosurf_m4f::AVAILABLE;
+
+use super::Q16;
+
+/// `Wᵀ·g`, each output rounded as `from_acc`, when a kernel exists for `(OUT, IN)`.
+#[inline(always)]
+pub(super) fn transposed<const IN: usize, const OUT: usize>(
+    w: &[[Q16; IN]; OUT],
+    g: &[Q16; OUT],
+) -> Option<[Q16; IN]> {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    {
+        use super::kernel_shapes::{resize, rows};
+        use neurosurf_m4f as m4f;
+        let w = w.as_flattened();
+        return match (OUT, IN) {
+            (9, 9) => resize(m4f::q16_transposed_9x9(rows(w)?, g.first_chunk()?)),
+            (9, 3) => resize(m4f::q16_transposed_9x3(rows(w)?, g.first_chunk()?)),
+            (1, 9) => resize(m4f::q16_transposed_1x9(w.first_chunk()?, *g.first()?)),
+            _ => None,
+        };
+    }
+    #[allow(unreachable_code)]
+    {
+        let _ = (w, g);
+        None
+    }
+}
