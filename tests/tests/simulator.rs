@@ -162,11 +162,16 @@ fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
 }
 
 /// The Q16.16 transposed kernels' out-of-line saturation, on the target against the host: a
-/// torus leaf with every weight at ±1000 and zero biases, queried at and around its box centre
-/// (where every pre-activation is 0, so every slope is at its largest). Back through layer b the
-/// nine products of a column all share one sign (W_b[j][i] = ±1000·sign(w_out[j])), so each
-/// column sums to about ±1.2·10⁷, far beyond Q16.16's ±32 768, and saturates at the end its
-/// sign picks — both ends, column by column; the first layer's transpose then saturates too.
+/// torus leaf with every weight at ±1000 and zero biases, queried at its box centre (where
+/// every pre-activation is 0, so every slope is a′(0) ≈ 1.144) and next to it. At the centre,
+/// back through layer b the nine products of a column all share one sign
+/// (W_b[j][i] = ±1000·sign(w_out[j])), so each column sums to about ±1.03·10⁷, far beyond
+/// Q16.16's ±32 768, and saturates at the end its sign picks — both ends, alternating by
+/// column; the first layer's transpose (about ±2.9·10⁸) then saturates at both ends too. (The
+/// 1×9 output transpose multiplies by one slope and cannot.) Points that round to another Q16.16
+/// value than the centre's saturate the activations instead, which covers the table's ends.
+/// Checked once by breaking the kernels' saturated value (`eor … lsr` for `asr`): this test
+/// then fails.
 #[test]
 fn q16_kernels_saturate_like_the_host() {
     let mut trained = torus();
@@ -201,8 +206,8 @@ fn q16_kernels_saturate_like_the_host() {
         })
         .collect();
     let expected = host(&bytes, &points, Precision::Q16);
-    // Saturation shows against f64, which does not saturate: at the centre its gradient is
-    // orders of magnitude larger.
+    // A sanity check that the centre is where the construction puts it: f64, which does not
+    // saturate, has a gradient orders of magnitude larger there.
     let length = |g: [f64; 3]| g.iter().map(|c| c * c).sum::<f64>().sqrt();
     let (q16, f64) = (
         length(expected[0].1),

@@ -6,9 +6,13 @@
 //!
 //! The columns are unrolled: the weights are read at constant offsets from one base, and the
 //! only branch is to the out-of-line saturation of a column whose sum leaves the Q16.16 range.
-//! The blocks save and restore r6 and r7 themselves (`push` / `pop`): Rust refuses them as
-//! operands or clobbers (r6 can be LLVM's base pointer, r7 the Thumb frame pointer), and the
-//! nine values of g need them. Nothing inside reads memory through r6 or r7.
+//! The 9-row blocks save and restore r6, r7 and r11 themselves (`push` / `pop`, with lr to
+//! keep the stack 8-byte aligned): Rust refuses r6 and the frame pointer (r7 in Thumb code, r11
+//! in ARM code) as operands or clobbers, and the nine values of g and the output pointer need
+//! them. Nothing inside reads memory through them. While a block runs, r7 holds a value of g,
+//! so a debugger's backtrace taken inside a kernel (which follows the frame pointer) is wrong;
+//! it is right again after the block. r9 is used as an ordinary register: targets that reserve
+//! it (the RWPI relocation model) do not build this crate.
 #![allow(unsafe_code)]
 
 use core::arch::asm;
@@ -18,7 +22,7 @@ use fixed::types::I16F16;
 
 /// One column of a transposed product: output `$i` = Σⱼ W[j][`$i`]·gⱼ over the rows j = 0…8
 /// (row stride `$stride` bytes), g in r0–r8, the weights at r12, rounded to Q16.16 in r9 and
-/// stored at r11 + 4·`$i`. Accumulator r9:r10, weight and scratch lr.
+/// stored at r11 + 4·`$i`. Accumulator r10:r9 (high:low), weight and scratch lr.
 macro_rules! column9 {
     ($i:literal, $stride:literal) => {
         concat!(
@@ -79,7 +83,7 @@ macro_rules! column9 {
     };
 }
 
-/// Rounds the accumulator r9:r10 to Q16.16 like `Scalar::from_acc`: r9 ← ((r9:r10) + 2¹⁵) >> 16
+/// Rounds the accumulator r10:r9 to Q16.16 like `Scalar::from_acc`: r9 ← ((r10:r9) + 2¹⁵) >> 16
 /// when that fits 32 bits, else the end of the range on r10's side (label 1`$i` does that
 /// out of line, then comes back to 2`$i`); stores it at r11 + 4·`$i`.
 macro_rules! round_and_store {
@@ -123,19 +127,20 @@ macro_rules! saturate {
 
 /// The whole transposed product over nine rows of `$stride` bytes, one `column9!` per listed
 /// output column, their saturations out of line after the last: g at `$g` (loaded into r0–r8),
-/// the weights at `$w`, the outputs written at `$out`.
+/// the weights at `$w`, the outputs written at `$out` (moved to r11 once it is saved).
 macro_rules! transposed_rows9 {
     ($w:expr, $g:expr, $out:expr, $stride:literal, $($i:literal),+) => {
         asm!(
-            "push {{r6, r7}}",
+            "push {{r6, r7, r11, lr}}",
+            "mov r11, r1",
             "ldm r0, {{r0-r8}}",
             $(column9!($i, $stride),)+
             "b 3f",
             $(saturate!($i),)+
             "3:",
-            "pop {{r6, r7}}",
+            "pop {{r6, r7, r11, lr}}",
             inout("r0") $g => _,
-            out("r1") _,
+            inout("r1") $out => _,
             out("r2") _,
             out("r3") _,
             out("r4") _,
@@ -143,7 +148,6 @@ macro_rules! transposed_rows9 {
             out("r8") _,
             out("r9") _,
             out("r10") _,
-            in("r11") $out,
             in("r12") $w,
             out("lr") _,
         )
@@ -157,8 +161,8 @@ pub fn q16_transposed_9x9(w: &[[I16F16; 9]; 9], g: &[I16F16; 9]) -> [I16F16; 9] 
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
     // SAFETY: reads the 81 words behind `w` and the 9 behind `g`, writes the 9 words of `out`
     // (lengths fixed by the array types; `I16F16` is a transparent `i32`); saves and restores
-    // r6 and r7 on the stack (8 bytes, keeping its 8-byte alignment) and declares every other
-    // register it changes.
+    // r6, r7, r11 and lr on the stack (16 bytes, keeping its 8-byte alignment) and declares
+    // every other register it changes.
     unsafe {
         transposed_rows9!(
             w.as_ptr(),
@@ -199,7 +203,8 @@ pub fn q16_transposed_9x3(w: &[[I16F16; 3]; 9], g: &[I16F16; 9]) -> [I16F16; 3] 
     }
 }
 
-/// One product of the one-row transpose: output `$i` = `from_acc(0 + wᵢ·g)`, g in r0.
+/// One product of the one-row transpose: output `$i` = `from_acc(0 + wᵢ·g)`, g in r0 (the
+/// output pointer in r11, as for the other kernels).
 macro_rules! single9 {
     ($i:literal) => {
         concat!(
@@ -217,14 +222,17 @@ macro_rules! single9 {
 macro_rules! transposed_row1 {
     ($w:expr, $g:expr, $out:expr, $($i:literal),+) => {
         asm!(
+            "push {{r11, lr}}",
+            "mov r11, r1",
             $(single9!($i),)+
             "b 3f",
             $(saturate!($i),)+
             "3:",
+            "pop {{r11, lr}}",
             in("r0") $g,
+            in("r1") $out,
             out("r9") _,
             out("r10") _,
-            in("r11") $out,
             in("r12") $w,
             out("lr") _,
         )
@@ -237,7 +245,8 @@ macro_rules! transposed_row1 {
 pub fn q16_transposed_1x9(w: &[I16F16; 9], g: I16F16) -> [I16F16; 9] {
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
     // SAFETY: reads the 9 words behind `w`, writes the 9 words of `out` (lengths fixed by the
-    // array types) and declares every register it changes.
+    // array types), saves and restores r11 and lr (8 bytes) and declares every other register
+    // it changes.
     unsafe {
         transposed_row1!(
             w.as_ptr(),

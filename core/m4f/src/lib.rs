@@ -28,8 +28,8 @@
 //! result buffer it then returns (a `MaybeUninit` every element of which it stores), pushes and
 //! pops 88–112 bytes of stack, restores every FPU register it uses, and changes only the FPSCR's
 //! sticky exception flags (so no block claims `preserves_flags`). The Q16.16 blocks declare every
-//! general register they change, save r6 and r7 (which Rust does not let them declare) on the
-//! stack for their duration, and change the APSR flags. That is the whole unsafe surface, in two
+//! general register they change, save r6, r7 and r11 (which Rust does not let them declare on
+//! every ARM target) with lr on the stack for their duration, and change the APSR flags. That is the whole unsafe surface, in two
 //! modules.
 //!
 //! The kernels are compiled for bare-metal hard-float ARM (`target_arch = "arm"`,
@@ -59,12 +59,13 @@
 //!
 //! | function | computes | multiply–accumulates | instructions |
 //! |---|---|---:|---:|
-//! | `q16_transposed_9x9` | `round(Wᵀ·g)`, W 9×9 | 81 | 238 |
-//! | `q16_transposed_9x3` | `round(Wᵀ·g)`, W 9×3 | 27 | 82 |
-//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 | 9 | 91 |
+//! | `q16_transposed_9x9` | `round(Wᵀ·g)`, W 9×9 | 81 | 239 |
+//! | `q16_transposed_9x3` | `round(Wᵀ·g)`, W 9×3 | 27 | 83 |
+//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 | 9 | 94 |
 //!
-//! The simulator tests hold the Q16.16 kernels to the host's bits too, a model built to
-//! saturate every column included.
+//! The simulator tests hold the Q16.16 kernels to the host's bits too, including a model built
+//! so that every column of its 9×9 and 9×3 transposes saturates, at both ends (the 1×9
+//! transpose multiplies by one g and cannot saturate within the loader's parameter bound).
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]

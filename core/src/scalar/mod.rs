@@ -223,9 +223,9 @@ pub trait Scalar:
     /// a″(H), computed from `a = a(H)` and `slope = a′(H)`: a″ = −(4/3)·a·a′/1.7159.
     fn activation_curvature(a: Self, slope: Self) -> Self;
 
-    /// Whether this scalar has target kernels on the machine compiled for
-    /// ([`Scalar::affine_kernel`], [`Scalar::transposed_kernel`]); the layer loops only ask
-    /// when it does.
+    /// Whether this scalar has target kernels on the machine compiled for, for some shapes
+    /// ([`Scalar::affine_kernel`], [`Scalar::transposed_kernel`]; Q16.16 has only the
+    /// transposed ones); the layer loops only ask when it does.
     const TARGET_KERNELS: bool = false;
     /// `b + W·x` (W row-major, one row per output) by a kernel written for the target, when
     /// there is one for this shape; `None` means "use the portable loop". A kernel computes
