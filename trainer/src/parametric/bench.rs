@@ -44,6 +44,10 @@ pub struct BenchmarkRow {
     pub search_seconds: f64,
     /// Of that, the final refinement on all training points (s).
     pub refinement_seconds: f64,
+    /// Accepted LM steps of the search, summed over the configurations' kept starts.
+    pub search_steps: usize,
+    /// LM trial steps (accepted or not) of the same runs: each a solve and a training pass.
+    pub search_trials: usize,
     /// Eigen-solver iterations.
     pub eigen_iterations: usize,
     /// Chosen hidden layers.
@@ -143,6 +147,8 @@ pub fn benchmark(
             fitting_seconds,
             search_seconds: fit.search_seconds,
             refinement_seconds: fit.refinement_seconds,
+            search_steps: fit.search.candidates.iter().map(|c| c.iterations).sum(),
+            search_trials: fit.search.candidates.iter().map(|c| c.trials).sum(),
             eigen_iterations: lle.iterations,
             layers: best.layers,
             neurons: best.neurons,

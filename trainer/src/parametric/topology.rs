@@ -129,6 +129,8 @@ pub struct Candidate {
     pub test_mse: f64,
     /// LM steps of the kept start.
     pub iterations: usize,
+    /// LM trial steps of the kept start (accepted or not; see [`TrainReport::trials`]).
+    pub trials: usize,
 }
 
 /// Every configuration tried and the one chosen.
@@ -221,6 +223,7 @@ pub(crate) fn search(
                 validation_mse: report.validation_mse,
                 test_mse,
                 iterations: report.iterations,
+                trials: report.trials,
             });
             if options.grow {
                 previous = Some(net.clone());

@@ -63,6 +63,9 @@ impl Default for TrainSettings {
 pub struct TrainReport {
     /// Accepted LM steps.
     pub iterations: usize,
+    /// Trial steps whose training error was evaluated, accepted or not (each a solve of the
+    /// damped system and a pass over the training points).
+    pub trials: usize,
     /// Training MSE of the kept weights.
     pub training_mse: f64,
     /// Validation MSE of the kept weights.
@@ -159,6 +162,7 @@ pub fn train(
     if training.is_empty() {
         return TrainReport {
             iterations: 0,
+            trials: 0,
             training_mse: 0.0,
             validation_mse: mean_square(network, samples, validation),
         };
@@ -194,6 +198,7 @@ pub fn train(
     let mut mu = settings.mu0;
     let mut fails = 0;
     let mut iterations = 0;
+    let mut trials = 0;
     let mut trial = network.clone();
     while iterations < settings.max_iterations
         && train_error > settings.goal
@@ -245,6 +250,7 @@ pub fn train(
                 break;
             }
             let error = mean_square_parallel(&trial, samples, training);
+            trials += 1;
             if error.is_finite() && error < train_error {
                 params = candidate;
                 std::mem::swap(network, &mut trial);
@@ -275,6 +281,7 @@ pub fn train(
     let _ = network.set_parameters(&best.1);
     TrainReport {
         iterations,
+        trials,
         training_mse: best.2,
         validation_mse: best.0,
     }
@@ -397,6 +404,40 @@ impl Backprop {
 mod tests {
     use super::*;
     use crate::parametric::activation::Activation;
+
+    /// The report counts every trial step: at least one per accepted step, and a rejected one
+    /// costs a trial without a step.
+    #[test]
+    fn reports_count_trials_and_accepted_steps() {
+        let inputs: Vec<[f64; 2]> = (0..60)
+            .map(|i| [(i % 6) as f64 / 3.0 - 0.8, (i / 6) as f64 / 5.0 - 0.9])
+            .collect();
+        let targets = inputs
+            .iter()
+            .map(|&[u, v]| [u, v, 0.3 * (2.0 * u).sin() * v])
+            .collect();
+        let samples = Samples { inputs, targets };
+        let mut net = random_network(&[4], Activation::TanSig, 3);
+        let training: Vec<usize> = (0..50).collect();
+        let validation: Vec<usize> = (50..60).collect();
+        let report = train(
+            &mut net,
+            &samples,
+            &training,
+            &validation,
+            &TrainSettings::default(),
+        );
+        assert!(report.iterations > 0, "{report:?}");
+        assert!(report.trials >= report.iterations, "{report:?}");
+        let empty = train(
+            &mut net,
+            &samples,
+            &[],
+            &validation,
+            &TrainSettings::default(),
+        );
+        assert_eq!((empty.iterations, empty.trials), (0, 0));
+    }
 
     /// Every Jacobian row, in each lane of a group of four, against central differences of the
     /// reference forward pass (the columns a compact row leaves out must have a zero
