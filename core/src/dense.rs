@@ -268,6 +268,18 @@ pub(crate) fn through_activation<S: Scalar, const L: usize>(
     delta: &mut [[S; L]],
     outputs: &[[S; L]],
 ) {
+    if S::TARGET_KERNELS
+        && L == 1
+        && delta.len() == KERNEL_WIDTH
+        && outputs.len() == KERNEL_WIDTH
+        && let (Some(d), Some(a)) = (
+            delta.as_flattened_mut().first_chunk_mut::<KERNEL_WIDTH>(),
+            outputs.as_flattened().first_chunk::<KERNEL_WIDTH>(),
+        )
+        && S::times_slope_kernel(d, a)
+    {
+        return;
+    }
     for (delta, output) in delta.iter_mut().zip(outputs) {
         for (d, &a) in delta.iter_mut().zip(output) {
             *d = S::times_slope(*d, a);

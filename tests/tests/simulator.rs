@@ -99,6 +99,20 @@ fn angle_degrees(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// Every value's bits, so that +0.0 and −0.0 differ.
+/// Runs the Q16.16 blob `bytes` at `points` on the target, in batches and point by point, and
+/// requires the host's `expected` samples bit for bit.
+fn assert_q16_target_equals(bytes: &[u8], points: &[[f64; 3]], expected: &[Sample]) {
+    let (sim, points_f32) = (simulator(), as_f32(points));
+    for mode in [Mode::Batch, Mode::Single] {
+        let job = Job {
+            mode,
+            ..Job::field_gradient(bytes, ScalarKind::Q16_16, &points_f32)
+        };
+        let samples = sim.run(&job).unwrap().samples();
+        assert_eq!(sample_bits(&samples), sample_bits(expected), "{mode:?}");
+    }
+}
+
 fn sample_bits(samples: &[(f64, [f64; 3])]) -> Vec<[u64; 4]> {
     samples
         .iter()
@@ -217,15 +231,51 @@ fn q16_kernels_saturate_like_the_host() {
         f64 > 100.0 * q16 && q16 > 0.0,
         "no saturation: Q16.16 |∇Φ| {q16}, f64 {f64}"
     );
-    let (sim, points_f32) = (simulator(), as_f32(&points));
-    for mode in [Mode::Batch, Mode::Single] {
-        let job = Job {
-            mode,
-            ..Job::field_gradient(&bytes, ScalarKind::Q16_16, &points_f32)
-        };
-        let samples = sim.run(&job).unwrap().samples();
-        assert_eq!(sample_bits(&samples), sample_bits(&expected), "{mode:?}");
+    assert_q16_target_equals(&bytes, &points, &expected);
+}
+
+/// The Q16.16 slope kernel's fallback (`times_slope` for nine neurons, which leaves |δ| ≥ 2¹³
+/// to the portable saturating path), on the target against the host: a torus leaf whose first
+/// layer has tiny weights (±0.01 by row) and equal biases (0.5), so at the box centre all nine
+/// a-outputs are equal (a(0.5) ≈ 0.55, slope ≈ 1.03); layer b's rows alternate ±1000 over
+/// eight inputs and 0 on the ninth, so they cancel on equal inputs (H_b = 0, slope 1.144) while
+/// their columns add nine δ_b ≈ 1.31 to about ±11 800: above the fast range, below
+/// saturation, so the fallback changes δ (to about ±12 100) and the first layer's transpose
+/// (the rows' ±0.01 follow the columns' signs) carries it into ∇Φ. Checked once by dropping
+/// the fallback (the kernel's unchanged δ kept): this test then fails.
+#[test]
+fn q16_slope_kernel_falls_back_like_the_host() {
+    let mut trained = torus();
+    let leaf = trained.network.root();
+    let layout = trained.network.trained_layout(leaf);
+    let center = trained.network.normalization(leaf).unwrap().center;
+    let params = trained.network.trained_params_mut(leaf);
+    let width = layout.width;
+    let alternate = |k: usize| if k.is_multiple_of(2) { 1.0 } else { -1.0 };
+    for j in 0..width {
+        params[layout.out_weights + j] = 1.0;
+        for i in 0..width {
+            params[layout.b_weights + j * width + i] = if i + 1 < width {
+                1000.0 * alternate(i)
+            } else {
+                0.0
+            };
+        }
+        for i in 0..layout.inputs {
+            params[layout.a_weights + j * layout.inputs + i] = 0.01 * alternate(j);
+        }
+        params[layout.a_biases + j] = 0.5;
+        params[layout.b_biases + j] = 0.0;
     }
+    params[layout.out_bias] = 0.0;
+    let bytes = blob(&trained, ScalarKind::Q16_16);
+    let points = vec![center; 4];
+    let expected = host(&bytes, &points, Precision::Q16);
+    // The construction's premise: a gradient of the size the fallback's δ gives (8 rows of
+    // 0.01 × about 12 100 per coordinate).
+    let length = expected[0].1.iter().map(|c| c * c).sum::<f64>().sqrt();
+    assert!(length > 100.0, "|∇Φ| {length}: the fallback is not reached");
+    assert_q16_target_equals(&bytes, &points, &expected);
 }
 
 /// The issue allows 2 ulp; the design gives 0 and this test holds it to that: the f32 path is

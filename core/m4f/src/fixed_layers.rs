@@ -217,19 +217,45 @@ macro_rules! single9 {
     };
 }
 
-/// The one-row transpose, one `single9!` per listed output, the saturations out of line: g
-/// in r0, the weights at `$w`, the outputs written at `$out`.
+/// One product of the one-row transpose for a small g: output `$i` = round(wᵢ·g/2¹⁶) as the
+/// rounded high word of (wᵢ·2⁴)·(g·2¹²), g·2¹² in r0.
+macro_rules! single9_small {
+    ($i:literal) => {
+        concat!(
+            "ldr lr, [r12, #(4*",
+            $i,
+            ")]\n",
+            "lsl lr, lr, #4\n",
+            "smmulr r9, lr, r0\n",
+            "str r9, [r11, #(4*",
+            $i,
+            ")]\n",
+        )
+    };
+}
+
+/// The one-row transpose: for |g| < 2 (2¹⁷ in bits) one `single9_small!` per listed output,
+/// else one `single9!` each with the saturations out of line: g in r0, the weights at `$w`,
+/// the outputs written at `$out`.
 macro_rules! transposed_row1 {
     ($w:expr, $g:expr, $out:expr, $($i:literal),+) => {
         asm!(
             "push {{r11, lr}}",
             "mov r11, r1",
+            // |g| < 2¹⁷: (g + 2¹⁷) as u32 < 2¹⁸.
+            "add r9, r0, #0x20000",
+            "cmp r9, #0x40000",
+            "bhs 4f",
+            "lsl r0, r0, #12",
+            $(single9_small!($i),)+
+            "b 3f",
+            "4:",
             $(single9!($i),)+
             "b 3f",
             $(saturate!($i),)+
             "3:",
             "pop {{r11, lr}}",
-            in("r0") $g,
+            inout("r0") $g => _,
             in("r1") $out,
             out("r9") _,
             out("r10") _,
@@ -240,13 +266,20 @@ macro_rules! transposed_row1 {
 }
 
 /// `wᵀ·g` for one row of nine weights and one g in Q16.16, rounded: output i is
-/// `from_acc(0 + wᵢ·g)`.
+/// `from_acc(0 + wᵢ·g)`, for weights within the core's parameter bound |wᵢ| ≤ 1024 (2²⁶ in
+/// bits; the model loader rejects larger ones). Larger weights give an unspecified value (no
+/// undefined behaviour) when |g| < 2.
+///
+/// For |g| < 2 (the caller's g is a slope a′, at most 1.144) each output is one `smmulr`:
+/// with |wᵢ| ≤ 2²⁶ and |g| < 2¹⁷ in bits, (wᵢ·2⁴)·(g·2¹²) fits the multiplier's operands, the
+/// rounded high word is (wᵢ·g + 2¹⁵) >> 16 exactly, and it cannot saturate (|wᵢ·g| < 2⁴³).
+/// Other g take the 64-bit product with the full rounding and saturation.
 #[inline(always)]
 pub fn q16_transposed_1x9(w: &[I16F16; 9], g: I16F16) -> [I16F16; 9] {
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
-    // SAFETY: reads the 9 words behind `w`, writes the 9 words of `out` (lengths fixed by the
-    // array types), saves and restores r11 and lr (8 bytes) and declares every other register
-    // it changes.
+    // SAFETY: reads the 9 words behind `w`, writes the 9 words of `out` on either path
+    // (lengths fixed by the array types), saves and restores r11 and lr (8 bytes) and declares
+    // every other register it changes.
     unsafe {
         transposed_row1!(
             w.as_ptr(),
@@ -264,4 +297,119 @@ pub fn q16_transposed_1x9(w: &[I16F16; 9], g: I16F16) -> [I16F16; 9] {
         );
         out.assume_init()
     }
+}
+
+/// The chain rule through neuron `$i` (see [`q16_times_slope_9`]): δ at r0 + 4·`$i`, a at
+/// r1 + 4·`$i`, the constants in r2 (square·2¹⁶) and r3 (offset·2¹⁴); a value outside the fast
+/// range branches to label 1`$i` (out of line), which marks it in r12 and comes back to 2`$i`.
+macro_rules! slope9 {
+    ($i:literal) => {
+        concat!(
+            "ldr r4, [r0, #(4*",
+            $i,
+            ")]\n",
+            "ldr r5, [r1, #(4*",
+            $i,
+            ")]\n",
+            // |a| ≤ 2: (a + 2·2¹⁶) as u32 ≤ 4·2¹⁶.
+            "add lr, r5, #0x20000\n",
+            "cmp lr, #0x40000\n",
+            "bhi 1",
+            $i,
+            "f\n",
+            // |δ| < 2²⁹: (δ + 2²⁹) as u32 < 2³⁰.
+            "add lr, r4, #0x20000000\n",
+            "cmp lr, #0x40000000\n",
+            "bhs 1",
+            $i,
+            "f\n",
+            // a′·2¹⁴ = offset·2¹⁴ − round(square·2¹⁶ · round((a·2⁸)²/2³²)/2³²)·2¹⁴
+            "lsl r5, r5, #8\n",
+            "smmulr r5, r5, r5\n",
+            "smmulr r5, r5, r2\n",
+            "sub r5, r3, r5, lsl #14\n",
+            // round((δ·2²)·(a′·2¹⁴)/2³²)
+            "lsl r4, r4, #2\n",
+            "smmulr r4, r4, r5\n",
+            "str r4, [r0, #(4*",
+            $i,
+            ")]\n",
+            "2",
+            $i,
+            ":\n",
+        )
+    };
+}
+
+/// The out-of-line branch of [`slope9!`] for neuron `$i`: sets bit `$i` of r12, δ unchanged.
+macro_rules! slope_slow {
+    ($i:literal) => {
+        concat!(
+            "1",
+            $i,
+            ":\n",
+            "orr r12, r12, #(1 << ",
+            $i,
+            ")\n",
+            "b 2",
+            $i,
+            "b\n",
+        )
+    };
+}
+
+/// δᵢ ← round(δᵢ·a′ᵢ/2¹⁶) for the nine neurons of a layer, the slope a′ᵢ computed from the
+/// neuron's output aᵢ as `offset − round(square·round(aᵢ²/2¹⁶)/2¹⁶)` (all in Q16.16 bits,
+/// each round(x·y/2ⁿ) the rounded high word of a `smmulr`) — exactly the core's fast path of
+/// `Scalar::times_slope` for Q16.16, which holds for |aᵢ| ≤ 2 and |δᵢ| < 2¹³. A neuron outside
+/// that range keeps its δ, and its bit (1 << i) is set in the returned mask: the caller
+/// finishes it on the portable (saturating) path. Fifteen instructions per neuron.
+///
+/// `offset` and `square` are the core's constants (a′ = offset − square·a²); with them below
+/// 2¹⁷ and 2¹⁵ in bits, offset·2¹⁴ and square·2¹⁶ fit an `i32` (the caller's are 1.144 and
+/// 0.389).
+#[inline(always)]
+pub fn q16_times_slope_9(
+    delta: &mut [I16F16; 9],
+    a: &[I16F16; 9],
+    offset: i32,
+    square: i32,
+) -> u32 {
+    let slow: u32;
+    // SAFETY: reads the 9 words behind `a` and reads and writes the 9 words behind `delta`
+    // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses no stack and
+    // declares every register it changes.
+    unsafe {
+        asm!(
+            slope9!("0"),
+            slope9!("1"),
+            slope9!("2"),
+            slope9!("3"),
+            slope9!("4"),
+            slope9!("5"),
+            slope9!("6"),
+            slope9!("7"),
+            slope9!("8"),
+            "b 3f",
+            slope_slow!("0"),
+            slope_slow!("1"),
+            slope_slow!("2"),
+            slope_slow!("3"),
+            slope_slow!("4"),
+            slope_slow!("5"),
+            slope_slow!("6"),
+            slope_slow!("7"),
+            slope_slow!("8"),
+            "3:",
+            in("r0") delta.as_mut_ptr(),
+            in("r1") a.as_ptr(),
+            in("r2") square.wrapping_shl(16),
+            in("r3") offset.wrapping_shl(14),
+            out("r4") _,
+            out("r5") _,
+            inout("r12") 0u32 => slow,
+            out("lr") _,
+        );
+    }
+    slow
 }

@@ -2,8 +2,8 @@
 //!
 //! The dense-layer products of `neurosurf-core`'s width-9 implicit modules, written for the
 //! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly, and the Q16.16 transposes
-//! for its integer multiply–accumulate. On every other target this
-//! crate is empty and the core runs its portable loops.
+//! and chain rule for its integer multiply–accumulate. On every other target this crate is
+//! empty and the core runs its portable loops.
 //!
 //! Why assembly: the portable loop compiles to three instructions per multiply–accumulate on the
 //! M4F (`vldr` of the weight, `vmul`, `vadd`), because LLVM neither merges the weight loads into
@@ -61,11 +61,20 @@
 //! |---|---|---:|---:|
 //! | `q16_transposed_9x9` | `round(Wᵀ·g)`, W 9×9 | 81 | 239 |
 //! | `q16_transposed_9x3` | `round(Wᵀ·g)`, W 9×3 | 27 | 83 |
-//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 | 9 | 94 |
+//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 (\|g\| < 2: one `smmulr` each) | 9 | 44 |
+//! | `q16_times_slope_9` | δᵢ ← round(δᵢ·a′(aᵢ)), 9 neurons | (27 products) | 136 |
+//!
+//! `q16_times_slope_9` is the core's `Scalar::times_slope` for Q16.16 on nine neurons: the
+//! slope from the neuron's output and the product, each a rounded high word (`smmulr`), 15
+//! instructions a neuron with the constants in registers. It covers the fast range (|a| ≤ 2,
+//! |δ| < 2¹³) and returns a mask of the neurons outside it, which the core finishes on its
+//! portable saturating path.
 //!
 //! The simulator tests hold the Q16.16 kernels to the host's bits too, including a model built
 //! so that every column of its 9×9 and 9×3 transposes saturates, at both ends (the 1×9
-//! transpose multiplies by one g and cannot saturate within the loader's parameter bound).
+//! transpose multiplies by one g and cannot saturate within the loader's parameter bound), and
+//! a model built so that the chain rule's δ leaves the slope kernel's fast range without
+//! saturating, so its fallback changes the result.
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
@@ -76,7 +85,9 @@ mod fixed_layers;
 mod layers;
 
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-pub use fixed_layers::{q16_transposed_1x9, q16_transposed_9x3, q16_transposed_9x9};
+pub use fixed_layers::{
+    q16_times_slope_9, q16_transposed_1x9, q16_transposed_9x3, q16_transposed_9x9,
+};
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 pub use layers::{
     affine_1x9, affine_9x3, affine_9x9, transposed_1x9, transposed_9x3, transposed_9x9,

@@ -1,8 +1,10 @@
 //! Q16.16's target kernels: on a Cortex-M4F (bare-metal hard-float ARM, the `neurosurf-m4f`
 //! targets), the width-9 transposed products run as the `neurosurf-m4f` assembly (the values of
 //! g in registers, one `ldr` + `smlal` per product, the rounding to Q16.16 per column: the same
-//! bits as the portable loop and `from_acc`); everywhere else there are none. The forward
-//! products have no kernel: the compiler's code is already two instructions per product there.
+//! bits as the portable loop and `from_acc`), and so does the chain rule through a layer's nine
+//! neurons (`times_slope`'s fast path, one `smmulr` per product); everywhere else there are
+//! none. The forward products have no kernel: the compiler's code is already two instructions
+//! per product there.
 
 /// Whether this build has the kernels.
 pub(super) const AVAILABLE: bool = neurosurf_m4f::AVAILABLE;
@@ -30,6 +32,29 @@ pub(super) fn transposed<const IN: usize, const OUT: usize>(
     #[allow(unreachable_code)]
     {
         let _ = (w, g);
+        None
+    }
+}
+
+/// `δᵢ ← times_slope(δᵢ, aᵢ)` for the neurons in the kernel's fast range, when a kernel exists
+/// for `N` neurons: `Some(mask)` of the neurons it left unchanged (outside that range), with
+/// a′ = `offset` − `square`·a² in Q16.16 bits.
+#[inline(always)]
+pub(super) fn times_slope<const N: usize>(
+    delta: &mut [Q16; N],
+    a: &[Q16; N],
+    offset: i32,
+    square: i32,
+) -> Option<u32> {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    {
+        let delta: &mut [Q16; 9] = delta.as_mut_slice().try_into().ok()?;
+        let a: &[Q16; 9] = a.as_slice().try_into().ok()?;
+        return Some(neurosurf_m4f::q16_times_slope_9(delta, a, offset, square));
+    }
+    #[allow(unreachable_code)]
+    {
+        let _ = (delta, a, offset, square);
         None
     }
 }

@@ -220,12 +220,21 @@ pub trait Scalar:
     fn times_slope(delta: Self, a: Self) -> Self {
         delta.mul(Self::activation_slope(a))
     }
+    /// [`Scalar::times_slope`] on every pair `(delta[i], a[i])` by a target kernel, when there
+    /// is one for `N` neurons (Q16.16 on a Cortex-M4F: N = 9); false, with `delta` unchanged,
+    /// means "use the portable loop". The same bits as the portable loop.
+    #[inline(always)]
+    fn times_slope_kernel<const N: usize>(delta: &mut [Self; N], a: &[Self; N]) -> bool {
+        let _ = (delta, a);
+        false
+    }
     /// a″(H), computed from `a = a(H)` and `slope = a′(H)`: a″ = −(4/3)·a·a′/1.7159.
     fn activation_curvature(a: Self, slope: Self) -> Self;
 
     /// Whether this scalar has target kernels on the machine compiled for, for some shapes
-    /// ([`Scalar::affine_kernel`], [`Scalar::transposed_kernel`]; Q16.16 has only the
-    /// transposed ones); the layer loops only ask when it does.
+    /// ([`Scalar::affine_kernel`], [`Scalar::transposed_kernel`],
+    /// [`Scalar::times_slope_kernel`]; Q16.16 has no affine ones); the layer loops only ask
+    /// when it does.
     const TARGET_KERNELS: bool = false;
     /// `b + W·x` (W row-major, one row per output) by a kernel written for the target, when
     /// there is one for this shape; `None` means "use the portable loop". A kernel computes

@@ -240,6 +240,22 @@ impl Scalar for Q16 {
         }
         delta.mul(Self::activation_slope(a))
     }
+    #[inline(always)]
+    fn times_slope_kernel<const N: usize>(delta: &mut [Self; N], a: &[Self; N]) -> bool {
+        let Some(slow) = super::kernels_q16::times_slope(delta, a, SLOPE_OFFSET, SLOPE_SQUARE)
+        else {
+            return false;
+        };
+        // The kernel leaves the values outside its fast range to the portable path.
+        if slow != 0 {
+            for (i, (d, &a)) in delta.iter_mut().zip(a).enumerate() {
+                if slow.checked_shr(i as u32).unwrap_or(0) & 1 != 0 {
+                    *d = Self::times_slope(*d, a);
+                }
+            }
+        }
+        true
+    }
     #[inline]
     fn activation_curvature(a: Self, slope: Self) -> Self {
         Q16::from_bits(CURVATURE).mul(a).mul(slope).neg()
