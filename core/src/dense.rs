@@ -75,6 +75,15 @@ fn forward_by_kernel<S: Scalar, const L: usize, const OUT: usize>(
     biases: &[S],
     x: &[[S; L]],
 ) -> Option<[[S; L]; OUT]> {
+    let layer = match x.len() {
+        3 => layer_kernel::<S, 3, OUT>(weights, biases, x.as_flattened()),
+        9 => layer_kernel::<S, 9, OUT>(weights, biases, x.as_flattened()),
+        _ => None,
+    };
+    if let Some(layer) = layer {
+        let mut out = unwritten::<S, L, OUT>();
+        return fill(&mut out, layer).then_some(out);
+    }
     let acc = match x.len() {
         3 => affine_kernel::<S, 3, OUT>(weights, biases, x.as_flattened())?,
         9 => affine_kernel::<S, 9, OUT>(weights, biases, x.as_flattened())?,
@@ -94,6 +103,20 @@ fn activate<S: Scalar, const L: usize>(out: &mut [[S; L]], acc: &[S::Acc]) {
     for (out, &acc) in out.iter_mut().zip(acc) {
         *out = [S::activation_from_acc(acc); L];
     }
+}
+
+/// [`Scalar::layer_kernel`] on slices of exactly the shape `(OUT, IN)`.
+#[inline(always)]
+fn layer_kernel<S: Scalar, const IN: usize, const OUT: usize>(
+    weights: &[S],
+    biases: &[S],
+    x: &[S],
+) -> Option<[S; OUT]> {
+    let (rows, _) = weights.as_chunks::<IN>();
+    if rows.len() != OUT || biases.len() != OUT || x.len() != IN {
+        return None;
+    }
+    S::layer_kernel::<IN, OUT>(rows.first_chunk()?, biases.first_chunk()?, x.first_chunk()?)
 }
 
 /// [`Scalar::affine_kernel`] on slices of exactly the shape `(OUT, IN)`.

@@ -413,3 +413,274 @@ pub fn q16_times_slope_9(
     }
     slow
 }
+
+/// Row `$j` of a forward layer over nine inputs (x in r0–r8, biases at r11, weights at r12
+/// with a row stride of 36 bytes): H = bias + Σᵢ W[j][i]·xᵢ in r10:r9 (Q32.32, in order), then
+/// [`pre_activation!`].
+macro_rules! layer_row9 {
+    ($j:literal) => {
+        concat!(
+            "ldr r10, [r11, #(4*",
+            $j,
+            ")]\n",
+            "lsl r9, r10, #16\n",
+            "asr r10, r10, #16\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            ")]\n",
+            "smlal r9, r10, lr, r0\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 4)]\n",
+            "smlal r9, r10, lr, r1\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 8)]\n",
+            "smlal r9, r10, lr, r2\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 12)]\n",
+            "smlal r9, r10, lr, r3\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 16)]\n",
+            "smlal r9, r10, lr, r4\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 20)]\n",
+            "smlal r9, r10, lr, r5\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 24)]\n",
+            "smlal r9, r10, lr, r6\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 28)]\n",
+            "smlal r9, r10, lr, r7\n",
+            "ldr lr, [r12, #(36*",
+            $j,
+            " + 32)]\n",
+            "smlal r9, r10, lr, r8\n",
+            pre_activation!($j),
+        )
+    };
+}
+
+/// Row `$j` of a forward layer over three inputs (x in r0–r2), as [`layer_row9!`] with a row
+/// stride of 12 bytes.
+macro_rules! layer_row3 {
+    ($j:literal) => {
+        concat!(
+            "ldr r10, [r11, #(4*",
+            $j,
+            ")]\n",
+            "lsl r9, r10, #16\n",
+            "asr r10, r10, #16\n",
+            "ldr lr, [r12, #(12*",
+            $j,
+            ")]\n",
+            "smlal r9, r10, lr, r0\n",
+            "ldr lr, [r12, #(12*",
+            $j,
+            " + 4)]\n",
+            "smlal r9, r10, lr, r1\n",
+            "ldr lr, [r12, #(12*",
+            $j,
+            " + 8)]\n",
+            "smlal r9, r10, lr, r2\n",
+            pre_activation!($j),
+        )
+    };
+}
+
+/// Rounds row `$j`'s accumulator r10:r9 for the activation and stores it at sp + 4·`$j`: H in
+/// Q16.16 bits when the rounded high word lies in [−10, 10) (then H fits 32 bits and |H| < 16),
+/// else ±10 (label 1`$j`, out of line), where the table has saturated: both give
+/// `activation_from_acc`'s value in the second pass ([`activation!`]).
+macro_rules! pre_activation {
+    ($j:literal) => {
+        concat!(
+            "adds r9, r9, #0x8000\n",
+            "adc r10, r10, #0\n",
+            "add lr, r10, #10\n",
+            "cmp lr, #20\n",
+            "bhs 1",
+            $j,
+            "f\n",
+            "lsr r9, r9, #16\n",
+            "orr r9, r9, r10, lsl #16\n",
+            "2",
+            $j,
+            ":\n",
+            "str r9, [sp, #(4*",
+            $j,
+            ")]\n",
+        )
+    };
+}
+
+/// The out-of-line branch of [`pre_activation!`] for row `$j`: ±10 in Q16.16 bits, the sign
+/// of the high word r10.
+macro_rules! saturated_pre_activation {
+    ($j:literal) => {
+        concat!(
+            "1",
+            $j,
+            ":\n",
+            "mov r9, #0xa0000\n",
+            "cmp r10, #0\n",
+            "it lt\n",
+            "rsblt r9, r9, #0\n",
+            "b 2",
+            $j,
+            "b\n",
+        )
+    };
+}
+
+/// Output `$j` = a(H) for the H at sp + 4·`$j`: the table (at r3) entry below |H| interpolated
+/// linearly towards the next (index |H| >> 10, fraction |H| & 1023), the sign restored;
+/// stored at r2 + 4·`$j`.
+macro_rules! activation {
+    ($j:literal) => {
+        concat!(
+            "ldr r0, [sp, #(4*",
+            $j,
+            ")]\n",
+            "eor r1, r0, r0, asr #31\n",
+            "sub r1, r1, r0, asr #31\n",
+            "ubfx r4, r1, #10, #10\n",
+            "add r4, r3, r4, lsl #2\n",
+            "ldrd r4, r5, [r4]\n",
+            "ubfx r1, r1, #0, #10\n",
+            "sub r5, r5, r4\n",
+            "mul r5, r5, r1\n",
+            "add r5, r5, #512\n",
+            "add r4, r4, r5, asr #10\n",
+            "eor r4, r4, r0, asr #31\n",
+            "sub r4, r4, r0, asr #31\n",
+            "str r4, [r2, #(4*",
+            $j,
+            ")]\n",
+        )
+    };
+}
+
+/// A whole forward layer of nine outputs: the rows (`$row!`, inputs loaded by `$load`) into
+/// the nine pre-activations on the stack, then their activations through the table.
+macro_rules! layer9 {
+    ($row:ident, $load:literal, $w:expr, $b:expr, $x:expr, $out:expr, $table:expr) => {
+        asm!(
+            // r2 (out) and r3 (table) are saved for the second pass; 24 + 40 bytes keep sp
+            // 8-byte aligned.
+            "push {{r2, r3, r6, r7, r11, lr}}",
+            "sub sp, sp, #40",
+            "mov r11, r1",
+            $load,
+            $row!("0"),
+            $row!("1"),
+            $row!("2"),
+            $row!("3"),
+            $row!("4"),
+            $row!("5"),
+            $row!("6"),
+            $row!("7"),
+            $row!("8"),
+            "ldr r2, [sp, #40]",
+            "ldr r3, [sp, #44]",
+            activation!("0"),
+            activation!("1"),
+            activation!("2"),
+            activation!("3"),
+            activation!("4"),
+            activation!("5"),
+            activation!("6"),
+            activation!("7"),
+            activation!("8"),
+            "b 3f",
+            saturated_pre_activation!("0"),
+            saturated_pre_activation!("1"),
+            saturated_pre_activation!("2"),
+            saturated_pre_activation!("3"),
+            saturated_pre_activation!("4"),
+            saturated_pre_activation!("5"),
+            saturated_pre_activation!("6"),
+            saturated_pre_activation!("7"),
+            saturated_pre_activation!("8"),
+            "3:",
+            "add sp, sp, #40",
+            "pop {{r2, r3, r6, r7, r11, lr}}",
+            inout("r0") $x => _,
+            inout("r1") $b => _,
+            inout("r2") $out => _,
+            inout("r3") $table => _,
+            out("r4") _,
+            out("r5") _,
+            out("r8") _,
+            out("r9") _,
+            out("r10") _,
+            in("r12") $w,
+            out("lr") _,
+        )
+    };
+}
+
+/// The activation table's layout that [`q16_layer_9x9`] and [`q16_layer_9x3`] read: a(H) in
+/// Q16.16 bits at H = k/64 for k = 0 … 1024 (padded with a(10) from k = 640 on).
+pub type ActivationTable = [i32; 1025];
+
+/// A forward layer of nine outputs on nine inputs in Q16.16: output j is the core's
+/// `activation_from_acc(to_acc(bⱼ) + Σᵢ W[j][i]·xᵢ)` with `table` the core's activation
+/// table — the accumulation exact in 64 bits, rounded once, then the table entry below |H|
+/// interpolated towards the next; |H| ≥ 10 gives the saturated entry.
+#[inline(always)]
+pub fn q16_layer_9x9(
+    w: &[[I16F16; 9]; 9],
+    b: &[I16F16; 9],
+    x: &[I16F16; 9],
+    table: &ActivationTable,
+) -> [I16F16; 9] {
+    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
+    // SAFETY: reads the 81 words behind `w`, the 9 behind `b` and `x` and, at indices below
+    // 1 024 + 1 (the index is masked to 10 bits), the table; writes the 9 words of `out`
+    // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses 64 bytes of
+    // stack (saving r6, r7, r11 and lr there), keeps it 8-byte aligned, and declares every
+    // other register it changes.
+    unsafe {
+        layer9!(
+            layer_row9,
+            "ldm r0, {{r0-r8}}",
+            w.as_ptr(),
+            b.as_ptr(),
+            x.as_ptr(),
+            out.as_mut_ptr(),
+            table.as_ptr()
+        );
+        out.assume_init()
+    }
+}
+
+/// A forward layer of nine outputs on three inputs (a leaf's first layer), as
+/// [`q16_layer_9x9`].
+#[inline(always)]
+pub fn q16_layer_9x3(
+    w: &[[I16F16; 3]; 9],
+    b: &[I16F16; 9],
+    x: &[I16F16; 3],
+    table: &ActivationTable,
+) -> [I16F16; 9] {
+    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
+    // SAFETY: as `q16_layer_9x9`, over the 27 words behind `w` and the 3 behind `x`.
+    unsafe {
+        layer9!(
+            layer_row3,
+            "ldm r0, {{r0-r2}}",
+            w.as_ptr(),
+            b.as_ptr(),
+            x.as_ptr(),
+            out.as_mut_ptr(),
+            table.as_ptr()
+        );
+        out.assume_init()
+    }
+}

@@ -1,8 +1,8 @@
 //! # neurosurf-m4f
 //!
 //! The dense-layer products of `neurosurf-core`'s width-9 implicit modules, written for the
-//! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly, and the Q16.16 transposes
-//! and chain rule for its integer multiply–accumulate. On every other target this crate is
+//! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly, and the Q16.16 hidden layers,
+//! transposes and chain rule for its integer multiply–accumulate. On every other target this crate is
 //! empty and the core runs its portable loops.
 //!
 //! Why assembly: the portable loop compiles to three instructions per multiply–accumulate on the
@@ -29,8 +29,10 @@
 //! pops 88–112 bytes of stack, restores every FPU register it uses, and changes only the FPSCR's
 //! sticky exception flags (so no block claims `preserves_flags`). The Q16.16 blocks declare every
 //! general register they change, save r6, r7 and r11 (which Rust does not let them declare on
-//! every ARM target) with lr on the stack for their duration, and change the APSR flags. That is the whole unsafe surface, in two
-//! modules.
+//! every ARM target) with lr on the stack for their duration (the layer kernels also keep their
+//! nine pre-activations in 40 bytes below them, sp staying 8-byte aligned), and change the APSR
+//! flags; `q16_times_slope_9` updates its `&mut` array in place and uses no stack. That is the
+//! whole unsafe surface, in two modules.
 //!
 //! The kernels are compiled for bare-metal hard-float ARM (`target_arch = "arm"`,
 //! `target_abi = "eabihf"`, `target_os = "none"`: the Cortex-M4F/M7 targets); their bits are
@@ -53,9 +55,11 @@
 //! backward pass does with each of them. The nine values of g sit in r0–r8, so each product is
 //! one `ldr` of the weight at a constant offset and one `smull` / `smlal` into a 64-bit
 //! accumulator (exact: the same sum as the portable `i64` loop), and a column's rounding is six
-//! instructions with its saturation out of line. The forward products have no kernel: the
-//! compiler's code is already two instructions per product there (a 64-bit accumulator leaves
-//! too few registers to hold a layer's inputs either way).
+//! instructions with its saturation out of line. The two hidden forward layers are whole
+//! kernels (`q16_layer_9x9`, `q16_layer_9x3`): the inputs in r0–r8, each row its bias, `ldr` +
+//! `smlal` per product, the rounding and a clamp to ±10 (where the table has saturated) onto
+//! the stack; then each neuron's table interpolation with the constants in registers, 14
+//! instructions — exactly the core's `activation_from_acc`.
 //!
 //! | function | computes | multiply–accumulates | instructions |
 //! |---|---|---:|---:|
@@ -63,6 +67,8 @@
 //! | `q16_transposed_9x3` | `round(Wᵀ·g)`, W 9×3 | 27 | 83 |
 //! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 (\|g\| < 2: one `smmulr` each) | 9 | 44 |
 //! | `q16_times_slope_9` | δᵢ ← round(δᵢ·a′(aᵢ)), 9 neurons | (27 products) | 136 |
+//! | `q16_layer_9x9` | a(b + W·x), W 9×9 | 81 | 395 |
+//! | `q16_layer_9x3` | a(b + W·x), W 9×3 | 27 | 287 |
 //!
 //! `q16_times_slope_9` is the core's `Scalar::times_slope` for Q16.16 on nine neurons: the
 //! slope from the neuron's output and the product, each a rounded high word (`smmulr`), 15
@@ -86,7 +92,8 @@ mod layers;
 
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 pub use fixed_layers::{
-    q16_times_slope_9, q16_transposed_1x9, q16_transposed_9x3, q16_transposed_9x9,
+    ActivationTable, q16_layer_9x3, q16_layer_9x9, q16_times_slope_9, q16_transposed_1x9,
+    q16_transposed_9x3, q16_transposed_9x9,
 };
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 pub use layers::{

@@ -2,9 +2,9 @@
 //! targets), the width-9 transposed products run as the `neurosurf-m4f` assembly (the values of
 //! g in registers, one `ldr` + `smlal` per product, the rounding to Q16.16 per column: the same
 //! bits as the portable loop and `from_acc`), and so does the chain rule through a layer's nine
-//! neurons (`times_slope`'s fast path, one `smmulr` per product); everywhere else there are
-//! none. The forward products have no kernel: the compiler's code is already two instructions
-//! per product there.
+//! neurons (`times_slope`'s fast path, one `smmulr` per product) and the two hidden forward
+//! layers (products, rounding and table lookup in one kernel each); everywhere else there are
+//! none.
 
 /// Whether this build has the kernels.
 pub(super) const AVAILABLE: bool = neurosurf_m4f::AVAILABLE;
@@ -55,6 +55,34 @@ pub(super) fn times_slope<const N: usize>(
     #[allow(unreachable_code)]
     {
         let _ = (delta, a, offset, square);
+        None
+    }
+}
+
+/// A forward layer, `activation_from_acc(to_acc(bⱼ) + Σᵢ W[j][i]·xᵢ)` per output, when a kernel
+/// exists for `(OUT, IN)`; `table` is the activation table.
+#[inline(always)]
+pub(super) fn layer<const IN: usize, const OUT: usize>(
+    w: &[[Q16; IN]; OUT],
+    b: &[Q16; OUT],
+    x: &[Q16; IN],
+    table: &[i32; 1025],
+) -> Option<[Q16; OUT]> {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    {
+        use super::kernel_shapes::{resize, rows};
+        use neurosurf_m4f as m4f;
+        let w = w.as_flattened();
+        let b = b.first_chunk()?;
+        return match (OUT, IN) {
+            (9, 9) => resize(m4f::q16_layer_9x9(rows(w)?, b, x.first_chunk()?, table)),
+            (9, 3) => resize(m4f::q16_layer_9x3(rows(w)?, b, x.first_chunk()?, table)),
+            _ => None,
+        };
+    }
+    #[allow(unreachable_code)]
+    {
+        let _ = (w, b, x, table);
         None
     }
 }

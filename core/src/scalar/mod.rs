@@ -232,9 +232,8 @@ pub trait Scalar:
     fn activation_curvature(a: Self, slope: Self) -> Self;
 
     /// Whether this scalar has target kernels on the machine compiled for, for some shapes
-    /// ([`Scalar::affine_kernel`], [`Scalar::transposed_kernel`],
-    /// [`Scalar::times_slope_kernel`]; Q16.16 has no affine ones); the layer loops only ask
-    /// when it does.
+    /// ([`Scalar::affine_kernel`], [`Scalar::layer_kernel`], [`Scalar::transposed_kernel`],
+    /// [`Scalar::times_slope_kernel`]); the layer loops only ask when it does.
     const TARGET_KERNELS: bool = false;
     /// `b + W·x` (W row-major, one row per output) by a kernel written for the target, when
     /// there is one for this shape; `None` means "use the portable loop". A kernel computes
@@ -247,6 +246,20 @@ pub trait Scalar:
         b: &[Self; OUT],
         x: &[Self; IN],
     ) -> Option<[Self::Acc; OUT]> {
+        let _ = (w, b, x);
+        None
+    }
+    /// A whole forward layer by a target kernel, when there is one for this shape: output j is
+    /// [`Scalar::activation_from_acc`] of the accumulation [`Scalar::affine_kernel`] describes,
+    /// bit for bit; `None` means "use `affine_kernel` or the portable loop". (Q16.16 on a
+    /// Cortex-M4F: the width-9 hidden layers, whose rounding and table lookup the kernel does
+    /// too.)
+    #[inline(always)]
+    fn layer_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        b: &[Self; OUT],
+        x: &[Self; IN],
+    ) -> Option<[Self; OUT]> {
         let _ = (w, b, x);
         None
     }

@@ -263,6 +263,14 @@ impl Scalar for Q16 {
 
     const TARGET_KERNELS: bool = super::kernels_q16::AVAILABLE;
     #[inline(always)]
+    fn layer_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Q16; IN]; OUT],
+        b: &[Q16; OUT],
+        x: &[Q16; IN],
+    ) -> Option<[Q16; OUT]> {
+        super::kernels_q16::layer(w, b, x, &TABLE)
+    }
+    #[inline(always)]
     fn transposed_kernel<const IN: usize, const OUT: usize>(
         w: &[[Q16; IN]; OUT],
         g: &[Q16; OUT],
