@@ -98,7 +98,6 @@ fn angle_degrees(a: [f64; 3], b: [f64; 3]) -> f64 {
         .to_degrees()
 }
 
-/// Every value's bits, so that +0.0 and −0.0 differ.
 /// Runs the Q16.16 blob `bytes` at `points` on the target, in batches and point by point, and
 /// requires the host's `expected` samples bit for bit.
 fn assert_q16_target_equals(bytes: &[u8], points: &[[f64; 3]], expected: &[Sample]) {
@@ -113,6 +112,7 @@ fn assert_q16_target_equals(bytes: &[u8], points: &[[f64; 3]], expected: &[Sampl
     }
 }
 
+/// Every value's bits, so that +0.0 and −0.0 differ.
 fn sample_bits(samples: &[(f64, [f64; 3])]) -> Vec<[u64; 4]> {
     samples
         .iter()
@@ -183,9 +183,10 @@ fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
 /// Q16.16's ±32 768, and saturates at the end its sign picks — both ends, alternating by
 /// column; the first layer's transpose (about ±2.9·10⁸) then saturates at both ends too. (The
 /// 1×9 output transpose multiplies by one slope and cannot.) Points that round to another Q16.16
-/// value than the centre's saturate the activations instead, which covers the table's ends.
-/// Checked once by breaking the kernels' saturated value (`eor … lsr` for `asr`): this test
-/// then fails.
+/// value than the centre's saturate the second layer's activations instead (the forward
+/// kernel's clamp to ±10, which covers the table's ends), and points 0.05–0.2 away saturate the
+/// first layer's too. Checked once by breaking the transposes' saturated value (`eor … lsr` for
+/// `asr`) and once by flipping the clamp's sign: this test then fails.
 #[test]
 fn q16_kernels_saturate_like_the_host() {
     let mut trained = torus();
@@ -213,11 +214,12 @@ fn q16_kernels_saturate_like_the_host() {
     }
     params[layout.out_bias] = 0.0;
     let bytes = blob(&trained, ScalarKind::Q16_16);
+    // Sixteen points at the centre and next to it, and four farther out, where the first
+    // layer's pre-activations (about 1000·x′) are beyond ±10 too: its clamp runs as well.
     let points: Vec<[f64; 3]> = (0..16)
-        .map(|k| {
-            let step = f64::from(k) * 1e-6;
-            [center[0] + step, center[1] - step, center[2] + 0.5 * step]
-        })
+        .map(|k| f64::from(k) * 1e-6)
+        .chain((1..=4).map(|k| f64::from(k) * 0.05))
+        .map(|step| [center[0] + step, center[1] - step, center[2] + 0.5 * step])
         .collect();
     let expected = host(&bytes, &points, Precision::Q16);
     // A sanity check that the centre is where the construction puts it: f64, which does not
@@ -237,12 +239,13 @@ fn q16_kernels_saturate_like_the_host() {
 /// The Q16.16 slope kernel's fallback (`times_slope` for nine neurons, which leaves |δ| ≥ 2¹³
 /// to the portable saturating path), on the target against the host: a torus leaf whose first
 /// layer has tiny weights (±0.01 by row) and equal biases (0.5), so at the box centre all nine
-/// a-outputs are equal (a(0.5) ≈ 0.55, slope ≈ 1.03); layer b's rows alternate ±1000 over
-/// eight inputs and 0 on the ninth, so they cancel on equal inputs (H_b = 0, slope 1.144) while
-/// their columns add nine δ_b ≈ 1.31 to about ±11 800: above the fast range, below
-/// saturation, so the fallback changes δ (to about ±12 100) and the first layer's transpose
-/// (the rows' ±0.01 follow the columns' signs) carries it into ∇Φ. Checked once by dropping
-/// the fallback (the kernel's unchanged δ kept): this test then fails.
+/// a-outputs are equal (a(0.5) ≈ 0.55, slope ≈ 1.03); layer b's rows are
+/// (+1000, −1000, …, +1000, −500, −500), which cancel on equal inputs (H_b = 0, slope 1.144),
+/// while the output weights of 2 make every δ_b ≈ 2.62 and the columns add nine of them to
+/// about ±23 600 (columns 0–6) and −11 800 (columns 7 and 8): all nine above the fast range,
+/// below saturation, so the fallback changes every δ (by the slope 1.03) and the first layer's
+/// transpose carries it into ∇Φ. Checked once by dropping the fallback (the kernel's unchanged
+/// δ kept), and once by widening the kernel's δ range: this test then fails.
 #[test]
 fn q16_slope_kernel_falls_back_like_the_host() {
     let mut trained = torus();
@@ -253,12 +256,12 @@ fn q16_slope_kernel_falls_back_like_the_host() {
     let width = layout.width;
     let alternate = |k: usize| if k.is_multiple_of(2) { 1.0 } else { -1.0 };
     for j in 0..width {
-        params[layout.out_weights + j] = 1.0;
+        params[layout.out_weights + j] = 2.0;
         for i in 0..width {
-            params[layout.b_weights + j * width + i] = if i + 1 < width {
+            params[layout.b_weights + j * width + i] = if i + 2 < width {
                 1000.0 * alternate(i)
             } else {
-                0.0
+                -500.0
             };
         }
         for i in 0..layout.inputs {
@@ -271,8 +274,8 @@ fn q16_slope_kernel_falls_back_like_the_host() {
     let bytes = blob(&trained, ScalarKind::Q16_16);
     let points = vec![center; 4];
     let expected = host(&bytes, &points, Precision::Q16);
-    // The construction's premise: a gradient of the size the fallback's δ gives (8 rows of
-    // 0.01 × about 12 100 per coordinate).
+    // The construction's premise: a gradient of the size the fallback's δ gives (rows of
+    // 0.01 × about 24 000 per coordinate).
     let length = expected[0].1.iter().map(|c| c * c).sum::<f64>().sqrt();
     assert!(length > 100.0, "|∇Φ| {length}: the fallback is not reached");
     assert_q16_target_equals(&bytes, &points, &expected);

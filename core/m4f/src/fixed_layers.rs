@@ -1,17 +1,23 @@
-//! The Q16.16 transposed kernels (see the crate docs): `Wᵀ·g` column by column with the
-//! nine (or one) values of g held in general registers, one `ldr` of a weight and one `smull` /
-//! `smlal` per product, and the core's rounding to Q16.16 (add 2¹⁵, shift by 16, saturate) at
-//! the end of each column, so that what comes back is exactly what the portable loop followed
-//! by `Scalar::from_acc` gives.
+//! The Q16.16 kernels (see the crate docs), each exactly the core's portable code for its
+//! shape:
 //!
-//! The columns are unrolled: the weights are read at constant offsets from one base, and the
-//! only branch is to the out-of-line saturation of a column whose sum leaves the Q16.16 range.
+//! - the transposes `Wᵀ·g`, column by column with the nine (or one) values of g held in general
+//!   registers, one `ldr` of a weight and one `smull` / `smlal` per product, and the core's
+//!   rounding to Q16.16 (add 2¹⁵, shift by 16, saturate) at the end of each column — what the
+//!   portable loop followed by `Scalar::from_acc` gives;
+//! - the chain rule δ·a′ through nine neurons (`Scalar::times_slope`'s fast path, `smmulr`);
+//! - the two hidden forward layers: the inputs in registers, the weights read two (or three) at
+//!   a time by `ldm`, each row rounded once and clamped for the activation table, then the
+//!   table interpolation (`Scalar::activation_from_acc`).
+//!
+//! Everything is unrolled; the branches go to out-of-line code (a saturated column, a
+//! saturated pre-activation, a neuron outside the chain rule's fast range) and straight back.
 //! The 9-row blocks save and restore r6, r7 and r11 themselves (`push` / `pop`, with lr to
 //! keep the stack 8-byte aligned): Rust refuses r6 and the frame pointer (r7 in Thumb code, r11
-//! in ARM code) as operands or clobbers, and the nine values of g and the output pointer need
-//! them. Nothing inside reads memory through them. While a block runs, r7 holds a value of g,
-//! so a debugger's backtrace taken inside a kernel (which follows the frame pointer) is wrong;
-//! it is right again after the block. r9 is used as an ordinary register: targets that reserve
+//! in ARM code) as operands or clobbers, and the nine values of g (or x) and a pointer or a
+//! weight need them. Nothing inside reads memory through r7 or r11 as a frame pointer. While a
+//! block runs, r7 holds a value of g or x, so a debugger's backtrace taken inside a kernel
+//! (which follows the frame pointer) is wrong; it is right again after the block. r9 is used as an ordinary register: targets that reserve
 //! it (the RWPI relocation model) do not build this crate.
 #![allow(unsafe_code)]
 
@@ -268,12 +274,14 @@ macro_rules! transposed_row1 {
 /// `wᵀ·g` for one row of nine weights and one g in Q16.16, rounded: output i is
 /// `from_acc(0 + wᵢ·g)`, for weights within the core's parameter bound |wᵢ| ≤ 1024 (2²⁶ in
 /// bits; the model loader rejects larger ones). Larger weights give an unspecified value (no
-/// undefined behaviour) when |g| < 2.
+/// undefined behaviour) when −2 ≤ g < 2.
 ///
-/// For |g| < 2 (the caller's g is a slope a′, at most 1.144) each output is one `smmulr`:
-/// with |wᵢ| ≤ 2²⁶ and |g| < 2¹⁷ in bits, (wᵢ·2⁴)·(g·2¹²) fits the multiplier's operands, the
-/// rounded high word is (wᵢ·g + 2¹⁵) >> 16 exactly, and it cannot saturate (|wᵢ·g| < 2⁴³).
-/// Other g take the 64-bit product with the full rounding and saturation.
+/// For −2 ≤ g < 2 (the caller's g is a slope a′, between −3·10⁻⁵ and 1.144) each output is
+/// one `smmulr`: with |wᵢ| ≤ 2²⁶ and −2¹⁷ ≤ g < 2¹⁷ in bits, (wᵢ·2⁴)·(g·2¹²) fits the
+/// multiplier's operands, the rounded high word is (wᵢ·g + 2¹⁵) >> 16 exactly, and it cannot
+/// saturate (|wᵢ·g| ≤ 2⁴³). Other g take the 64-bit product with the full rounding and
+/// saturation; the core never passes one, so no test reaches that branch (it is the previous
+/// kernel's code, which the simulator tests held to the host's bits).
 #[inline(always)]
 pub fn q16_transposed_1x9(w: &[I16F16; 9], g: I16F16) -> [I16F16; 9] {
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
@@ -311,15 +319,14 @@ macro_rules! slope9 {
             "ldr r5, [r1, #(4*",
             $i,
             ")]\n",
-            // |a| ≤ 2: (a + 2·2¹⁶) as u32 ≤ 4·2¹⁶.
+            // −2 ≤ a < 2 and |δ| < 2²⁹ bits at once: (a + 2¹⁷) as u32 < 2¹⁸ and
+            // (δ + 2²⁹) as u32 < 2³⁰ exactly when their OR, the second shifted right by 12,
+            // is below 2¹⁸. (a = 2 exactly goes out of line: the fallback gives the same
+            // bits, conservatively.)
             "add lr, r5, #0x20000\n",
+            "add r8, r4, #0x20000000\n",
+            "orr lr, lr, r8, lsr #12\n",
             "cmp lr, #0x40000\n",
-            "bhi 1",
-            $i,
-            "f\n",
-            // |δ| < 2²⁹: (δ + 2²⁹) as u32 < 2³⁰.
-            "add lr, r4, #0x20000000\n",
-            "cmp lr, #0x40000000\n",
             "bhs 1",
             $i,
             "f\n",
@@ -361,9 +368,11 @@ macro_rules! slope_slow {
 /// δᵢ ← round(δᵢ·a′ᵢ/2¹⁶) for the nine neurons of a layer, the slope a′ᵢ computed from the
 /// neuron's output aᵢ as `offset − round(square·round(aᵢ²/2¹⁶)/2¹⁶)` (all in Q16.16 bits,
 /// each round(x·y/2ⁿ) the rounded high word of a `smmulr`) — exactly the core's fast path of
-/// `Scalar::times_slope` for Q16.16, which holds for |aᵢ| ≤ 2 and |δᵢ| < 2¹³. A neuron outside
-/// that range keeps its δ, and its bit (1 << i) is set in the returned mask: the caller
-/// finishes it on the portable (saturating) path. Fifteen instructions per neuron.
+/// `Scalar::times_slope` for Q16.16, which holds for −2 ≤ aᵢ ≤ 2 and −2¹³ ≤ δᵢ < 2¹³; the
+/// kernel takes it for −2 ≤ aᵢ < 2 and the same δᵢ. A neuron outside that range keeps its δ, and its bit
+/// (1 << i) is set in the returned mask: the caller finishes it on the portable (saturating)
+/// path, which gives the fast path's bits wherever that holds. Fourteen instructions per
+/// neuron.
 ///
 /// `offset` and `square` are the core's constants (a′ = offset − square·a²); with them below
 /// 2¹⁷ and 2¹⁵ in bits, offset·2¹⁴ and square·2¹⁶ fit an `i32` (the caller's are 1.144 and
@@ -407,87 +416,59 @@ pub fn q16_times_slope_9(
             in("r3") offset.wrapping_shl(14),
             out("r4") _,
             out("r5") _,
+            out("r8") _,
             inout("r12") 0u32 => slow,
             out("lr") _,
+            options(nostack),
         );
     }
     slow
 }
 
-/// Row `$j` of a forward layer over nine inputs (x in r0–r8, biases at r11, weights at r12
-/// with a row stride of 36 bytes): H = bias + Σᵢ W[j][i]·xᵢ in r10:r9 (Q32.32, in order), then
-/// [`pre_activation!`].
+/// Row `$j` of a forward layer over nine inputs (x in r0–r8, the row's bias at sp + 4·`$j`,
+/// the weights read in order from r12, two at a time): H = bias + Σᵢ W[j][i]·xᵢ in r10:r9
+/// (Q32.32, in order), then [`pre_activation!`].
 macro_rules! layer_row9 {
     ($j:literal) => {
         concat!(
-            "ldr r10, [r11, #(4*",
+            "ldr r10, [sp, #(4*",
             $j,
             ")]\n",
             "lsl r9, r10, #16\n",
             "asr r10, r10, #16\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            ")]\n",
-            "smlal r9, r10, lr, r0\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 4)]\n",
+            "ldm r12!, {{r11, lr}}\n",
+            "smlal r9, r10, r11, r0\n",
             "smlal r9, r10, lr, r1\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 8)]\n",
-            "smlal r9, r10, lr, r2\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 12)]\n",
+            "ldm r12!, {{r11, lr}}\n",
+            "smlal r9, r10, r11, r2\n",
             "smlal r9, r10, lr, r3\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 16)]\n",
-            "smlal r9, r10, lr, r4\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 20)]\n",
+            "ldm r12!, {{r11, lr}}\n",
+            "smlal r9, r10, r11, r4\n",
             "smlal r9, r10, lr, r5\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 24)]\n",
-            "smlal r9, r10, lr, r6\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 28)]\n",
+            "ldm r12!, {{r11, lr}}\n",
+            "smlal r9, r10, r11, r6\n",
             "smlal r9, r10, lr, r7\n",
-            "ldr lr, [r12, #(36*",
-            $j,
-            " + 32)]\n",
+            "ldr lr, [r12], #4\n",
             "smlal r9, r10, lr, r8\n",
             pre_activation!($j),
         )
     };
 }
 
-/// Row `$j` of a forward layer over three inputs (x in r0–r2), as [`layer_row9!`] with a row
-/// stride of 12 bytes.
+/// Row `$j` of a forward layer over three inputs (x in r0–r2, the row's three weights read
+/// from r12 by one `ldm`), as [`layer_row9!`].
 macro_rules! layer_row3 {
     ($j:literal) => {
         concat!(
-            "ldr r10, [r11, #(4*",
+            "ldr r10, [sp, #(4*",
             $j,
             ")]\n",
             "lsl r9, r10, #16\n",
             "asr r10, r10, #16\n",
-            "ldr lr, [r12, #(12*",
-            $j,
-            ")]\n",
-            "smlal r9, r10, lr, r0\n",
-            "ldr lr, [r12, #(12*",
-            $j,
-            " + 4)]\n",
-            "smlal r9, r10, lr, r1\n",
-            "ldr lr, [r12, #(12*",
-            $j,
-            " + 8)]\n",
-            "smlal r9, r10, lr, r2\n",
+            "ldm r12!, {{r4, r5, r6}}\n",
+            "smlal r9, r10, r4, r0\n",
+            "smlal r9, r10, r5, r1\n",
+            "smlal r9, r10, r6, r2\n",
             pre_activation!($j),
         )
     };
@@ -575,7 +556,10 @@ macro_rules! layer9 {
             // 8-byte aligned.
             "push {{r2, r3, r6, r7, r11, lr}}",
             "sub sp, sp, #40",
-            "mov r11, r1",
+            // The biases go where the rows' pre-activations will be: row j reads slot j,
+            // then overwrites it.
+            "ldm r1, {{r2-r10}}",
+            "stm sp, {{r2-r10}}",
             $load,
             $row!("0"),
             $row!("1"),
@@ -619,7 +603,7 @@ macro_rules! layer9 {
             out("r8") _,
             out("r9") _,
             out("r10") _,
-            in("r12") $w,
+            inout("r12") $w => _,
             out("lr") _,
         )
     };
@@ -644,8 +628,8 @@ pub fn q16_layer_9x9(
     // SAFETY: reads the 81 words behind `w`, the 9 behind `b` and `x` and, at indices below
     // 1 024 + 1 (the index is masked to 10 bits), the table; writes the 9 words of `out`
     // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses 64 bytes of
-    // stack (saving r6, r7, r11 and lr there), keeps it 8-byte aligned, and declares every
-    // other register it changes.
+    // stack (saving r2, r3, r6, r7, r11 and lr there, the nine pre-activations below them),
+    // keeps it 8-byte aligned, and declares every other register it changes.
     unsafe {
         layer9!(
             layer_row9,

@@ -56,25 +56,26 @@
 //! one `ldr` of the weight at a constant offset and one `smull` / `smlal` into a 64-bit
 //! accumulator (exact: the same sum as the portable `i64` loop), and a column's rounding is six
 //! instructions with its saturation out of line. The two hidden forward layers are whole
-//! kernels (`q16_layer_9x9`, `q16_layer_9x3`): the inputs in r0–r8, each row its bias, `ldr` +
-//! `smlal` per product, the rounding and a clamp to ±10 (where the table has saturated) onto
-//! the stack; then each neuron's table interpolation with the constants in registers, 14
-//! instructions — exactly the core's `activation_from_acc`.
+//! kernels (`q16_layer_9x9`, `q16_layer_9x3`): the inputs in r0–r8, each row its bias, the
+//! weights two at a time by `ldm` (three for the 3-input rows) and an `smlal` per product, the
+//! rounding and a clamp to ±10 (where the table has saturated) onto the stack; then each
+//! neuron's table interpolation with the constants in registers, 14 instructions — exactly the
+//! core's `activation_from_acc`.
 //!
 //! | function | computes | multiply–accumulates | instructions |
 //! |---|---|---:|---:|
 //! | `q16_transposed_9x9` | `round(Wᵀ·g)`, W 9×9 | 81 | 239 |
 //! | `q16_transposed_9x3` | `round(Wᵀ·g)`, W 9×3 | 27 | 83 |
-//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 (\|g\| < 2: one `smmulr` each) | 9 | 44 |
-//! | `q16_times_slope_9` | δᵢ ← round(δᵢ·a′(aᵢ)), 9 neurons | (27 products) | 136 |
-//! | `q16_layer_9x9` | a(b + W·x), W 9×9 | 81 | 395 |
-//! | `q16_layer_9x3` | a(b + W·x), W 9×3 | 27 | 287 |
+//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 (−2 ≤ g < 2: one `smmulr` each) | 9 | 44 |
+//! | `q16_times_slope_9` | δᵢ ← round(δᵢ·a′(aᵢ)), 9 neurons | (27 products) | 127 |
+//! | `q16_layer_9x9` | a(b + W·x), W 9×9 | 81 | 361 |
+//! | `q16_layer_9x3` | a(b + W·x), W 9×3 | 27 | 271 |
 //!
 //! `q16_times_slope_9` is the core's `Scalar::times_slope` for Q16.16 on nine neurons: the
-//! slope from the neuron's output and the product, each a rounded high word (`smmulr`), 15
-//! instructions a neuron with the constants in registers. It covers the fast range (|a| ≤ 2,
-//! |δ| < 2¹³) and returns a mask of the neurons outside it, which the core finishes on its
-//! portable saturating path.
+//! slope from the neuron's output and the product, each a rounded high word (`smmulr`), 14
+//! instructions a neuron with the constants in registers. It covers the fast range
+//! (−2 ≤ a < 2, −2¹³ ≤ δ < 2¹³, one combined test) and returns a mask of the neurons outside
+//! it, which the core finishes on its portable saturating path.
 //!
 //! The simulator tests hold the Q16.16 kernels to the host's bits too, including a model built
 //! so that every column of its 9×9 and 9×3 transposes saturates, at both ends (the 1×9

@@ -6,6 +6,13 @@
 //! layers (products, rounding and table lookup in one kernel each); everywhere else there are
 //! none.
 
+// The forward kernels hard-code the activation table's layout: index |H|·2¹⁶ >> 10 on 10 bits,
+// the saturated entry at H = 10 (index 640), 1 025 entries.
+const _: () = {
+    use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, TABLE};
+    assert!(FRACTION_BITS == 10 && INDEX_BITS == 10 && LAST == 640 && TABLE.len() == 1025);
+};
+
 /// Whether this build has the kernels.
 pub(super) const AVAILABLE: bool = neurosurf_m4f::AVAILABLE;
 
