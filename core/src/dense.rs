@@ -286,6 +286,71 @@ pub(crate) fn transposed<S: Scalar, const L: usize, const K: usize, const EXACT:
     out
 }
 
+/// [`transposed`] followed by [`through_activation`] with `outputs` (the layer whose inputs
+/// the columns are): δᵢ = a′ᵢ·Σⱼ Wⱼᵢ·gⱼ, the gradient at the pre-activations of the layer
+/// below. A scalar's [`Scalar::transposed_slope_kernel`] does both in one pass for one point
+/// over all columns of the shapes it covers; the result is the same bit for bit.
+#[inline(always)]
+pub(crate) fn transposed_through_activation<
+    S: Scalar,
+    const L: usize,
+    const K: usize,
+    const EXACT: bool,
+>(
+    params: &[S],
+    layout: &DenseLayout,
+    (first, columns): (usize, usize),
+    g: &[[S; L]],
+    outputs: &[[S; L]],
+) -> [[S; L]; K] {
+    if S::TARGET_KERNELS
+        && L == 1
+        && first == 0
+        && columns == layout.inputs
+        && let Some(out) = transposed_slope_by_kernel(params, layout, g, outputs)
+    {
+        return out;
+    }
+    let mut delta = transposed::<S, L, K, EXACT>(params, layout, (first, columns), g);
+    through_activation(&mut delta, outputs);
+    delta
+}
+
+/// [`transposed_through_activation`] over all columns for one point through the scalar's
+/// target kernel, when it has one for the layer's shape; `None` otherwise.
+#[inline(always)]
+fn transposed_slope_by_kernel<S: Scalar, const L: usize, const K: usize>(
+    params: &[S],
+    layout: &DenseLayout,
+    g: &[[S; L]],
+    outputs: &[[S; L]],
+) -> Option<[[S; L]; K]> {
+    let (count, rows) = (layout.inputs, layout.outputs);
+    let weights = params.get(layout.weights..layout.weights + count * rows)?;
+    let (g, a) = (g.get(..rows)?.as_flattened(), outputs.as_flattened());
+    let mut out = unwritten::<S, L, K>();
+    match (rows, count) {
+        (9, 9) => fill(&mut out, transposed_slope_kernel::<S, 9, 9>(weights, g, a)?),
+        (1, 9) => fill(&mut out, transposed_slope_kernel::<S, 9, 1>(weights, g, a)?),
+        _ => return None,
+    }
+    .then_some(out)
+}
+
+/// [`Scalar::transposed_slope_kernel`] on slices of exactly the shape `(OUT, IN)`.
+#[inline(always)]
+fn transposed_slope_kernel<S: Scalar, const IN: usize, const OUT: usize>(
+    weights: &[S],
+    g: &[S],
+    a: &[S],
+) -> Option<[S; IN]> {
+    let (rows, _) = weights.as_chunks::<IN>();
+    if rows.len() != OUT || g.len() != OUT || a.len() != IN {
+        return None;
+    }
+    S::transposed_slope_kernel::<IN, OUT>(rows.first_chunk()?, g.first_chunk()?, a.first_chunk()?)
+}
+
 /// `δ[j] ← δ[j]·a′(Hⱼ)` lane by lane, with a′ recovered from the layer's outputs a(Hⱼ): the
 /// chain rule through the activation.
 #[inline(always)]

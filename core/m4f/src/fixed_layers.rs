@@ -348,14 +348,19 @@ macro_rules! slope9 {
     };
 }
 
-/// The out-of-line branch of [`slope9!`] for neuron `$i`: sets bit `$i` of r12, δ unchanged.
+/// The out-of-line branch of [`slope9!`] (mask in r12) and [`single_slope!`] (mask in r5) for
+/// neuron `$i`: sets bit `$i` of the mask register `$mask`, the value unchanged.
 macro_rules! slope_slow {
-    ($i:literal) => {
+    ($mask:literal, $i:literal) => {
         concat!(
             "1",
             $i,
             ":\n",
-            "orr r12, r12, #(1 << ",
+            "orr ",
+            $mask,
+            ", ",
+            $mask,
+            ", #(1 << ",
             $i,
             ")\n",
             "b 2",
@@ -400,15 +405,15 @@ pub fn q16_times_slope_9(
             slope9!("7"),
             slope9!("8"),
             "b 3f",
-            slope_slow!("0"),
-            slope_slow!("1"),
-            slope_slow!("2"),
-            slope_slow!("3"),
-            slope_slow!("4"),
-            slope_slow!("5"),
-            slope_slow!("6"),
-            slope_slow!("7"),
-            slope_slow!("8"),
+            slope_slow!("r12", "0"),
+            slope_slow!("r12", "1"),
+            slope_slow!("r12", "2"),
+            slope_slow!("r12", "3"),
+            slope_slow!("r12", "4"),
+            slope_slow!("r12", "5"),
+            slope_slow!("r12", "6"),
+            slope_slow!("r12", "7"),
+            slope_slow!("r12", "8"),
             "3:",
             in("r0") delta.as_mut_ptr(),
             in("r1") a.as_ptr(),
@@ -455,12 +460,16 @@ macro_rules! layer_row9 {
     };
 }
 
-/// Row `$j` of a forward layer over three inputs (x in r0–r2, the row's three weights read
-/// from r12 by one `ldm`), as [`layer_row9!`].
+/// Row `$j` of a forward layer over three inputs, activation included (x in r0–r2, the
+/// row's bias at r8 + 4·`$j`, its three weights read from r12 by one `ldm`): H = bias +
+/// Σᵢ W[j][i]·xᵢ in r10:r9, rounded and clamped as [`pre_activation!`] into r9 (label 1`$j`
+/// is [`saturated_pre_activation!`]), then a(H) by [`table_activation!`] (2⁹ in r7), stored at
+/// r11 + 4·`$j`. With three inputs there are registers to spare, so the row needs no second
+/// pass.
 macro_rules! layer_row3 {
     ($j:literal) => {
         concat!(
-            "ldr r10, [sp, #(4*",
+            "ldr r10, [r8, #(4*",
             $j,
             ")]\n",
             "lsl r9, r10, #16\n",
@@ -469,7 +478,22 @@ macro_rules! layer_row3 {
             "smlal r9, r10, r4, r0\n",
             "smlal r9, r10, r5, r1\n",
             "smlal r9, r10, r6, r2\n",
-            pre_activation!($j),
+            "adds r9, r9, #0x8000\n",
+            "adc r10, r10, #0\n",
+            "add lr, r10, #10\n",
+            "cmp lr, #20\n",
+            "bhs 1",
+            $j,
+            "f\n",
+            "lsr r9, r9, #16\n",
+            "orr r9, r9, r10, lsl #16\n",
+            "2",
+            $j,
+            ":\n",
+            table_activation!("r9", "r4", "r5", "r6", "r7"),
+            "str r5, [r11, #(4*",
+            $j,
+            ")]\n",
         )
     };
 }
@@ -519,27 +543,91 @@ macro_rules! saturated_pre_activation {
     };
 }
 
-/// Output `$j` = a(H) for the H at sp + 4·`$j`: the table (at r3) entry below |H| interpolated
-/// linearly towards the next (index |H| >> 10, fraction |H| & 1023), the sign restored;
-/// stored at r2 + 4·`$j`.
+/// a(H) for the H in `$h` into `$lo`, by the table's segments (at r3) with 2⁹ in `$half`: the
+/// segment below |H| (index |H| >> 10) interpolated by the fraction |H| & 1023, rounded, the
+/// sign restored — the core's `interpolate` and odd symmetry. `$abs` and `$rise` are scratch.
+macro_rules! table_activation {
+    ($h:literal, $abs:literal, $lo:literal, $rise:literal, $half:literal) => {
+        concat!(
+            "eor ",
+            $abs,
+            ", ",
+            $h,
+            ", ",
+            $h,
+            ", asr #31\n",
+            "sub ",
+            $abs,
+            ", ",
+            $abs,
+            ", ",
+            $h,
+            ", asr #31\n",
+            "ubfx ",
+            $lo,
+            ", ",
+            $abs,
+            ", #10, #10\n",
+            "add ",
+            $lo,
+            ", r3, ",
+            $lo,
+            ", lsl #3\n",
+            "ldrd ",
+            $lo,
+            ", ",
+            $rise,
+            ", [",
+            $lo,
+            "]\n",
+            "ubfx ",
+            $abs,
+            ", ",
+            $abs,
+            ", #0, #10\n",
+            "mla ",
+            $rise,
+            ", ",
+            $rise,
+            ", ",
+            $abs,
+            ", ",
+            $half,
+            "\n",
+            "add ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $rise,
+            ", asr #10\n",
+            "eor ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $h,
+            ", asr #31\n",
+            "sub ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $h,
+            ", asr #31\n",
+        )
+    };
+}
+
+/// Output `$j` = a(H) for the H at sp + 4·`$j` ([`table_activation!`], 2⁹ in r6), stored at
+/// r2 + 4·`$j`.
 macro_rules! activation {
     ($j:literal) => {
         concat!(
             "ldr r0, [sp, #(4*",
             $j,
             ")]\n",
-            "eor r1, r0, r0, asr #31\n",
-            "sub r1, r1, r0, asr #31\n",
-            "ubfx r4, r1, #10, #10\n",
-            "add r4, r3, r4, lsl #2\n",
-            "ldrd r4, r5, [r4]\n",
-            "ubfx r1, r1, #0, #10\n",
-            "sub r5, r5, r4\n",
-            "mul r5, r5, r1\n",
-            "add r5, r5, #512\n",
-            "add r4, r4, r5, asr #10\n",
-            "eor r4, r4, r0, asr #31\n",
-            "sub r4, r4, r0, asr #31\n",
+            table_activation!("r0", "r1", "r4", "r5", "r6"),
             "str r4, [r2, #(4*",
             $j,
             ")]\n",
@@ -572,6 +660,7 @@ macro_rules! layer9 {
             $row!("8"),
             "ldr r2, [sp, #40]",
             "ldr r3, [sp, #44]",
+            "mov r6, #512",
             activation!("0"),
             activation!("1"),
             activation!("2"),
@@ -609,9 +698,10 @@ macro_rules! layer9 {
     };
 }
 
-/// The activation table's layout that [`q16_layer_9x9`] and [`q16_layer_9x3`] read: a(H) in
-/// Q16.16 bits at H = k/64 for k = 0 … 1024 (padded with a(10) from k = 640 on).
-pub type ActivationTable = [i32; 1025];
+/// The activation table's layout that [`q16_layer_9x9`] and [`q16_layer_9x3`] read: for
+/// k = 0 … 1023, a(H) in Q16.16 bits at H = k/64 and its rise to the entry at (k + 1)/64
+/// (a(10) from k = 640 on, rise 0).
+pub type ActivationTable = [[i32; 2]; 1024];
 
 /// A forward layer of nine outputs on nine inputs in Q16.16: output j is the core's
 /// `activation_from_acc(to_acc(bⱼ) + Σᵢ W[j][i]·xᵢ)` with `table` the core's activation
@@ -654,17 +744,418 @@ pub fn q16_layer_9x3(
     table: &ActivationTable,
 ) -> [I16F16; 9] {
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
-    // SAFETY: as `q16_layer_9x9`, over the 27 words behind `w` and the 3 behind `x`.
+    // SAFETY: reads the 27 words behind `w`, the 9 behind `b`, the 3 behind `x` and, at
+    // indices below 1 024 (the index is masked to 10 bits), the table; writes the 9 words of
+    // `out` (lengths fixed by the array types; `I16F16` is a transparent `i32`); pushes r6,
+    // r7, r11 and lr (16 bytes, keeping sp 8-byte aligned) and restores them, and declares
+    // every other register it changes.
     unsafe {
-        layer9!(
-            layer_row3,
+        asm!(
+            "push {{r6, r7, r11, lr}}",
+            "mov r11, r2",
+            "mov r7, #512",
             "ldm r0, {{r0-r2}}",
-            w.as_ptr(),
-            b.as_ptr(),
-            x.as_ptr(),
-            out.as_mut_ptr(),
-            table.as_ptr()
+            layer_row3!("0"),
+            layer_row3!("1"),
+            layer_row3!("2"),
+            layer_row3!("3"),
+            layer_row3!("4"),
+            layer_row3!("5"),
+            layer_row3!("6"),
+            layer_row3!("7"),
+            layer_row3!("8"),
+            "b 3f",
+            saturated_pre_activation!("0"),
+            saturated_pre_activation!("1"),
+            saturated_pre_activation!("2"),
+            saturated_pre_activation!("3"),
+            saturated_pre_activation!("4"),
+            saturated_pre_activation!("5"),
+            saturated_pre_activation!("6"),
+            saturated_pre_activation!("7"),
+            saturated_pre_activation!("8"),
+            "3:",
+            "pop {{r6, r7, r11, lr}}",
+            inout("r0") x.as_ptr() => _,
+            out("r1") _,
+            inout("r2") out.as_mut_ptr() => _,
+            in("r3") table.as_ptr(),
+            out("r4") _,
+            out("r5") _,
+            inout("r8") b.as_ptr() => _,
+            out("r9") _,
+            out("r10") _,
+            inout("r12") w.as_ptr() => _,
+            out("lr") _,
         );
         out.assume_init()
+    }
+}
+
+/// The chain rule's tail for column `$c` of a fused transpose, its rounded accumulator
+/// `$lo`/`$hi` = Σⱼ W[j][`$c`]·gⱼ + 2¹⁵ (Q32.32, high word `$hi`): with a = `a[$c]` (r2 points
+/// at a, r0 = square·2¹⁶, r1 = offset·2¹⁴), t = the sum rounded to Q16.16 and, when
+/// −2 ≤ a < 2 and |t| < 2¹³ (so t needs no saturation), δ = round(t·a′/2¹⁶) with
+/// a′ = offset − round(square·round(a²/2¹⁶)/2¹⁶), as [`slope9!`]; stores δ at lr + 4·`$c`.
+/// Outside that range label 1`$c` (out of line, [`slope_tail_slow!`]) stores t instead and
+/// marks the column. Uses r3, r4 and r9.
+macro_rules! slope_tail {
+    ($c:literal, $lo:literal, $hi:literal) => {
+        concat!(
+            "ldr r3, [r2, #(4*",
+            $c,
+            ")]\n",
+            // −2 ≤ a < 2 and −2¹³ ≤ high word < 2¹³ (t in [−2²⁹, 2²⁹) bits) at once:
+            // (a + 2¹⁷) as u32 < 2¹⁸ and (high + 2¹³) as u32 < 2¹⁴ exactly when the first
+            // shifted right by 4, ORed with the second, is below 2¹⁴.
+            "add r4, r3, #0x20000\n",
+            "add r9, ",
+            $hi,
+            ", #0x2000\n",
+            "orr r4, r9, r4, lsr #4\n",
+            "cmp r4, #0x4000\n",
+            "bhs 1",
+            $c,
+            "f\n",
+            // t·2² = (sum >> 16) << 2, in range by the test above.
+            "bfc ",
+            $lo,
+            ", #0, #16\n",
+            "lsr ",
+            $lo,
+            ", ",
+            $lo,
+            ", #14\n",
+            "orr ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $hi,
+            ", lsl #18\n",
+            // a′·2¹⁴, then round((t·2²)·(a′·2¹⁴)/2³²), as slope9!.
+            "lsl r3, r3, #8\n",
+            "smmulr r3, r3, r3\n",
+            "smmulr r3, r3, r0\n",
+            "sub r3, r1, r3, lsl #14\n",
+            "smmulr ",
+            $lo,
+            ", ",
+            $lo,
+            ", r3\n",
+            "2",
+            $c,
+            ":\n",
+            "str ",
+            $lo,
+            ", [lr, #(4*",
+            $c,
+            ")]\n",
+        )
+    };
+}
+
+/// The out-of-line branch of [`slope_tail!`] for column `$c`: t = the rounded sum saturated to
+/// Q16.16 (as `Scalar::from_acc`) into `$lo`, bit `$c` set in the mask at sp + 12; back to
+/// 2`$c`.
+macro_rules! slope_tail_slow {
+    ($c:literal, $lo:literal, $hi:literal) => {
+        concat!(
+            "1",
+            $c,
+            ":\n",
+            "lsr ",
+            $lo,
+            ", ",
+            $lo,
+            ", #16\n",
+            "orr ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $hi,
+            ", lsl #16\n",
+            // Exact when bits 15… of the high word all equal the result's sign bit.
+            "asr r3, ",
+            $hi,
+            ", #15\n",
+            "cmp r3, ",
+            $lo,
+            ", asr #31\n",
+            "beq 4",
+            $c,
+            "f\n",
+            "mvn ",
+            $lo,
+            ", #0x80000000\n",
+            "eor ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $hi,
+            ", asr #31\n",
+            "4",
+            $c,
+            ":\n",
+            "ldr r3, [sp, #12]\n",
+            "orr r3, r3, #(1 << ",
+            $c,
+            ")\n",
+            "str r3, [sp, #12]\n",
+            "b 2",
+            $c,
+            "b\n",
+        )
+    };
+}
+
+/// Row `$j` of a column pair: W[`$j`][`$c`] and W[`$j`][`$c` + 1] by one `ldrd` (row stride 36
+/// bytes, W at r12) into r9/r10, times g (in `$g`) into the accumulators r6:r5 and r8:r7;
+/// `$op` is `smull` for the first row, else `smlal`.
+macro_rules! pair_row {
+    ($op:literal, $c:literal, $j:literal, $g:literal) => {
+        concat!(
+            "ldrd r9, r10, [r12, #(4*",
+            $c,
+            " + 36*",
+            $j,
+            ")]\n",
+            $op,
+            " r5, r6, r9, ",
+            $g,
+            "\n",
+            $op,
+            " r7, r8, r10, ",
+            $g,
+            "\n",
+        )
+    };
+}
+
+/// Columns `$c` and `$c1` = `$c` + 1 of a fused 9×9 transpose: g₀…g₄ then g₅…g₈ (at r11) into
+/// r0–r4, one `ldrd` of two weights per row, then [`slope_tail!`] on each column with the
+/// constants and the pointer to a (sp + 0…8) in r0–r2.
+macro_rules! slope_pair {
+    ($c:literal, $c1:literal) => {
+        concat!(
+            "ldm r11, {{r0-r4}}\n",
+            pair_row!("smull", $c, "0", "r0"),
+            pair_row!("smlal", $c, "1", "r1"),
+            pair_row!("smlal", $c, "2", "r2"),
+            pair_row!("smlal", $c, "3", "r3"),
+            pair_row!("smlal", $c, "4", "r4"),
+            "add r9, r11, #20\n",
+            "ldm r9, {{r0-r3}}\n",
+            pair_row!("smlal", $c, "5", "r0"),
+            pair_row!("smlal", $c, "6", "r1"),
+            pair_row!("smlal", $c, "7", "r2"),
+            pair_row!("smlal", $c, "8", "r3"),
+            "ldm sp, {{r0-r2}}\n",
+            "adds r5, r5, #0x8000\n",
+            "adc r6, r6, #0\n",
+            slope_tail!($c, "r5", "r6"),
+            "adds r7, r7, #0x8000\n",
+            "adc r8, r8, #0\n",
+            slope_tail!($c1, "r7", "r8"),
+        )
+    };
+}
+
+/// Row `$j` of the last, single column 8: W[`$j`][8] by `ldr` into r9, times g (in `$g`) into
+/// r6:r5.
+macro_rules! last_row {
+    ($op:literal, $j:literal, $g:literal) => {
+        concat!(
+            "ldr r9, [r12, #(32 + 36*",
+            $j,
+            ")]\n",
+            $op,
+            " r5, r6, r9, ",
+            $g,
+            "\n",
+        )
+    };
+}
+
+/// δᵢ = `times_slope(from_acc(Σⱼ W[j][i]·gⱼ), aᵢ)` for the nine columns of a 9×9 `W` in Q16.16:
+/// [`q16_transposed_9x9`] followed by [`q16_times_slope_9`] in one pass, with the same bits.
+///
+/// Each column's sum is exact in 64 bits; when −2 ≤ aᵢ < 2 and its rounded value t lies in
+/// [−2¹³, 2¹³) (where no saturation happens), δᵢ is the chain rule's fast path, as
+/// `q16_times_slope_9` with `offset` and `square` (a′ = offset − square·a², in Q16.16 bits,
+/// below 2¹⁷ and 2¹⁵). Otherwise output i is t, saturated like `from_acc`, and bit i of the
+/// returned mask is set: the caller finishes it on the portable path, which gives the fast
+/// path's bits wherever that holds.
+///
+/// The weights come in column pairs, two per `ldrd` from the same row, with g₀…g₄ and then
+/// g₅…g₈ in registers (the nine values and two 64-bit accumulators do not fit together): about
+/// 1.7 instructions per product against the two of [`q16_transposed_9x9`], and the chain rule
+/// runs on the sum still in registers.
+#[inline(always)]
+pub fn q16_transposed_slope_9x9(
+    w: &[[I16F16; 9]; 9],
+    g: &[I16F16; 9],
+    a: &[I16F16; 9],
+    offset: i32,
+    square: i32,
+) -> ([I16F16; 9], u32) {
+    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
+    let slow: u32;
+    // SAFETY: reads the 81 words behind `w` and the 9 behind `g` and `a`, writes the 9 words
+    // of `out` (lengths fixed by the array types; `I16F16` is a transparent `i32`); pushes 32
+    // bytes (the constants, the pointer to `a`, the mask, and r6, r7, r11 and lr, which it
+    // restores), keeping sp 8-byte aligned, and declares every other register it changes.
+    unsafe {
+        asm!(
+            "push {{r0-r3, r6, r7, r11, lr}}",
+            "mov r11, r5",
+            "mov lr, r4",
+            slope_pair!("0", "1"),
+            slope_pair!("2", "3"),
+            slope_pair!("4", "5"),
+            slope_pair!("6", "7"),
+            "ldm r11, {{r0-r4}}",
+            last_row!("smull", "0", "r0"),
+            last_row!("smlal", "1", "r1"),
+            last_row!("smlal", "2", "r2"),
+            last_row!("smlal", "3", "r3"),
+            last_row!("smlal", "4", "r4"),
+            "add r9, r11, #20",
+            "ldm r9, {{r0-r3}}",
+            last_row!("smlal", "5", "r0"),
+            last_row!("smlal", "6", "r1"),
+            last_row!("smlal", "7", "r2"),
+            last_row!("smlal", "8", "r3"),
+            "ldm sp, {{r0-r2}}",
+            "adds r5, r5, #0x8000",
+            "adc r6, r6, #0",
+            slope_tail!("8", "r5", "r6"),
+            "b 3f",
+            slope_tail_slow!("0", "r5", "r6"),
+            slope_tail_slow!("1", "r7", "r8"),
+            slope_tail_slow!("2", "r5", "r6"),
+            slope_tail_slow!("3", "r7", "r8"),
+            slope_tail_slow!("4", "r5", "r6"),
+            slope_tail_slow!("5", "r7", "r8"),
+            slope_tail_slow!("6", "r5", "r6"),
+            slope_tail_slow!("7", "r7", "r8"),
+            slope_tail_slow!("8", "r5", "r6"),
+            "3:",
+            "ldr r0, [sp, #12]",
+            "add sp, sp, #16",
+            "pop {{r6, r7, r11, lr}}",
+            inout("r0") square.wrapping_shl(16) => slow,
+            inout("r1") offset.wrapping_shl(14) => _,
+            inout("r2") a.as_ptr() => _,
+            inout("r3") 0u32 => _,
+            inout("r4") out.as_mut_ptr() => _,
+            inout("r5") g.as_ptr() => _,
+            out("r8") _,
+            out("r9") _,
+            out("r10") _,
+            in("r12") w.as_ptr(),
+            out("lr") _,
+        );
+        (out.assume_init(), slow)
+    }
+}
+
+/// Output `$i` of the fused one-row transpose: t = round(wᵢ·g/2¹⁶) as [`single9_small!`] (g·2¹²
+/// in r0, w at r12), then with a = `a[$i]` (at r1; r3 = square·2¹⁶, r4 = offset·2¹⁴) the
+/// chain rule's fast path when −2 ≤ a < 2 (t is small enough by the weight bound), else t
+/// and bit `$i` of r5 (label 1`$i`, out of line); stored at r2 + 4·`$i`.
+macro_rules! single_slope {
+    ($i:literal) => {
+        concat!(
+            "ldr r9, [r12, #(4*",
+            $i,
+            ")]\n",
+            "lsl r9, r9, #4\n",
+            "smmulr r9, r9, r0\n",
+            "ldr r10, [r1, #(4*",
+            $i,
+            ")]\n",
+            "add lr, r10, #0x20000\n",
+            "cmp lr, #0x40000\n",
+            "bhs 1",
+            $i,
+            "f\n",
+            "lsl r9, r9, #2\n",
+            "lsl r10, r10, #8\n",
+            "smmulr r10, r10, r10\n",
+            "smmulr r10, r10, r3\n",
+            "sub r10, r4, r10, lsl #14\n",
+            "smmulr r9, r9, r10\n",
+            "2",
+            $i,
+            ":\n",
+            "str r9, [r2, #(4*",
+            $i,
+            ")]\n",
+        )
+    };
+}
+
+/// δᵢ = `times_slope(from_acc(wᵢ·g), aᵢ)` for one row of nine weights and one g in Q16.16:
+/// [`q16_transposed_1x9`] followed by [`q16_times_slope_9`] in one pass, with the same bits,
+/// for −2 ≤ g < 2 and weights within the core's bound |wᵢ| ≤ 1024 (as `q16_transposed_1x9`'s
+/// fast path; then |t| ≤ 2¹¹, inside the chain rule's fast range). `None` for any other g (the
+/// core's g, the output's slope, is at most 1.144): the caller then takes the two steps
+/// separately. A neuron with aᵢ outside [−2, 2) keeps t and its bit is set in the mask, as
+/// [`q16_transposed_slope_9x9`].
+#[inline(always)]
+pub fn q16_transposed_slope_1x9(
+    w: &[I16F16; 9],
+    g: I16F16,
+    a: &[I16F16; 9],
+    offset: i32,
+    square: i32,
+) -> Option<([I16F16; 9], u32)> {
+    let g = g.to_bits();
+    // |g| < 2¹⁷ bits, as the 1×9 kernel's test.
+    if (g.wrapping_add(0x2_0000) as u32) >= 0x4_0000 {
+        return None;
+    }
+    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
+    let slow: u32;
+    // SAFETY: reads the 9 words behind `w` and `a`, writes the 9 words of `out` (lengths fixed
+    // by the array types); uses no stack and declares every register it changes.
+    unsafe {
+        asm!(
+            single_slope!("0"),
+            single_slope!("1"),
+            single_slope!("2"),
+            single_slope!("3"),
+            single_slope!("4"),
+            single_slope!("5"),
+            single_slope!("6"),
+            single_slope!("7"),
+            single_slope!("8"),
+            "b 3f",
+            slope_slow!("r5", "0"),
+            slope_slow!("r5", "1"),
+            slope_slow!("r5", "2"),
+            slope_slow!("r5", "3"),
+            slope_slow!("r5", "4"),
+            slope_slow!("r5", "5"),
+            slope_slow!("r5", "6"),
+            slope_slow!("r5", "7"),
+            slope_slow!("r5", "8"),
+            "3:",
+            in("r0") g << 12,
+            in("r1") a.as_ptr(),
+            in("r2") out.as_mut_ptr(),
+            in("r3") square.wrapping_shl(16),
+            in("r4") offset.wrapping_shl(14),
+            inout("r5") 0u32 => slow,
+            out("r9") _,
+            out("r10") _,
+            in("r12") w.as_ptr(),
+            out("lr") _,
+            options(nostack),
+        );
+        Some((out.assume_init(), slow))
     }
 }

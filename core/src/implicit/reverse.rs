@@ -15,14 +15,16 @@ use super::eval::{FieldGradient, ModuleView, normalized_input};
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
 use super::width::{at_width, width};
-use crate::dense::{forward, through_activation, transposed};
+use crate::dense::{forward, transposed, transposed_through_activation};
 use crate::scalar::Scalar;
 
 /// ∇Φ summed over the leaves, per coordinate and lane, in the wide accumulator.
 type Gradient<S, const L: usize> = [[<S as Scalar>::Acc; L]; 3];
 
 /// The evaluation above a module: given the module's last hidden layer (b), it finishes the
-/// forward pass, runs the transposed pass down to this module, and returns ∂Φ/∂b.
+/// forward pass, runs the transposed pass down to this module, and returns ∂Φ/∂H_b, the
+/// gradient at b's pre-activations (the chain rule through b's activation included, so that
+/// it can run on the transpose's sums while a kernel still holds them).
 type Above<'f, S, const L: usize, const N: usize> =
     dyn FnMut(&[[S; L]; N], &mut Gradient<S, L>) -> [[S; L]; N] + 'f;
 
@@ -62,8 +64,14 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
                         *a = S::activation_slope(*a);
                     }
                 }
-                // ∂Φ/∂bⱼ = a′(H)·wⱼ
-                transposed::<S, L, N, EXACT>(params, &layout.output, (0, width), &slope)
+                // ∂Φ/∂bⱼ = a′(H)·wⱼ, and through b's activation: ∂Φ/∂H_bⱼ = ∂Φ/∂bⱼ·b′ⱼ
+                transposed_through_activation::<S, L, N, EXACT>(
+                    params,
+                    &layout.output,
+                    (0, width),
+                    &slope,
+                    hidden,
+                )
             };
             model.reverse::<L, N, EXACT>(self.module, points, MAX_HEIGHT, &mut gradient, root);
         }
@@ -130,17 +138,20 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                                     pass.run::<L, N, EXACT>(inputs, gradient, &mut *above);
                                 let delta_a = delta_a.get(..width).unwrap_or(&[]);
                                 let hidden_a = &pass.layout.hidden_a;
-                                delta_left = Some(transposed::<S, L, N, EXACT>(
+                                // Each child's ∂Φ/∂H_b, through its activation.
+                                delta_left = Some(transposed_through_activation::<S, L, N, EXACT>(
                                     params,
                                     hidden_a,
                                     (0, width),
                                     delta_a,
+                                    inputs.0,
                                 ));
-                                transposed::<S, L, N, EXACT>(
+                                transposed_through_activation::<S, L, N, EXACT>(
                                     params,
                                     hidden_a,
                                     (width, width),
                                     delta_a,
+                                    inputs.1,
                                 )
                             },
                         );
@@ -192,13 +203,15 @@ impl<S: Scalar> Pass<'_, S> {
         let a: [[S; L]; N] = forward(params, &layout.hidden_a, inputs);
         let a = a.get(..width).unwrap_or(&[]);
         let b: [[S; L]; N] = forward(params, &layout.hidden_b, (a, &[]));
-        let mut delta_b = above(&b, gradient);
-        through_activation(&mut delta_b, &b);
+        let delta_b = above(&b, gradient);
         let delta_b = delta_b.get(..width).unwrap_or(&[]);
-        let mut delta_a: [[S; L]; N] =
-            transposed::<S, L, N, EXACT>(params, &layout.hidden_b, (0, width), delta_b);
-        through_activation(&mut delta_a, a);
-        delta_a
+        transposed_through_activation::<S, L, N, EXACT>(
+            params,
+            &layout.hidden_b,
+            (0, width),
+            delta_b,
+            a,
+        )
     }
 }
 

@@ -7,10 +7,10 @@
 //! none.
 
 // The forward kernels hard-code the activation table's layout: index |H|·2¹⁶ >> 10 on 10 bits,
-// the saturated entry at H = 10 (index 640), 1 025 entries.
+// the saturated entry at H = 10 (index 640), 1 024 segments of two words.
 const _: () = {
-    use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, TABLE};
-    assert!(FRACTION_BITS == 10 && INDEX_BITS == 10 && LAST == 640 && TABLE.len() == 1025);
+    use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, SEGMENTS};
+    assert!(FRACTION_BITS == 10 && INDEX_BITS == 10 && LAST == 640 && SEGMENTS.len() == 1024);
 };
 
 /// Whether this build has the kernels.
@@ -67,13 +67,13 @@ pub(super) fn times_slope<const N: usize>(
 }
 
 /// A forward layer, `activation_from_acc(to_acc(bⱼ) + Σᵢ W[j][i]·xᵢ)` per output, when a kernel
-/// exists for `(OUT, IN)`; `table` is the activation table.
+/// exists for `(OUT, IN)`; `table` is the activation table's segments.
 #[inline(always)]
 pub(super) fn layer<const IN: usize, const OUT: usize>(
     w: &[[Q16; IN]; OUT],
     b: &[Q16; OUT],
     x: &[Q16; IN],
-    table: &[i32; 1025],
+    table: &[[i32; 2]; 1024],
 ) -> Option<[Q16; OUT]> {
     #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     {
@@ -90,6 +90,39 @@ pub(super) fn layer<const IN: usize, const OUT: usize>(
     #[allow(unreachable_code)]
     {
         let _ = (w, b, x, table);
+        None
+    }
+}
+
+/// `δᵢ = times_slope(from_acc(Σⱼ W[j][i]·gⱼ), aᵢ)` for the neurons in the kernel's fast range,
+/// when a kernel exists for `(OUT, IN)`: `Some((δ, mask))`, where a set bit i of the mask means
+/// output i is only `from_acc(…)`, still to be multiplied by the slope (see `times_slope`).
+#[inline(always)]
+pub(super) fn transposed_slope<const IN: usize, const OUT: usize>(
+    w: &[[Q16; IN]; OUT],
+    g: &[Q16; OUT],
+    a: &[Q16; IN],
+    offset: i32,
+    square: i32,
+) -> Option<([Q16; IN], u32)> {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    {
+        use super::kernel_shapes::{resize, rows};
+        use neurosurf_m4f as m4f;
+        let w = w.as_flattened();
+        let a = a.first_chunk()?;
+        let (out, slow) = match (OUT, IN) {
+            (9, 9) => m4f::q16_transposed_slope_9x9(rows(w)?, g.first_chunk()?, a, offset, square),
+            (1, 9) => {
+                m4f::q16_transposed_slope_1x9(w.first_chunk()?, *g.first()?, a, offset, square)?
+            }
+            _ => return None,
+        };
+        return Some((resize(out)?, slow));
+    }
+    #[allow(unreachable_code)]
+    {
+        let _ = (w, g, a, offset, square);
         None
     }
 }

@@ -228,12 +228,27 @@ pub trait Scalar:
         let _ = (delta, a);
         false
     }
+    /// [`Scalar::transposed_kernel`] followed by [`Scalar::times_slope`] on each output with
+    /// `a[i]`, by a target kernel, when there is one for this shape: output i is
+    /// `times_slope(from_acc(ZERO.to_acc() + Σⱼ mac(W[j][i], g[j])), a[i])`, bit for bit;
+    /// `None` means "use the two steps". (Q16.16 on a Cortex-M4F: the 9×9 and 1×9 transposes
+    /// of the backward pass, the chain rule on the column sums while they are in registers.)
+    #[inline(always)]
+    fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        g: &[Self; OUT],
+        a: &[Self; IN],
+    ) -> Option<[Self; IN]> {
+        let _ = (w, g, a);
+        None
+    }
     /// a″(H), computed from `a = a(H)` and `slope = a′(H)`: a″ = −(4/3)·a·a′/1.7159.
     fn activation_curvature(a: Self, slope: Self) -> Self;
 
     /// Whether this scalar has target kernels on the machine compiled for, for some shapes
     /// ([`Scalar::affine_kernel`], [`Scalar::layer_kernel`], [`Scalar::transposed_kernel`],
-    /// [`Scalar::times_slope_kernel`]); the layer loops only ask when it does.
+    /// [`Scalar::times_slope_kernel`], [`Scalar::transposed_slope_kernel`]); the layer loops
+    /// only ask when it does.
     const TARGET_KERNELS: bool = false;
     /// `b + W·x` (W row-major, one row per output) by a kernel written for the target, when
     /// there is one for this shape; `None` means "use the portable loop". A kernel computes

@@ -6,7 +6,7 @@
 //! interpolation (no division anywhere in a neuron). Every operation saturates at the ends of
 //! the range instead of wrapping.
 
-use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, TABLE};
+use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, SEGMENTS};
 use super::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN, Scalar, ScalarKind};
 
 /// Signed Q16.16 fixed point: range [−32768, 32768), resolution 2⁻¹⁶ ≈ 1.5·10⁻⁵.
@@ -73,7 +73,7 @@ fn slope_bits(a: i32) -> i32 {
 fn activation_bits(bits: i32) -> i32 {
     let magnitude = bits.unsigned_abs();
     let value = if magnitude >> (FRACTION_BITS + INDEX_BITS) != 0 {
-        TABLE.get(LAST).copied().unwrap_or(0)
+        saturated_activation()
     } else {
         interpolate(magnitude)
     };
@@ -86,10 +86,28 @@ fn activation_bits(bits: i32) -> i32 {
 #[inline(always)]
 fn interpolate(magnitude: u32) -> i32 {
     let index = ((magnitude >> FRACTION_BITS) & ((1 << INDEX_BITS) - 1)) as usize;
-    let lower = TABLE.get(index).copied().unwrap_or(0);
-    let upper = TABLE.get(index + 1).copied().unwrap_or(lower);
+    let [lower, rise] = SEGMENTS.get(index).copied().unwrap_or([0, 0]);
     let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
-    lower + (((upper - lower) * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
+    lower + ((rise * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
+}
+
+/// `delta[i] ← times_slope(delta[i], a[i])` for each bit i set in `slow`: what a chain-rule
+/// kernel left outside its fast range, finished on the portable (saturating) path.
+#[inline(always)]
+fn finish_times_slope<const N: usize>(delta: &mut [Q16; N], a: &[Q16; N], slow: u32) {
+    if slow != 0 {
+        for (i, (d, &a)) in delta.iter_mut().zip(a).enumerate() {
+            if slow.checked_shr(i as u32).unwrap_or(0) & 1 != 0 {
+                *d = Q16::times_slope(*d, a);
+            }
+        }
+    }
+}
+
+/// a(H) in bits for |H| ≥ 10, where the table has saturated.
+#[inline(always)]
+fn saturated_activation() -> i32 {
+    SEGMENTS.get(LAST).map_or(0, |&[value, _]| value)
 }
 
 impl Scalar for Q16 {
@@ -207,7 +225,7 @@ impl Scalar for Q16 {
             let value = interpolate(bits.unsigned_abs());
             if bits < 0 { -value } else { value }
         } else {
-            let last = TABLE.get(LAST).copied().unwrap_or(0);
+            let last = saturated_activation();
             if high < 0 { -last } else { last }
         })
     }
@@ -246,15 +264,19 @@ impl Scalar for Q16 {
         else {
             return false;
         };
-        // The kernel leaves the values outside its fast range to the portable path.
-        if slow != 0 {
-            for (i, (d, &a)) in delta.iter_mut().zip(a).enumerate() {
-                if slow.checked_shr(i as u32).unwrap_or(0) & 1 != 0 {
-                    *d = Self::times_slope(*d, a);
-                }
-            }
-        }
+        finish_times_slope(delta, a, slow);
         true
+    }
+    #[inline(always)]
+    fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        g: &[Self; OUT],
+        a: &[Self; IN],
+    ) -> Option<[Self; IN]> {
+        let (mut delta, slow) =
+            super::kernels_q16::transposed_slope(w, g, a, SLOPE_OFFSET, SLOPE_SQUARE)?;
+        finish_times_slope(&mut delta, a, slow);
+        Some(delta)
     }
     #[inline]
     fn activation_curvature(a: Self, slope: Self) -> Self {
@@ -268,7 +290,7 @@ impl Scalar for Q16 {
         b: &[Q16; OUT],
         x: &[Q16; IN],
     ) -> Option<[Q16; OUT]> {
-        super::kernels_q16::layer(w, b, x, &TABLE)
+        super::kernels_q16::layer(w, b, x, &SEGMENTS)
     }
     #[inline(always)]
     fn transposed_kernel<const IN: usize, const OUT: usize>(
@@ -349,10 +371,10 @@ fn isqrt(n: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::{
-        FRACTION_BITS, HALF_BITS, LAST, Q16, SLOPE_OFFSET, SLOPE_SQUARE, TABLE, activation_bits,
-        isqrt,
+        FRACTION_BITS, HALF_BITS, LAST, Q16, SLOPE_OFFSET, SLOPE_SQUARE, activation_bits, isqrt,
     };
     use crate::scalar::Scalar;
+    use crate::scalar::activation_table::TABLE;
 
     /// The slope's `smmulr` form equals the 64-bit formula it replaced, for every a in [−2, 2].
     #[test]
