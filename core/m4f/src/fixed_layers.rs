@@ -26,282 +26,200 @@ use core::mem::MaybeUninit;
 
 use fixed::types::I16F16;
 
-/// One column of a transposed product: output `$i` = Σⱼ W[j][`$i`]·gⱼ over the rows j = 0…8
-/// (row stride `$stride` bytes), g in r0–r8, the weights at r12, rounded to Q16.16 in r9 and
-/// stored at r11 + 4·`$i`. Accumulator r10:r9 (high:low), weight and scratch lr.
-macro_rules! column9 {
-    ($i:literal, $stride:literal) => {
+/// Row `$j` of a column pair: W[`$j`][`$c`] and W[`$j`][`$c` + 1] by one `ldrd` (row stride
+/// `$stride` bytes, W at r12) into r9/r10, times g (in `$g`) into the accumulators r6:r5 and
+/// r8:r7; `$op` is `smull` for the first row, else `smlal`.
+macro_rules! pair_row {
+    ($op:literal, $c:literal, $j:literal, $g:literal, $stride:literal) => {
         concat!(
-            "ldr lr, [r12, #(4*",
-            $i,
-            ")]\n",
-            "smull r9, r10, lr, r0\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 1*",
+            "ldrd r9, r10, [r12, #(4*",
+            $c,
+            " + ",
             $stride,
+            "*",
+            $j,
             ")]\n",
-            "smlal r9, r10, lr, r1\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 2*",
-            $stride,
-            ")]\n",
-            "smlal r9, r10, lr, r2\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 3*",
-            $stride,
-            ")]\n",
-            "smlal r9, r10, lr, r3\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 4*",
-            $stride,
-            ")]\n",
-            "smlal r9, r10, lr, r4\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 5*",
-            $stride,
-            ")]\n",
-            "smlal r9, r10, lr, r5\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 6*",
-            $stride,
-            ")]\n",
-            "smlal r9, r10, lr, r6\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 7*",
-            $stride,
-            ")]\n",
-            "smlal r9, r10, lr, r7\n",
-            "ldr lr, [r12, #(4*",
-            $i,
-            " + 8*",
-            $stride,
-            ")]\n",
-            "smlal r9, r10, lr, r8\n",
-            round_and_store!($i),
+            $op,
+            " r5, r6, r9, ",
+            $g,
+            "\n",
+            $op,
+            " r7, r8, r10, ",
+            $g,
+            "\n",
         )
     };
 }
 
-/// Rounds the accumulator r10:r9 to Q16.16 like `Scalar::from_acc`: r9 ← ((r10:r9) + 2¹⁵) >> 16
-/// when that fits 32 bits, else the end of the range on r10's side (label 1`$i` does that
-/// out of line, then comes back to 2`$i`); stores it at r11 + 4·`$i`.
-macro_rules! round_and_store {
-    ($i:literal) => {
+/// Row `$j` of a single column: W[`$j`][`$c`] by `ldr` into r9 (row stride `$stride` bytes, W
+/// at r12), times g (in `$g`) into r6:r5.
+macro_rules! single_row {
+    ($op:literal, $c:literal, $j:literal, $g:literal, $stride:literal) => {
         concat!(
-            "adds r9, r9, #32768\n",
-            "adc r10, r10, #0\n",
-            "lsr r9, r9, #16\n",
-            "orr r9, r9, r10, lsl #16\n",
-            // Exact when bits 15… of the high word all equal the result's sign bit.
-            "asr lr, r10, #15\n",
-            "cmp lr, r9, asr #31\n",
+            "ldr r9, [r12, #(4*",
+            $c,
+            " + ",
+            $stride,
+            "*",
+            $j,
+            ")]\n",
+            $op,
+            " r5, r6, r9, ",
+            $g,
+            "\n",
+        )
+    };
+}
+
+/// Σⱼ W[j][`$c`]·gⱼ over nine rows (of `$stride` bytes, W at r12) into r6:r5, by `$row!`
+/// ([`pair_row!`] also sums column `$c` + 1 into r8:r7): g₀…g₄ and then g₅…g₈ (at r11) in
+/// r0–r4, since nine values of g and two 64-bit accumulators do not fit the registers
+/// together. Uses r9 and r10.
+macro_rules! column_sums {
+    ($row:ident, $c:literal, $stride:literal) => {
+        concat!(
+            "ldm r11, {{r0-r4}}\n",
+            $row!("smull", $c, "0", "r0", $stride),
+            $row!("smlal", $c, "1", "r1", $stride),
+            $row!("smlal", $c, "2", "r2", $stride),
+            $row!("smlal", $c, "3", "r3", $stride),
+            $row!("smlal", $c, "4", "r4", $stride),
+            "add r9, r11, #20\n",
+            "ldm r9, {{r0-r3}}\n",
+            $row!("smlal", $c, "5", "r0", $stride),
+            $row!("smlal", $c, "6", "r1", $stride),
+            $row!("smlal", $c, "7", "r2", $stride),
+            $row!("smlal", $c, "8", "r3", $stride),
+        )
+    };
+}
+
+/// `$lo` ← the rounded sum `$hi`:`$lo` (2¹⁵ already added) shifted to Q16.16, and the flags
+/// "equal" exactly when that fits 32 bits: when bits 15… of the high word all equal the
+/// result's sign bit. `$scratch` is scratch.
+macro_rules! shift_and_check {
+    ($lo:literal, $hi:literal, $scratch:literal) => {
+        concat!(
+            "lsr ",
+            $lo,
+            ", ",
+            $lo,
+            ", #16\n",
+            "orr ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $hi,
+            ", lsl #16\n",
+            "asr ",
+            $scratch,
+            ", ",
+            $hi,
+            ", #15\n",
+            "cmp ",
+            $scratch,
+            ", ",
+            $lo,
+            ", asr #31\n",
+        )
+    };
+}
+
+/// `$lo` ← i32::MAX, or i32::MIN when the sum (high word `$hi`) is negative: the saturation of
+/// a sum that does not fit.
+macro_rules! saturated_word {
+    ($lo:literal, $hi:literal) => {
+        concat!(
+            "mvn ",
+            $lo,
+            ", #0x80000000\n",
+            "eor ",
+            $lo,
+            ", ",
+            $lo,
+            ", ",
+            $hi,
+            ", asr #31\n",
+        )
+    };
+}
+
+/// Rounds the sum `$hi`:`$lo` to Q16.16 like `Scalar::from_acc` — ((`$hi`:`$lo`) + 2¹⁵) >> 16
+/// when that fits 32 bits, else the end of the range on `$hi`'s side (label 1`$c`, out of
+/// line: [`saturate!`], back at 2`$c`) — and stores it at lr + 4·`$c`. Uses r9.
+macro_rules! round_and_store {
+    ($c:literal, $lo:literal, $hi:literal) => {
+        concat!(
+            "adds ",
+            $lo,
+            ", ",
+            $lo,
+            ", #32768\n",
+            "adc ",
+            $hi,
+            ", ",
+            $hi,
+            ", #0\n",
+            shift_and_check!($lo, $hi, "r9"),
             "bne 1",
-            $i,
+            $c,
             "f\n",
             "2",
-            $i,
+            $c,
             ":\n",
-            "str r9, [r11, #(4*",
-            $i,
+            "str ",
+            $lo,
+            ", [lr, #(4*",
+            $c,
             ")]\n",
         )
     };
 }
 
-/// The out-of-line saturation of column `$i`: i32::MAX, or i32::MIN when the sum is negative.
+/// The out-of-line saturation of column `$c` (see [`round_and_store!`]).
 macro_rules! saturate {
-    ($i:literal) => {
-        concat!(
-            "1",
-            $i,
-            ":\n",
-            "mvn r9, #0x80000000\n",
-            "eor r9, r9, r10, asr #31\n",
-            "b 2",
-            $i,
-            "b\n",
-        )
+    ($c:literal, $lo:literal, $hi:literal) => {
+        concat!("1", $c, ":\n", saturated_word!($lo, $hi), "b 2", $c, "b\n",)
     };
 }
 
-/// The whole transposed product over nine rows of `$stride` bytes, one `column9!` per listed
-/// output column, their saturations out of line after the last: g at `$g` (loaded into r0–r8),
-/// the weights at `$w`, the outputs written at `$out` (moved to r11 once it is saved).
-macro_rules! transposed_rows9 {
-    ($w:expr, $g:expr, $out:expr, $stride:literal, $($i:literal),+) => {
-        asm!(
-            "push {{r6, r7, r11, lr}}",
-            "mov r11, r1",
-            "ldm r0, {{r0-r8}}",
-            $(column9!($i, $stride),)+
-            "b 3f",
-            $(saturate!($i),)+
-            "3:",
-            "pop {{r6, r7, r11, lr}}",
-            inout("r0") $g => _,
-            inout("r1") $out => _,
-            out("r2") _,
-            out("r3") _,
-            out("r4") _,
-            out("r5") _,
-            out("r8") _,
-            out("r9") _,
-            out("r10") _,
-            in("r12") $w,
-            out("lr") _,
-        )
-    };
-}
-
-/// `Wᵀ·g` for a 9×9 `W` in Q16.16, rounded: output i is
-/// `from_acc(0 + W₀ᵢg₀ + … + W₈ᵢg₈)`, the products exact in 64 bits.
+/// `Wᵀ·g` for a 9×3 `W` (back through a leaf's first layer) in Q16.16, rounded: output i is
+/// `from_acc(0 + W₀ᵢg₀ + … + W₈ᵢg₈)`, the products exact in 64 bits. Columns 0 and 1 as a pair
+/// (one `ldrd` of two weights per row), then column 2.
 #[inline(always)]
-pub fn q16_transposed_9x9(w: &[[I16F16; 9]; 9], g: &[I16F16; 9]) -> [I16F16; 9] {
-    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
-    // SAFETY: reads the 81 words behind `w` and the 9 behind `g`, writes the 9 words of `out`
+pub fn q16_transposed_9x3(w: &[[I16F16; 3]; 9], g: &[I16F16; 9]) -> [I16F16; 3] {
+    let mut out = MaybeUninit::<[I16F16; 3]>::uninit();
+    // SAFETY: reads the 27 words behind `w` and the 9 behind `g`, writes the 3 words of `out`
     // (lengths fixed by the array types; `I16F16` is a transparent `i32`); saves and restores
     // r6, r7, r11 and lr on the stack (16 bytes, keeping its 8-byte alignment) and declares
     // every other register it changes.
     unsafe {
-        transposed_rows9!(
-            w.as_ptr(),
-            g.as_ptr(),
-            out.as_mut_ptr(),
-            "36",
-            "0",
-            "1",
-            "2",
-            "3",
-            "4",
-            "5",
-            "6",
-            "7",
-            "8"
-        );
-        out.assume_init()
-    }
-}
-
-/// `Wᵀ·g` for a 9×3 `W` (back through a leaf's first layer) in Q16.16, rounded: output
-/// i is `from_acc(0 + W₀ᵢg₀ + … + W₈ᵢg₈)`.
-#[inline(always)]
-pub fn q16_transposed_9x3(w: &[[I16F16; 3]; 9], g: &[I16F16; 9]) -> [I16F16; 3] {
-    let mut out = MaybeUninit::<[I16F16; 3]>::uninit();
-    // SAFETY: as `q16_transposed_9x9`, over the 27 words behind `w` and the 3 of `out`.
-    unsafe {
-        transposed_rows9!(
-            w.as_ptr(),
-            g.as_ptr(),
-            out.as_mut_ptr(),
-            "12",
-            "0",
-            "1",
-            "2"
-        );
-        out.assume_init()
-    }
-}
-
-/// One product of the one-row transpose: output `$i` = `from_acc(0 + wᵢ·g)`, g in r0 (the
-/// output pointer in r11, as for the other kernels).
-macro_rules! single9 {
-    ($i:literal) => {
-        concat!(
-            "ldr lr, [r12, #(4*",
-            $i,
-            ")]\n",
-            "smull r9, r10, lr, r0\n",
-            round_and_store!($i),
-        )
-    };
-}
-
-/// One product of the one-row transpose for a small g: output `$i` = round(wᵢ·g/2¹⁶) as the
-/// rounded high word of (wᵢ·2⁴)·(g·2¹²), g·2¹² in r0.
-macro_rules! single9_small {
-    ($i:literal) => {
-        concat!(
-            "ldr lr, [r12, #(4*",
-            $i,
-            ")]\n",
-            "lsl lr, lr, #4\n",
-            "smmulr r9, lr, r0\n",
-            "str r9, [r11, #(4*",
-            $i,
-            ")]\n",
-        )
-    };
-}
-
-/// The one-row transpose: for |g| < 2 (2¹⁷ in bits) one `single9_small!` per listed output,
-/// else one `single9!` each with the saturations out of line: g in r0, the weights at `$w`,
-/// the outputs written at `$out`.
-macro_rules! transposed_row1 {
-    ($w:expr, $g:expr, $out:expr, $($i:literal),+) => {
         asm!(
-            "push {{r11, lr}}",
-            "mov r11, r1",
-            // |g| < 2¹⁷: (g + 2¹⁷) as u32 < 2¹⁸.
-            "add r9, r0, #0x20000",
-            "cmp r9, #0x40000",
-            "bhs 4f",
-            "lsl r0, r0, #12",
-            $(single9_small!($i),)+
+            "push {{r6, r7, r11, lr}}",
+            "mov r11, r5",
+            "mov lr, r4",
+            column_sums!(pair_row, "0", "12"),
+            round_and_store!("0", "r5", "r6"),
+            round_and_store!("1", "r7", "r8"),
+            column_sums!(single_row, "2", "12"),
+            round_and_store!("2", "r5", "r6"),
             "b 3f",
-            "4:",
-            $(single9!($i),)+
-            "b 3f",
-            $(saturate!($i),)+
+            saturate!("0", "r5", "r6"),
+            saturate!("1", "r7", "r8"),
+            saturate!("2", "r5", "r6"),
             "3:",
-            "pop {{r11, lr}}",
-            inout("r0") $g => _,
-            in("r1") $out,
+            "pop {{r6, r7, r11, lr}}",
+            out("r0") _,
+            out("r1") _,
+            out("r2") _,
+            out("r3") _,
+            inout("r4") out.as_mut_ptr() => _,
+            inout("r5") g.as_ptr() => _,
+            out("r8") _,
             out("r9") _,
             out("r10") _,
-            in("r12") $w,
-            out("lr") _,
-        )
-    };
-}
-
-/// `wᵀ·g` for one row of nine weights and one g in Q16.16, rounded: output i is
-/// `from_acc(0 + wᵢ·g)`, for weights within the core's parameter bound |wᵢ| ≤ 1024 (2²⁶ in
-/// bits; the model loader rejects larger ones). Larger weights give an unspecified value (no
-/// undefined behaviour) when −2 ≤ g < 2.
-///
-/// For −2 ≤ g < 2 (the caller's g is a slope a′, between −3·10⁻⁵ and 1.144) each output is
-/// one `smmulr`: with |wᵢ| ≤ 2²⁶ and −2¹⁷ ≤ g < 2¹⁷ in bits, (wᵢ·2⁴)·(g·2¹²) fits the
-/// multiplier's operands, the rounded high word is (wᵢ·g + 2¹⁵) >> 16 exactly, and it cannot
-/// saturate (|wᵢ·g| ≤ 2⁴³). Other g take the 64-bit product with the full rounding and
-/// saturation; the core never passes one, so no test reaches that branch (it is the previous
-/// kernel's code, which the simulator tests held to the host's bits).
-#[inline(always)]
-pub fn q16_transposed_1x9(w: &[I16F16; 9], g: I16F16) -> [I16F16; 9] {
-    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
-    // SAFETY: reads the 9 words behind `w`, writes the 9 words of `out` on either path
-    // (lengths fixed by the array types), saves and restores r11 and lr (8 bytes) and declares
-    // every other register it changes.
-    unsafe {
-        transposed_row1!(
-            w.as_ptr(),
-            g.to_bits(),
-            out.as_mut_ptr(),
-            "0",
-            "1",
-            "2",
-            "3",
-            "4",
-            "5",
-            "6",
-            "7",
-            "8"
+            in("r12") w.as_ptr(),
         );
         out.assume_init()
     }
@@ -461,9 +379,9 @@ macro_rules! layer_row9 {
 }
 
 /// Row `$j` of a forward layer over three inputs, activation included (x in r0–r2, the
-/// row's bias at r8 + 4·`$j`, its three weights read from r12 by one `ldm`): H = bias +
-/// Σᵢ W[j][i]·xᵢ in r10:r9, rounded and clamped as [`pre_activation!`] into r9 (label 1`$j`
-/// is [`saturated_pre_activation!`]), then a(H) by [`table_activation!`] (2⁹ in r7), stored at
+/// row's bias at r8 + 4·`$j`, its three weights read from r12 by one `ldm`): H = bias + 2⁻¹⁷ +
+/// Σᵢ W[j][i]·xᵢ in r10:r9 (the rounding's half added with the bias, from lr = 2¹⁵), clamped
+/// by [`clamp_pre_activation!`] into r9, then a(H) by [`table_activation!`] (2⁹ in r7), stored at
 /// r11 + 4·`$j`. With three inputs there are registers to spare, so the row needs no second
 /// pass.
 macro_rules! layer_row3 {
@@ -472,25 +390,15 @@ macro_rules! layer_row3 {
             "ldr r10, [r8, #(4*",
             $j,
             ")]\n",
-            "lsl r9, r10, #16\n",
+            // bias·2¹⁶ + 2¹⁵: the rounding's half folded into the bias's low word.
+            "orr r9, lr, r10, lsl #16\n",
             "asr r10, r10, #16\n",
             "ldm r12!, {{r4, r5, r6}}\n",
             "smlal r9, r10, r4, r0\n",
             "smlal r9, r10, r5, r1\n",
             "smlal r9, r10, r6, r2\n",
-            "adds r9, r9, #0x8000\n",
-            "adc r10, r10, #0\n",
-            "add lr, r10, #10\n",
-            "cmp lr, #20\n",
-            "bhs 1",
-            $j,
-            "f\n",
-            "lsr r9, r9, #16\n",
-            "orr r9, r9, r10, lsl #16\n",
-            "2",
-            $j,
-            ":\n",
-            table_activation!("r9", "r4", "r5", "r6", "r7"),
+            clamp_pre_activation!($j, "r4"),
+            table_activation!("r9", "r4", "r5", "r6", "r7", "r10"),
             "str r5, [r11, #(4*",
             $j,
             ")]\n",
@@ -498,17 +406,20 @@ macro_rules! layer_row3 {
     };
 }
 
-/// Rounds row `$j`'s accumulator r10:r9 for the activation and stores it at sp + 4·`$j`: H in
-/// Q16.16 bits when the rounded high word lies in [−10, 10) (then H fits 32 bits and |H| < 16),
-/// else ±10 (label 1`$j`, out of line), where the table has saturated: both give
-/// `activation_from_acc`'s value in the second pass ([`activation!`]).
-macro_rules! pre_activation {
-    ($j:literal) => {
+/// Row `$j`'s accumulator r10:r9, already holding the rounding's 2¹⁵, as H for the activation
+/// into r9: H in Q16.16 bits when the rounded high word lies in [−10, 10) (then H fits 32
+/// bits), else ±10 (label 1`$j`, out of line: [`saturated_pre_activation!`], back at label
+/// 2`$j`), where the table has saturated: both give `activation_from_acc`'s value. `$scratch`
+/// is scratch.
+macro_rules! clamp_pre_activation {
+    ($j:literal, $scratch:literal) => {
         concat!(
-            "adds r9, r9, #0x8000\n",
-            "adc r10, r10, #0\n",
-            "add lr, r10, #10\n",
-            "cmp lr, #20\n",
+            "add ",
+            $scratch,
+            ", r10, #10\n",
+            "cmp ",
+            $scratch,
+            ", #20\n",
             "bhs 1",
             $j,
             "f\n",
@@ -517,14 +428,31 @@ macro_rules! pre_activation {
             "2",
             $j,
             ":\n",
-            "str r9, [sp, #(4*",
-            $j,
-            ")]\n",
         )
     };
 }
 
-/// The out-of-line branch of [`pre_activation!`] for row `$j`: ±10 in Q16.16 bits, the sign
+/// Rounds row `$j`'s accumulator r10:r9 (adds 2¹⁵) and clamps it for the activation
+/// ([`clamp_pre_activation!`]) into r9; uses lr.
+macro_rules! clamped_pre_activation {
+    ($j:literal) => {
+        concat!(
+            "adds r9, r9, #0x8000\n",
+            "adc r10, r10, #0\n",
+            clamp_pre_activation!($j, "lr"),
+        )
+    };
+}
+
+/// [`clamped_pre_activation!`] for row `$j`, stored at sp + 4·`$j` for the second pass
+/// ([`activation!`]).
+macro_rules! pre_activation {
+    ($j:literal) => {
+        concat!(clamped_pre_activation!($j), "str r9, [sp, #(4*", $j, ")]\n",)
+    };
+}
+
+/// The out-of-line branch of [`clamped_pre_activation!`] for row `$j`: ±10 in Q16.16 bits, the sign
 /// of the high word r10.
 macro_rules! saturated_pre_activation {
     ($j:literal) => {
@@ -543,56 +471,51 @@ macro_rules! saturated_pre_activation {
     };
 }
 
-/// a(H) for the H in `$h` into `$lo`, by the table's segments (at r3) with 2⁹ in `$half`: the
-/// segment below |H| (index |H| >> 10) interpolated by the fraction |H| & 1023, rounded, the
-/// sign restored — the core's `interpolate` and odd symmetry. `$abs` and `$rise` are scratch.
+/// a(H) for the H in `$h` (within [−10, 10]) into `$lo`, by the table's segments over both
+/// signs (r3 points at the one for H = 0; see `ActivationTable`): the segment below H, index
+/// H >> 10, interpolated by the fraction H & 1023 and rounded with 2⁹ (in `$half`) less one
+/// when H < 0 — the core's symmetric interpolation, bit for bit (the core's `SEGMENTS` docs
+/// show why). `$index`, `$rise` and `$round` are scratch.
 macro_rules! table_activation {
-    ($h:literal, $abs:literal, $lo:literal, $rise:literal, $half:literal) => {
+    ($h:literal, $index:literal, $lo:literal, $rise:literal, $half:literal, $round:literal) => {
         concat!(
-            "eor ",
-            $abs,
+            "asr ",
+            $index,
             ", ",
             $h,
-            ", ",
-            $h,
-            ", asr #31\n",
-            "sub ",
-            $abs,
-            ", ",
-            $abs,
-            ", ",
-            $h,
-            ", asr #31\n",
-            "ubfx ",
-            $lo,
-            ", ",
-            $abs,
-            ", #10, #10\n",
+            ", #10\n",
             "add ",
-            $lo,
+            $index,
             ", r3, ",
-            $lo,
+            $index,
             ", lsl #3\n",
             "ldrd ",
             $lo,
             ", ",
             $rise,
             ", [",
-            $lo,
+            $index,
             "]\n",
             "ubfx ",
-            $abs,
+            $index,
             ", ",
-            $abs,
+            $h,
             ", #0, #10\n",
+            "add ",
+            $round,
+            ", ",
+            $half,
+            ", ",
+            $h,
+            ", asr #31\n",
             "mla ",
             $rise,
             ", ",
             $rise,
             ", ",
-            $abs,
+            $index,
             ", ",
-            $half,
+            $round,
             "\n",
             "add ",
             $lo,
@@ -601,20 +524,6 @@ macro_rules! table_activation {
             ", ",
             $rise,
             ", asr #10\n",
-            "eor ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $h,
-            ", asr #31\n",
-            "sub ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $h,
-            ", asr #31\n",
         )
     };
 }
@@ -627,7 +536,7 @@ macro_rules! activation {
             "ldr r0, [sp, #(4*",
             $j,
             ")]\n",
-            table_activation!("r0", "r1", "r4", "r5", "r6"),
+            table_activation!("r0", "r1", "r4", "r5", "r6", "r9"),
             "str r4, [r2, #(4*",
             $j,
             ")]\n",
@@ -698,10 +607,13 @@ macro_rules! layer9 {
     };
 }
 
-/// The activation table's layout that [`q16_layer_9x9`] and [`q16_layer_9x3`] read: for
-/// k = 0 … 1023, a(H) in Q16.16 bits at H = k/64 and its rise to the entry at (k + 1)/64
-/// (a(10) from k = 640 on, rise 0).
-pub type ActivationTable = [[i32; 2]; 1024];
+/// The activation table's layout that [`q16_layer_9x9`] and [`q16_layer_9x3`] read: at index
+/// 640 + k for k = −640 … 640, a(H) in Q16.16 bits at H = k/64 and its rise to the entry at
+/// (k + 1)/64 (rise 0 at k = 640, where a has saturated).
+pub type ActivationTable = [[i32; 2]; 1281];
+
+/// The index of H = 0 in an [`ActivationTable`].
+const TABLE_ZERO: usize = 640;
 
 /// A forward layer of nine outputs on nine inputs in Q16.16: output j is the core's
 /// `activation_from_acc(to_acc(bⱼ) + Σᵢ W[j][i]·xᵢ)` with `table` the core's activation
@@ -715,8 +627,8 @@ pub fn q16_layer_9x9(
     table: &ActivationTable,
 ) -> [I16F16; 9] {
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
-    // SAFETY: reads the 81 words behind `w`, the 9 behind `b` and `x` and, at indices below
-    // 1 024 + 1 (the index is masked to 10 bits), the table; writes the 9 words of `out`
+    // SAFETY: reads the 81 words behind `w`, the 9 behind `b` and `x` and the table at
+    // indices 640 + (H >> 10) for H clamped to [−10, 10] (0 … 1 280); writes the 9 words of `out`
     // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses 64 bytes of
     // stack (saving r2, r3, r6, r7, r11 and lr there, the nine pre-activations below them),
     // keeps it 8-byte aligned, and declares every other register it changes.
@@ -728,7 +640,7 @@ pub fn q16_layer_9x9(
             b.as_ptr(),
             x.as_ptr(),
             out.as_mut_ptr(),
-            table.as_ptr()
+            table.as_ptr().wrapping_add(TABLE_ZERO)
         );
         out.assume_init()
     }
@@ -744,8 +656,8 @@ pub fn q16_layer_9x3(
     table: &ActivationTable,
 ) -> [I16F16; 9] {
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
-    // SAFETY: reads the 27 words behind `w`, the 9 behind `b`, the 3 behind `x` and, at
-    // indices below 1 024 (the index is masked to 10 bits), the table; writes the 9 words of
+    // SAFETY: reads the 27 words behind `w`, the 9 behind `b`, the 3 behind `x` and the
+    // table at indices 640 + (H >> 10) for H clamped to [−10, 10] (0 … 1 280); writes the 9 words of
     // `out` (lengths fixed by the array types; `I16F16` is a transparent `i32`); pushes r6,
     // r7, r11 and lr (16 bytes, keeping sp 8-byte aligned) and restores them, and declares
     // every other register it changes.
@@ -754,6 +666,7 @@ pub fn q16_layer_9x3(
             "push {{r6, r7, r11, lr}}",
             "mov r11, r2",
             "mov r7, #512",
+            "mov lr, #0x8000",
             "ldm r0, {{r0-r2}}",
             layer_row3!("0"),
             layer_row3!("1"),
@@ -779,7 +692,7 @@ pub fn q16_layer_9x3(
             inout("r0") x.as_ptr() => _,
             out("r1") _,
             inout("r2") out.as_mut_ptr() => _,
-            in("r3") table.as_ptr(),
+            in("r3") table.as_ptr().wrapping_add(TABLE_ZERO),
             out("r4") _,
             out("r5") _,
             inout("r8") b.as_ptr() => _,
@@ -790,6 +703,66 @@ pub fn q16_layer_9x3(
         );
         out.assume_init()
     }
+}
+
+/// The output neuron: a(b + Σᵢ wᵢ·xᵢ) for one row of nine weights in Q16.16 — the core's
+/// `activation_from_acc(to_acc(b) + Σᵢ wᵢ·xᵢ)`, as [`q16_layer_9x9`] for one row. With one row
+/// the inputs need not stay in registers: once a product has used its input's register,
+/// that register takes a later weight, so the nine weights come in three `ldm`.
+#[inline(always)]
+pub fn q16_layer_1x9(
+    w: &[I16F16; 9],
+    b: I16F16,
+    x: &[I16F16; 9],
+    table: &ActivationTable,
+) -> I16F16 {
+    let a: i32;
+    // SAFETY: reads the 9 words behind `w` and `x` and the table at index 640 + (H >> 10) for
+    // H clamped to [−10, 10] (0 … 1 280); pushes the table pointer, r6, r7 and r11 (16 bytes,
+    // keeping sp 8-byte aligned) and restores them, and declares every other register it
+    // changes.
+    unsafe {
+        asm!(
+            "push {{r3, r6, r7, r11}}",
+            // bias·2¹⁶ + 2¹⁵: the rounding's half folded into the bias's low word.
+            "mov r9, #0x8000",
+            "orr r9, r9, r10, lsl #16",
+            "asr r10, r10, #16",
+            "ldm r0, {{r0-r8}}",
+            "ldm r12!, {{r11, lr}}",
+            "smlal r9, r10, r11, r0",
+            "smlal r9, r10, lr, r1",
+            "ldm r12!, {{r0, r1, r11, lr}}",
+            "smlal r9, r10, r0, r2",
+            "smlal r9, r10, r1, r3",
+            "smlal r9, r10, r11, r4",
+            "smlal r9, r10, lr, r5",
+            "ldm r12, {{r0-r2}}",
+            "smlal r9, r10, r0, r6",
+            "smlal r9, r10, r1, r7",
+            "smlal r9, r10, r2, r8",
+            clamp_pre_activation!("0", "lr"),
+            "ldr r3, [sp]",
+            "mov r7, #512",
+            table_activation!("r9", "r4", "r5", "r6", "r7", "lr"),
+            "b 3f",
+            saturated_pre_activation!("0"),
+            "3:",
+            "pop {{r3, r6, r7, r11}}",
+            inout("r0") x.as_ptr() => _,
+            out("r1") _,
+            out("r2") _,
+            in("r3") table.as_ptr().wrapping_add(TABLE_ZERO),
+            out("r4") _,
+            out("r5") a,
+            out("r8") _,
+            out("r9") _,
+            inout("r10") b.to_bits() => _,
+            inout("r12") w.as_ptr() => _,
+            out("lr") _,
+        );
+    }
+    I16F16::from_bits(a)
 }
 
 /// The chain rule's tail for column `$c` of a fused transpose, its rounded accumulator
@@ -864,38 +837,11 @@ macro_rules! slope_tail_slow {
             "1",
             $c,
             ":\n",
-            "lsr ",
-            $lo,
-            ", ",
-            $lo,
-            ", #16\n",
-            "orr ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $hi,
-            ", lsl #16\n",
-            // Exact when bits 15… of the high word all equal the result's sign bit.
-            "asr r3, ",
-            $hi,
-            ", #15\n",
-            "cmp r3, ",
-            $lo,
-            ", asr #31\n",
+            shift_and_check!($lo, $hi, "r3"),
             "beq 4",
             $c,
             "f\n",
-            "mvn ",
-            $lo,
-            ", #0x80000000\n",
-            "eor ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $hi,
-            ", asr #31\n",
+            saturated_word!($lo, $hi),
             "4",
             $c,
             ":\n",
@@ -911,47 +857,13 @@ macro_rules! slope_tail_slow {
     };
 }
 
-/// Row `$j` of a column pair: W[`$j`][`$c`] and W[`$j`][`$c` + 1] by one `ldrd` (row stride 36
-/// bytes, W at r12) into r9/r10, times g (in `$g`) into the accumulators r6:r5 and r8:r7;
-/// `$op` is `smull` for the first row, else `smlal`.
-macro_rules! pair_row {
-    ($op:literal, $c:literal, $j:literal, $g:literal) => {
-        concat!(
-            "ldrd r9, r10, [r12, #(4*",
-            $c,
-            " + 36*",
-            $j,
-            ")]\n",
-            $op,
-            " r5, r6, r9, ",
-            $g,
-            "\n",
-            $op,
-            " r7, r8, r10, ",
-            $g,
-            "\n",
-        )
-    };
-}
-
-/// Columns `$c` and `$c1` = `$c` + 1 of a fused 9×9 transpose: g₀…g₄ then g₅…g₈ (at r11) into
-/// r0–r4, one `ldrd` of two weights per row, then [`slope_tail!`] on each column with the
-/// constants and the pointer to a (sp + 0…8) in r0–r2.
+/// Columns `$c` and `$c1` = `$c` + 1 of a fused 9×9 transpose ([`column_sums!`] by
+/// [`pair_row!`]), then [`slope_tail!`] on each column with the constants and the pointer to a
+/// (sp + 0…8) in r0–r2.
 macro_rules! slope_pair {
     ($c:literal, $c1:literal) => {
         concat!(
-            "ldm r11, {{r0-r4}}\n",
-            pair_row!("smull", $c, "0", "r0"),
-            pair_row!("smlal", $c, "1", "r1"),
-            pair_row!("smlal", $c, "2", "r2"),
-            pair_row!("smlal", $c, "3", "r3"),
-            pair_row!("smlal", $c, "4", "r4"),
-            "add r9, r11, #20\n",
-            "ldm r9, {{r0-r3}}\n",
-            pair_row!("smlal", $c, "5", "r0"),
-            pair_row!("smlal", $c, "6", "r1"),
-            pair_row!("smlal", $c, "7", "r2"),
-            pair_row!("smlal", $c, "8", "r3"),
+            column_sums!(pair_row, $c, "36"),
             "ldm sp, {{r0-r2}}\n",
             "adds r5, r5, #0x8000\n",
             "adc r6, r6, #0\n",
@@ -963,24 +875,8 @@ macro_rules! slope_pair {
     };
 }
 
-/// Row `$j` of the last, single column 8: W[`$j`][8] by `ldr` into r9, times g (in `$g`) into
-/// r6:r5.
-macro_rules! last_row {
-    ($op:literal, $j:literal, $g:literal) => {
-        concat!(
-            "ldr r9, [r12, #(32 + 36*",
-            $j,
-            ")]\n",
-            $op,
-            " r5, r6, r9, ",
-            $g,
-            "\n",
-        )
-    };
-}
-
 /// δᵢ = `times_slope(from_acc(Σⱼ W[j][i]·gⱼ), aᵢ)` for the nine columns of a 9×9 `W` in Q16.16:
-/// [`q16_transposed_9x9`] followed by [`q16_times_slope_9`] in one pass, with the same bits.
+/// the transpose, rounded, followed by [`q16_times_slope_9`] in one pass, with the same bits.
 ///
 /// Each column's sum is exact in 64 bits; when −2 ≤ aᵢ < 2 and its rounded value t lies in
 /// [−2¹³, 2¹³) (where no saturation happens), δᵢ is the chain rule's fast path, as
@@ -991,7 +887,7 @@ macro_rules! last_row {
 ///
 /// The weights come in column pairs, two per `ldrd` from the same row, with g₀…g₄ and then
 /// g₅…g₈ in registers (the nine values and two 64-bit accumulators do not fit together): about
-/// 1.7 instructions per product against the two of [`q16_transposed_9x9`], and the chain rule
+/// 1.7 instructions per product against the two of one `ldr` per weight, and the chain rule
 /// runs on the sum still in registers.
 #[inline(always)]
 pub fn q16_transposed_slope_9x9(
@@ -1016,18 +912,7 @@ pub fn q16_transposed_slope_9x9(
             slope_pair!("2", "3"),
             slope_pair!("4", "5"),
             slope_pair!("6", "7"),
-            "ldm r11, {{r0-r4}}",
-            last_row!("smull", "0", "r0"),
-            last_row!("smlal", "1", "r1"),
-            last_row!("smlal", "2", "r2"),
-            last_row!("smlal", "3", "r3"),
-            last_row!("smlal", "4", "r4"),
-            "add r9, r11, #20",
-            "ldm r9, {{r0-r3}}",
-            last_row!("smlal", "5", "r0"),
-            last_row!("smlal", "6", "r1"),
-            last_row!("smlal", "7", "r2"),
-            last_row!("smlal", "8", "r3"),
+            column_sums!(single_row, "8", "36"),
             "ldm sp, {{r0-r2}}",
             "adds r5, r5, #0x8000",
             "adc r6, r6, #0",
@@ -1062,8 +947,8 @@ pub fn q16_transposed_slope_9x9(
     }
 }
 
-/// Output `$i` of the fused one-row transpose: t = round(wᵢ·g/2¹⁶) as [`single9_small!`] (g·2¹²
-/// in r0, w at r12), then with a = `a[$i]` (at r1; r3 = square·2¹⁶, r4 = offset·2¹⁴) the
+/// Output `$i` of the fused one-row transpose: t = round(wᵢ·g/2¹⁶) as the rounded high word
+/// of (wᵢ·2⁴)·(g·2¹²) (g·2¹² in r0, w at r12), then with a = `a[$i]` (at r1; r3 = square·2¹⁶, r4 = offset·2¹⁴) the
 /// chain rule's fast path when −2 ≤ a < 2 (t is small enough by the weight bound), else t
 /// and bit `$i` of r5 (label 1`$i`, out of line); stored at r2 + 4·`$i`.
 macro_rules! single_slope {
@@ -1099,11 +984,16 @@ macro_rules! single_slope {
 }
 
 /// δᵢ = `times_slope(from_acc(wᵢ·g), aᵢ)` for one row of nine weights and one g in Q16.16:
-/// [`q16_transposed_1x9`] followed by [`q16_times_slope_9`] in one pass, with the same bits,
-/// for −2 ≤ g < 2 and weights within the core's bound |wᵢ| ≤ 1024 (as `q16_transposed_1x9`'s
-/// fast path; then |t| ≤ 2¹¹, inside the chain rule's fast range). `None` for any other g (the
-/// core's g, the output's slope, is at most 1.144): the caller then takes the two steps
-/// separately. A neuron with aᵢ outside [−2, 2) keeps t and its bit is set in the mask, as
+/// the one-row transpose followed by [`q16_times_slope_9`] in one pass, with the same bits,
+/// for −2 ≤ g < 2 and weights within the core's bound |wᵢ| ≤ 1024 (2²⁶ in bits; the model
+/// loader rejects larger ones).
+///
+/// Each t = round(wᵢ·g/2¹⁶) is one `smmulr`: with |wᵢ| ≤ 2²⁶ and −2¹⁷ ≤ g < 2¹⁷ in bits,
+/// (wᵢ·2⁴)·(g·2¹²) fits the multiplier's operands, its rounded high word is
+/// (wᵢ·g + 2¹⁵) >> 16 exactly, and it cannot saturate (|wᵢ·g| ≤ 2⁴³); |t| ≤ 2¹¹, inside the
+/// chain rule's fast range. Larger weights give an unspecified value (no undefined
+/// behaviour). `None` for any other g (the core's g, the output's slope, is at most 1.144):
+/// the caller then takes the portable path. A neuron with aᵢ outside [−2, 2) keeps t and its bit is set in the mask, as
 /// [`q16_transposed_slope_9x9`].
 #[inline(always)]
 pub fn q16_transposed_slope_1x9(

@@ -6,11 +6,11 @@
 //! layers (products, rounding and table lookup in one kernel each); everywhere else there are
 //! none.
 
-// The forward kernels hard-code the activation table's layout: index |H|·2¹⁶ >> 10 on 10 bits,
-// the saturated entry at H = 10 (index 640), 1 024 segments of two words.
+// The forward kernels hard-code the activation table's layout: 1 281 segments of two words,
+// H = 0 at index 640, one segment per 2¹⁰ bits of H.
 const _: () = {
-    use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, SEGMENTS};
-    assert!(FRACTION_BITS == 10 && INDEX_BITS == 10 && LAST == 640 && SEGMENTS.len() == 1024);
+    use super::activation_table::{FRACTION_BITS, LAST, SEGMENTS};
+    assert!(FRACTION_BITS == 10 && LAST == 640 && SEGMENTS.len() == 1281);
 };
 
 /// Whether this build has the kernels.
@@ -30,9 +30,7 @@ pub(super) fn transposed<const IN: usize, const OUT: usize>(
         use neurosurf_m4f as m4f;
         let w = w.as_flattened();
         return match (OUT, IN) {
-            (9, 9) => resize(m4f::q16_transposed_9x9(rows(w)?, g.first_chunk()?)),
             (9, 3) => resize(m4f::q16_transposed_9x3(rows(w)?, g.first_chunk()?)),
-            (1, 9) => resize(m4f::q16_transposed_1x9(w.first_chunk()?, *g.first()?)),
             _ => None,
         };
     }
@@ -73,17 +71,32 @@ pub(super) fn layer<const IN: usize, const OUT: usize>(
     w: &[[Q16; IN]; OUT],
     b: &[Q16; OUT],
     x: &[Q16; IN],
-    table: &[[i32; 2]; 1024],
+    table: &[[i32; 2]; 1281],
 ) -> Option<[Q16; OUT]> {
     #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     {
         use super::kernel_shapes::{resize, rows};
         use neurosurf_m4f as m4f;
         let w = w.as_flattened();
-        let b = b.first_chunk()?;
         return match (OUT, IN) {
-            (9, 9) => resize(m4f::q16_layer_9x9(rows(w)?, b, x.first_chunk()?, table)),
-            (9, 3) => resize(m4f::q16_layer_9x3(rows(w)?, b, x.first_chunk()?, table)),
+            (9, 9) => resize(m4f::q16_layer_9x9(
+                rows(w)?,
+                b.first_chunk()?,
+                x.first_chunk()?,
+                table,
+            )),
+            (9, 3) => resize(m4f::q16_layer_9x3(
+                rows(w)?,
+                b.first_chunk()?,
+                x.first_chunk()?,
+                table,
+            )),
+            (1, 9) => resize([m4f::q16_layer_1x9(
+                w.first_chunk()?,
+                *b.first()?,
+                x.first_chunk()?,
+                table,
+            )]),
             _ => None,
         };
     }

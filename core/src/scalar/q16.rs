@@ -6,7 +6,7 @@
 //! interpolation (no division anywhere in a neuron). Every operation saturates at the ends of
 //! the range instead of wrapping.
 
-use super::activation_table::{FRACTION_BITS, INDEX_BITS, LAST, SEGMENTS};
+use super::activation_table::{FRACTION_BITS, LAST, SEGMENTS};
 use super::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN, Scalar, ScalarKind};
 
 /// Signed Q16.16 fixed point: range [−32768, 32768), resolution 2⁻¹⁶ ≈ 1.5·10⁻⁵.
@@ -72,7 +72,7 @@ fn slope_bits(a: i32) -> i32 {
 #[inline(always)]
 fn activation_bits(bits: i32) -> i32 {
     let magnitude = bits.unsigned_abs();
-    let value = if magnitude >> (FRACTION_BITS + INDEX_BITS) != 0 {
+    let value = if magnitude >= (LAST as u32) << FRACTION_BITS {
         saturated_activation()
     } else {
         interpolate(magnitude)
@@ -80,13 +80,12 @@ fn activation_bits(bits: i32) -> i32 {
     if bits < 0 { -value } else { value }
 }
 
-/// a(|H|) for |H| = `magnitude`·2⁻¹⁶ below 16 (larger magnitudes wrap the index): the index
-/// is masked to [`INDEX_BITS`] bits, so the table reads need no bounds checks (one `ubfx` on
-/// the M4).
+/// a(|H|) for |H| = `magnitude`·2⁻¹⁶ below 16: the segment of the table's upper half below
+/// |H| (from 10 on the last, which is flat), interpolated and rounded.
 #[inline(always)]
 fn interpolate(magnitude: u32) -> i32 {
-    let index = ((magnitude >> FRACTION_BITS) & ((1 << INDEX_BITS) - 1)) as usize;
-    let [lower, rise] = SEGMENTS.get(index).copied().unwrap_or([0, 0]);
+    let index = (magnitude >> FRACTION_BITS).min(LAST as u32) as usize;
+    let [lower, rise] = SEGMENTS.get(LAST + index).copied().unwrap_or([0, 0]);
     let fraction = (magnitude & ((1 << FRACTION_BITS) - 1)) as i32;
     lower + ((rise * fraction + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS)
 }
@@ -107,7 +106,7 @@ fn finish_times_slope<const N: usize>(delta: &mut [Q16; N], a: &[Q16; N], slow: 
 /// a(H) in bits for |H| ≥ 10, where the table has saturated.
 #[inline(always)]
 fn saturated_activation() -> i32 {
-    SEGMENTS.get(LAST).map_or(0, |&[value, _]| value)
+    SEGMENTS.get(2 * LAST).map_or(0, |&[value, _]| value)
 }
 
 impl Scalar for Q16 {
