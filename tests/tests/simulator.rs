@@ -281,6 +281,40 @@ fn q16_slope_kernel_falls_back_like_the_host() {
     assert_q16_target_equals(&bytes, &points, &expected);
 }
 
+/// The Q16.16 input normalization x′ = A·(x − c) where it saturates, on the target against the
+/// host: a torus leaf whose first layer reads x′₀ only, with weights 2·10⁻⁵·(j + 1), so that
+/// at the ends of the Q16.16 range (|x| ≈ 32 768, where x′₀ is clamped to ±32 768) the first
+/// layer's pre-activations stay within the activation's range and the clamped x′₀ shows in Φ.
+/// Checked by making row 0's saturation give 0: this test then fails.
+#[test]
+fn q16_normalization_saturates_like_the_host() {
+    let mut trained = torus();
+    let leaf = trained.network.root();
+    let layout = trained.network.trained_layout(leaf);
+    let params = trained.network.trained_params_mut(leaf);
+    for j in 0..layout.width {
+        for i in 0..layout.inputs {
+            params[layout.a_weights + j * layout.inputs + i] =
+                if i == 0 { 2e-5 * (j + 1) as f64 } else { 0.0 };
+        }
+    }
+    let bytes = blob(&trained, ScalarKind::Q16_16);
+    let points = vec![
+        [32767.0, -32768.0, 32767.0],
+        [-32768.0, 32767.0, -32768.0],
+        [32767.0, 32767.0, -32768.0],
+        [-20000.0, 30000.0, 25000.0],
+    ];
+    let expected = host(&bytes, &points, Precision::Q16);
+    // The construction's premise: f64, which does not clamp x′, gives another Φ there.
+    let differs = points
+        .iter()
+        .zip(&expected)
+        .any(|(&x, q16)| (trained.network.eval(x).0 - q16.0).abs() > 1e-2);
+    assert!(differs, "x′ does not saturate at these points");
+    assert_q16_target_equals(&bytes, &points, &expected);
+}
+
 /// The issue allows 2 ulp; the design gives 0 and this test holds it to that: the f32 path is
 /// IEEE `+ − × ÷` in a fixed order on both machines, and the target's assembly kernels
 /// (`neurosurf-m4f`: `vmla`, the non-fused multiply–accumulate) round exactly like the host's

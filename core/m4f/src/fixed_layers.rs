@@ -348,17 +348,16 @@ pub fn q16_times_slope_9(
     slow
 }
 
-/// Row `$j` of a forward layer over nine inputs (x in r0–r8, the row's bias at sp + 4·`$j`,
-/// the weights read in order from r12, two at a time): H = bias + Σᵢ W[j][i]·xᵢ in r10:r9
-/// (Q32.32, in order), then [`pre_activation!`].
+/// Row `$j` of a forward layer over nine inputs (x in r0–r8, the row's bias·2¹⁶ + 2¹⁵ as a
+/// Q32.32 pair at sp + 8·`$j`, the weights read in order from r12, two at a time): H = bias +
+/// Σᵢ W[j][i]·xᵢ in r10:r9 (Q32.32, in order, the rounding's half included), clamped by
+/// [`clamp_pre_activation!`] and stored at sp + 4·`$j` (a pair row j has read already).
 macro_rules! layer_row9 {
     ($j:literal) => {
         concat!(
-            "ldr r10, [sp, #(4*",
+            "ldrd r9, r10, [sp, #(8*",
             $j,
             ")]\n",
-            "lsl r9, r10, #16\n",
-            "asr r10, r10, #16\n",
             "ldm r12!, {{r11, lr}}\n",
             "smlal r9, r10, r11, r0\n",
             "smlal r9, r10, lr, r1\n",
@@ -373,7 +372,10 @@ macro_rules! layer_row9 {
             "smlal r9, r10, lr, r7\n",
             "ldr lr, [r12], #4\n",
             "smlal r9, r10, lr, r8\n",
-            pre_activation!($j),
+            clamp_pre_activation!($j, "lr"),
+            "str r9, [sp, #(4*",
+            $j,
+            ")]\n",
         )
     };
 }
@@ -432,27 +434,7 @@ macro_rules! clamp_pre_activation {
     };
 }
 
-/// Rounds row `$j`'s accumulator r10:r9 (adds 2¹⁵) and clamps it for the activation
-/// ([`clamp_pre_activation!`]) into r9; uses lr.
-macro_rules! clamped_pre_activation {
-    ($j:literal) => {
-        concat!(
-            "adds r9, r9, #0x8000\n",
-            "adc r10, r10, #0\n",
-            clamp_pre_activation!($j, "lr"),
-        )
-    };
-}
-
-/// [`clamped_pre_activation!`] for row `$j`, stored at sp + 4·`$j` for the second pass
-/// ([`activation!`]).
-macro_rules! pre_activation {
-    ($j:literal) => {
-        concat!(clamped_pre_activation!($j), "str r9, [sp, #(4*", $j, ")]\n",)
-    };
-}
-
-/// The out-of-line branch of [`clamped_pre_activation!`] for row `$j`: ±10 in Q16.16 bits, the sign
+/// The out-of-line branch of [`clamp_pre_activation!`] for row `$j`: ±10 in Q16.16 bits, the sign
 /// of the high word r10.
 macro_rules! saturated_pre_activation {
     ($j:literal) => {
@@ -544,19 +526,50 @@ macro_rules! activation {
     };
 }
 
+/// Bias `$j` (in `$b`) as the Q32.32 pair (bias·2¹⁶ + 2¹⁵, bias >> 16) at sp + 8·`$j`, with
+/// 2¹⁵ in lr: the accumulator a row starts from. Uses r11.
+macro_rules! bias_pair {
+    ($b:literal, $j:literal) => {
+        concat!(
+            "orr r11, lr, ",
+            $b,
+            ", lsl #16\n",
+            "asr ",
+            $b,
+            ", ",
+            $b,
+            ", #16\n",
+            "strd r11, ",
+            $b,
+            ", [sp, #(8*",
+            $j,
+            ")]\n",
+        )
+    };
+}
+
 /// A whole forward layer of nine outputs: the rows (`$row!`, inputs loaded by `$load`) into
 /// the nine pre-activations on the stack, then their activations through the table.
 macro_rules! layer9 {
     ($row:ident, $load:literal, $w:expr, $b:expr, $x:expr, $out:expr, $table:expr) => {
         asm!(
-            // r2 (out) and r3 (table) are saved for the second pass; 24 + 40 bytes keep sp
+            // r2 (out) and r3 (table) are saved for the second pass; 24 + 72 bytes keep sp
             // 8-byte aligned.
             "push {{r2, r3, r6, r7, r11, lr}}",
-            "sub sp, sp, #40",
-            // The biases go where the rows' pre-activations will be: row j reads slot j,
-            // then overwrites it.
+            "sub sp, sp, #72",
+            // Each bias as the Q32.32 pair (bias·2¹⁶ + 2¹⁵, bias >> 16) at sp + 8j: the row's
+            // accumulator starts with one `ldrd`, its rounding's half included.
+            "mov lr, #0x8000",
             "ldm r1, {{r2-r10}}",
-            "stm sp, {{r2-r10}}",
+            bias_pair!("r2", "0"),
+            bias_pair!("r3", "1"),
+            bias_pair!("r4", "2"),
+            bias_pair!("r5", "3"),
+            bias_pair!("r6", "4"),
+            bias_pair!("r7", "5"),
+            bias_pair!("r8", "6"),
+            bias_pair!("r9", "7"),
+            bias_pair!("r10", "8"),
             $load,
             $row!("0"),
             $row!("1"),
@@ -567,8 +580,8 @@ macro_rules! layer9 {
             $row!("6"),
             $row!("7"),
             $row!("8"),
-            "ldr r2, [sp, #40]",
-            "ldr r3, [sp, #44]",
+            "ldr r2, [sp, #72]",
+            "ldr r3, [sp, #76]",
             "mov r6, #512",
             activation!("0"),
             activation!("1"),
@@ -590,7 +603,7 @@ macro_rules! layer9 {
             saturated_pre_activation!("7"),
             saturated_pre_activation!("8"),
             "3:",
-            "add sp, sp, #40",
+            "add sp, sp, #72",
             "pop {{r2, r3, r6, r7, r11, lr}}",
             inout("r0") $x => _,
             inout("r1") $b => _,
@@ -629,9 +642,10 @@ pub fn q16_layer_9x9(
     let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
     // SAFETY: reads the 81 words behind `w`, the 9 behind `b` and `x` and the table at
     // indices 640 + (H >> 10) for H clamped to [−10, 10] (0 … 1 280); writes the 9 words of `out`
-    // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses 64 bytes of
-    // stack (saving r2, r3, r6, r7, r11 and lr there, the nine pre-activations below them),
-    // keeps it 8-byte aligned, and declares every other register it changes.
+    // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses 96 bytes of
+    // stack (saving r2, r3, r6, r7, r11 and lr there, below them the nine biases as Q32.32
+    // pairs, overwritten by the nine pre-activations), keeps it 8-byte aligned, and declares
+    // every other register it changes.
     unsafe {
         layer9!(
             layer_row9,
@@ -763,6 +777,72 @@ pub fn q16_layer_1x9(
         );
     }
     I16F16::from_bits(a)
+}
+
+/// Row `$r` of a leaf's input normalization: x′ᵣ = from_acc(Σₖ A[r][k]·dₖ) with d in r3–r5,
+/// the row's three weights read from r0 by one `ldm`, the sum in lr:r1, rounded by
+/// [`shift_and_check!`] (saturated out of line, label 1`$r`) and stored at r2 + 4·`$r`.
+macro_rules! normalization_row {
+    ($r:literal) => {
+        concat!(
+            "ldm r0!, {{r9, r10, r12}}\n",
+            "smull r1, lr, r9, r3\n",
+            "smlal r1, lr, r10, r4\n",
+            "smlal r1, lr, r12, r5\n",
+            "adds r1, r1, #0x8000\n",
+            "adc lr, lr, #0\n",
+            shift_and_check!("r1", "lr", "r9"),
+            "bne 1",
+            $r,
+            "f\n",
+            "2",
+            $r,
+            ":\n",
+            "str r1, [r2, #(4*",
+            $r,
+            ")]\n",
+        )
+    };
+}
+
+/// A leaf's normalized input x′ = A·(x − c) in Q16.16, `normalization` = [c₀, c₁, c₂, A row by
+/// row]: each dₖ = xₖ − cₖ saturating (`qsub`), each row's sum exact in 64 bits and rounded
+/// like `Scalar::from_acc` — the core's `normalized_input`, bit for bit.
+#[inline(always)]
+pub fn q16_normalize(normalization: &[I16F16; 12], x: &[I16F16; 3]) -> [I16F16; 3] {
+    let mut out = MaybeUninit::<[I16F16; 3]>::uninit();
+    // SAFETY: reads the 12 words behind `normalization` and the 3 behind `x`, writes the 3
+    // words of `out` (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses
+    // no stack and declares every register it changes.
+    unsafe {
+        asm!(
+            "ldm r1, {{r3-r5}}",
+            "ldm r0!, {{r9, r10, r12}}",
+            "qsub r3, r3, r9",
+            "qsub r4, r4, r10",
+            "qsub r5, r5, r12",
+            normalization_row!("0"),
+            normalization_row!("1"),
+            normalization_row!("2"),
+            "b 3f",
+            saturate!("0", "r1", "lr"),
+            saturate!("1", "r1", "lr"),
+            saturate!("2", "r1", "lr"),
+            "3:",
+            inout("r0") normalization.as_ptr() => _,
+            inout("r1") x.as_ptr() => _,
+            in("r2") out.as_mut_ptr(),
+            out("r3") _,
+            out("r4") _,
+            out("r5") _,
+            out("r9") _,
+            out("r10") _,
+            out("r12") _,
+            out("lr") _,
+            options(nostack),
+        );
+        out.assume_init()
+    }
 }
 
 /// The chain rule's tail for column `$c` of a fused transpose, its rounded accumulator

@@ -93,7 +93,7 @@ mod layers;
 
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 pub use fixed_layers::{
-    ActivationTable, q16_layer_1x9, q16_layer_9x3, q16_layer_9x9, q16_times_slope_9,
+    ActivationTable, q16_layer_1x9, q16_layer_9x3, q16_layer_9x9, q16_normalize, q16_times_slope_9,
     q16_transposed_9x3, q16_transposed_slope_1x9, q16_transposed_slope_9x9,
 };
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]

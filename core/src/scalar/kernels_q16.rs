@@ -139,3 +139,18 @@ pub(super) fn transposed_slope<const IN: usize, const OUT: usize>(
         None
     }
 }
+
+/// A leaf's normalized input x′ = A·(x − c) (`normalization` = [c, A row by row]), as the
+/// core's `normalized_input`, when a kernel exists.
+#[inline(always)]
+pub(super) fn normalize(normalization: &[Q16; 12], x: &[Q16; 3]) -> Option<[Q16; 3]> {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    {
+        return Some(neurosurf_m4f::q16_normalize(normalization, x));
+    }
+    #[allow(unreachable_code)]
+    {
+        let _ = (normalization, x);
+        None
+    }
+}

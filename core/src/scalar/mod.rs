@@ -228,6 +228,15 @@ pub trait Scalar:
         let _ = (delta, a);
         false
     }
+    /// A leaf's normalized input x′ = A·(x − c) for one point by a target kernel, when there is
+    /// one: `normalization` is [c₀, c₁, c₂, then A row by row], and x′ᵣ is
+    /// `from_acc(ZERO.to_acc() + Σₖ mac(A[r][k], x[k].sub(c[k])))`, bit for bit; `None` means
+    /// "use the portable loop". (Q16.16 on a Cortex-M4F.)
+    #[inline(always)]
+    fn normalization_kernel(normalization: &[Self; 12], x: &[Self; 3]) -> Option<[Self; 3]> {
+        let _ = (normalization, x);
+        None
+    }
     /// [`Scalar::transposed_kernel`] followed by [`Scalar::times_slope`] on each output with
     /// `a[i]`, by a target kernel, when there is one for this shape: output i is
     /// `times_slope(from_acc(ZERO.to_acc() + Σⱼ mac(W[j][i], g[j])), a[i])`, bit for bit;
@@ -247,8 +256,8 @@ pub trait Scalar:
 
     /// Whether this scalar has target kernels on the machine compiled for, for some shapes
     /// ([`Scalar::affine_kernel`], [`Scalar::layer_kernel`], [`Scalar::transposed_kernel`],
-    /// [`Scalar::times_slope_kernel`], [`Scalar::transposed_slope_kernel`]); the layer loops
-    /// only ask when it does.
+    /// [`Scalar::times_slope_kernel`], [`Scalar::transposed_slope_kernel`],
+    /// [`Scalar::normalization_kernel`]); the layer loops only ask when it does.
     const TARGET_KERNELS: bool = false;
     /// `b + W·x` (W row-major, one row per output) by a kernel written for the target, when
     /// there is one for this shape; `None` means "use the portable loop". A kernel computes

@@ -267,6 +267,10 @@ impl Scalar for Q16 {
         true
     }
     #[inline(always)]
+    fn normalization_kernel(normalization: &[Self; 12], x: &[Self; 3]) -> Option<[Self; 3]> {
+        super::kernels_q16::normalize(normalization, x)
+    }
+    #[inline(always)]
     fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
         w: &[[Self; IN]; OUT],
         g: &[Self; OUT],
