@@ -10,8 +10,9 @@
 //! before it is written (see `unwritten`).
 //!
 //! A scalar may bring target kernels for whole layers ([`Scalar::layer_kernel`],
-//! [`Scalar::affine_kernel`], [`Scalar::transposed_kernel`]) and for the chain rule through a
-//! layer ([`Scalar::times_slope_kernel`]): for single points whose layer shape one of them
+//! [`Scalar::affine_kernel`], [`Scalar::transposed_kernel`]), for the chain rule through a
+//! layer ([`Scalar::times_slope_kernel`]) and for both at once
+//! ([`Scalar::transposed_slope_kernel`]): for single points whose layer shape one of them
 //! covers, the loops below hand the work to it (with `affine_kernel`, the products only, and
 //! apply the activations themselves). f32 and Q16.16 on a Cortex-M4F have them for the N = 9
 //! shapes (`neurosurf-m4f`); they compute the loops' exact bits, so which path ran never shows

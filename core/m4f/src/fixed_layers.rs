@@ -1,24 +1,24 @@
 //! The Q16.16 kernels (see the crate docs), each exactly the core's portable code for its
 //! shape:
 //!
-//! - the transposes `Wᵀ·g`, column by column with the nine (or one) values of g held in general
-//!   registers, one `ldr` of a weight and one `smull` / `smlal` per product, and the core's
-//!   rounding to Q16.16 (add 2¹⁵, shift by 16, saturate) at the end of each column — what the
-//!   portable loop followed by `Scalar::from_acc` gives;
-//! - the chain rule δ·a′ through nine neurons (`Scalar::times_slope`'s fast path, `smmulr`);
-//! - the two hidden forward layers: the inputs in registers, the weights read two (or three) at
-//!   a time by `ldm`, each row rounded once and clamped for the activation table, then the
-//!   table interpolation (`Scalar::activation_from_acc`).
+//! - the forward layers: each row's products summed exactly in 64 bits, rounded once and
+//!   clamped for the activation table, then the table interpolation
+//!   (`Scalar::activation_from_acc`);
+//! - the transposes `Wᵀ·g`, rounded to Q16.16 at the end of each column (what the portable loop
+//!   followed by `Scalar::from_acc` gives), the 9×9 and 1×9 ones followed by the chain rule δ·a′
+//!   on the column sums (`Scalar::times_slope`'s fast path, `smmulr`);
+//! - the chain rule alone through nine neurons, and a leaf's input normalization.
 //!
 //! Everything is unrolled; the branches go to out-of-line code (a saturated column, a
 //! saturated pre-activation, a neuron outside the chain rule's fast range) and straight back.
-//! The 9-row blocks save and restore r6, r7 and r11 themselves (`push` / `pop`, with lr to
-//! keep the stack 8-byte aligned): Rust refuses r6 and the frame pointer (r7 in Thumb code, r11
-//! in ARM code) as operands or clobbers, and the nine values of g (or x) and a pointer or a
-//! weight need them. Nothing inside reads memory through r7 or r11 as a frame pointer. While a
-//! block runs, r7 holds a value of g or x, so a debugger's backtrace taken inside a kernel
-//! (which follows the frame pointer) is wrong; it is right again after the block. r9 is used as an ordinary register: targets that reserve
-//! it (the RWPI relocation model) do not build this crate.
+//! The blocks that need r6, r7 or r11 save and restore them themselves (`push` / `pop`, keeping
+//! the stack 8-byte aligned): Rust refuses r6 and the frame pointer (r7 in Thumb code, r11 in
+//! ARM code) as operands or clobbers, and the inputs held in registers, the accumulators and the
+//! pointers need them. Nothing inside reads memory through r7 or r11 as a frame pointer. While
+//! such a block runs, r7 holds data, so a debugger's backtrace taken inside a kernel (which
+//! follows the frame pointer) is wrong; it is right again after the block. r9 is used as an
+//! ordinary register: targets that reserve it (the RWPI relocation model) do not build this
+//! crate.
 #![allow(unsafe_code)]
 
 use core::arch::asm;

@@ -1,8 +1,8 @@
 //! # neurosurf-m4f
 //!
 //! The dense-layer products of `neurosurf-core`'s width-9 implicit modules, written for the
-//! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly, and the Q16.16 hidden layers,
-//! transposes and chain rule for its integer multiply–accumulate. On every other target this crate is
+//! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly, and the Q16.16 layers,
+//! transposes with the chain rule, and input normalization for its integer multiply–accumulate. On every other target this crate is
 //! empty and the core runs its portable loops.
 //!
 //! Why assembly: the portable loop compiles to three instructions per multiply–accumulate on the
@@ -29,10 +29,11 @@
 //! pops 88–112 bytes of stack, restores every FPU register it uses, and changes only the FPSCR's
 //! sticky exception flags (so no block claims `preserves_flags`). The Q16.16 blocks declare every
 //! general register they change, save r6, r7 and r11 (which Rust does not let them declare on
-//! every ARM target) with lr on the stack for their duration (the layer kernels also keep their
-//! nine pre-activations in 40 bytes below them, sp staying 8-byte aligned), and change the APSR
-//! flags; `q16_times_slope_9` updates its `&mut` array in place and uses no stack. That is the
-//! whole unsafe surface, in two modules.
+//! every ARM target) on the stack for their duration when they use them (`q16_layer_9x9` also
+//! keeps its biases and pre-activations in 72 bytes below them, the fused 9×9 transpose its
+//! constants and mask in 16, sp staying 8-byte aligned), and change the APSR flags;
+//! `q16_times_slope_9` updates its `&mut` array in place. That is the whole unsafe surface,
+//! in two modules.
 //!
 //! The kernels are compiled for bare-metal hard-float ARM (`target_arch = "arm"`,
 //! `target_abi = "eabihf"`, `target_os = "none"`: the Cortex-M4F/M7 targets); their bits are
@@ -50,38 +51,49 @@
 //! | `transposed_9x3` | `Wᵀ·g`, W 9×3 | 27 | 41 |
 //! | `transposed_1x9` | `wᵀ·g`, w 1×9 | 9 | 15 |
 //!
-//! **Q16.16** (`fixed_layers.rs`, `I16F16` in and out): the three transposes, rounded like the
-//! core's `Scalar::from_acc` (add 2¹⁵, shift by 16, saturate), which is what the core's
-//! backward pass does with each of them. The nine values of g sit in r0–r8, so each product is
-//! one `ldr` of the weight at a constant offset and one `smull` / `smlal` into a 64-bit
-//! accumulator (exact: the same sum as the portable `i64` loop), and a column's rounding is six
-//! instructions with its saturation out of line. The two hidden forward layers are whole
-//! kernels (`q16_layer_9x9`, `q16_layer_9x3`): the inputs in r0–r8, each row its bias, the
-//! weights two at a time by `ldm` (three for the 3-input rows) and an `smlal` per product, the
-//! rounding and a clamp to ±10 (where the table has saturated) onto the stack; then each
-//! neuron's table interpolation with the constants in registers, 14 instructions — exactly the
-//! core's `activation_from_acc`.
+//! **Q16.16** (`fixed_layers.rs`, `I16F16` in and out): every product an `smull` / `smlal` into
+//! a 64-bit accumulator (exact: the same sum as the portable `i64` loop), every sum rounded like
+//! the core's `Scalar::from_acc` (add 2¹⁵, shift by 16, saturate, the saturation out of line)
+//! or, before an activation, clamped to ±10, where the table has saturated.
+//!
+//! - The forward layers (`q16_layer_9x9`, `q16_layer_9x3`, `q16_layer_1x9`) are exactly the
+//!   core's `activation_from_acc` per output. The 9×9 holds the nine inputs in r0–r8 and reads
+//!   two weights per `ldm`, each row starting from its bias as a pre-rounded Q32.32 pair; the
+//!   activation reads the table's (value, rise) segment by H's signed integer part, 7
+//!   instructions a neuron (see the core's `activation_table.rs` for why that gives the
+//!   symmetric interpolation's bits). The 9×3 activates each row as it is summed; the 1×9 (the
+//!   output neuron) reuses each input's register for a later weight once its product is done.
+//! - The backward pass fuses each transpose with the chain rule δ·a′ on its sums
+//!   (`q16_transposed_slope_9x9`, `q16_transposed_slope_1x9`, the core's
+//!   `Scalar::transposed_slope_kernel`): the 9×9 reads two columns at once, one `ldrd` of two
+//!   weights per row with g₀…g₄ and then g₅…g₈ in registers, and tests the slope's fast range
+//!   (−2 ≤ a < 2, |t| < 2¹³) on the accumulator's high word, so that path needs no saturation
+//!   test. A neuron outside it keeps its rounded sum and comes back in a mask, which the core
+//!   finishes on its portable saturating path. `q16_transposed_9x3` (back through a leaf's
+//!   first layer) reads columns 0 and 1 the same way.
+//! - `q16_normalize` is a leaf's input normalization x′ = A·(x − c) (`qsub`, three rows).
+//! - `q16_times_slope_9` is the chain rule alone on nine neurons, for node modules, whose
+//!   transposes have no kernel: the slope from the neuron's output and the product, each a
+//!   rounded high word (`smmulr`), 14 instructions a neuron with the constants in registers.
+//!
+//! Instructions per call on the torus leaf (the simulator's profile, field + gradient):
 //!
 //! | function | computes | multiply–accumulates | instructions |
 //! |---|---|---:|---:|
-//! | `q16_transposed_9x9` | `round(Wᵀ·g)`, W 9×9 | 81 | 239 |
-//! | `q16_transposed_9x3` | `round(Wᵀ·g)`, W 9×3 | 27 | 83 |
-//! | `q16_transposed_1x9` | `round(wᵀ·g)`, w 1×9 (−2 ≤ g < 2: one `smmulr` each) | 9 | 44 |
-//! | `q16_times_slope_9` | δᵢ ← round(δᵢ·a′(aᵢ)), 9 neurons | (27 products) | 127 |
-//! | `q16_layer_9x9` | a(b + W·x), W 9×9 | 81 | 361 |
-//! | `q16_layer_9x3` | a(b + W·x), W 9×3 | 27 | 271 |
-//!
-//! `q16_times_slope_9` is the core's `Scalar::times_slope` for Q16.16 on nine neurons: the
-//! slope from the neuron's output and the product, each a rounded high word (`smmulr`), 14
-//! instructions a neuron with the constants in registers. It covers the fast range
-//! (−2 ≤ a < 2, −2¹³ ≤ δ < 2¹³, one combined test) and returns a mask of the neurons outside
-//! it, which the core finishes on its portable saturating path.
+//! | `q16_layer_9x9` | a(b + W·x), W 9×9 | 81 | 318 |
+//! | `q16_transposed_slope_9x9` | times_slope(round(Wᵀ·g), a), W 9×9 | 81 (+ 27 products) | 309 |
+//! | `q16_layer_9x3` | a(b + W·x), W 9×3 | 27 | 198 |
+//! | `q16_transposed_slope_1x9` | times_slope(round(wᵀ·g), a), w 1×9 | 9 (+ 27 products) | 140 |
+//! | `q16_transposed_9x3` | round(Wᵀ·g), W 9×3 | 27 | 85 |
+//! | `q16_normalize` | round(A·(x − c)) | 9 | 46 |
+//! | `q16_layer_1x9` | a(b + w·x), w 1×9 | 9 | 42 |
+//! | `q16_times_slope_9` | δᵢ ← round(δᵢ·a′(aᵢ)), 9 neurons (node modules) | (27 products) | 127 (from the source) |
 //!
 //! The simulator tests hold the Q16.16 kernels to the host's bits too, including a model built
-//! so that every column of its 9×9 and 9×3 transposes saturates, at both ends (the 1×9
-//! transpose multiplies by one g and cannot saturate within the loader's parameter bound), and
-//! a model built so that the chain rule's δ leaves the slope kernel's fast range without
-//! saturating, so its fallback changes the result.
+//! so that every column of its transposes saturates, at both ends, and every pre-activation
+//! is clamped; a model built so that the chain rule's δ leaves the fast range without
+//! saturating, so its fallback changes the result; and a model whose normalized input
+//! saturates where it shows in Φ.
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]

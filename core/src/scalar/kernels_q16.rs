@@ -1,10 +1,9 @@
 //! Q16.16's target kernels: on a Cortex-M4F (bare-metal hard-float ARM, the `neurosurf-m4f`
-//! targets), the width-9 transposed products run as the `neurosurf-m4f` assembly (the values of
-//! g in registers, one `ldr` + `smlal` per product, the rounding to Q16.16 per column: the same
-//! bits as the portable loop and `from_acc`), and so does the chain rule through a layer's nine
-//! neurons (`times_slope`'s fast path, one `smmulr` per product) and the two hidden forward
-//! layers (products, rounding and table lookup in one kernel each); everywhere else there are
-//! none.
+//! targets), the width-9 layers run as the `neurosurf-m4f` assembly — the forward layers
+//! (products, rounding and table lookup in one kernel each), the 9×9 and 1×9 transposes fused
+//! with the chain rule on their sums, the 9×3 transpose, the chain rule alone through nine
+//! neurons, and a leaf's input normalization — with the same bits as the portable loops;
+//! everywhere else there are none.
 
 // The forward kernels hard-code the activation table's layout: 1 281 segments of two words,
 // H = 0 at index 640, one segment per 2¹⁰ bits of H.
