@@ -236,8 +236,9 @@ fn q16_kernels_saturate_like_the_host() {
     assert_q16_target_equals(&bytes, &points, &expected);
 }
 
-/// The Q16.16 slope kernel's fallback (`times_slope` for nine neurons, which leaves |δ| ≥ 2¹³
-/// to the portable saturating path), on the target against the host: a torus leaf whose first
+/// The Q16.16 chain rule's fallback in a leaf (the fused 9×9 transpose and `times_slope`, which
+/// leaves |δ| ≥ 2¹³ to the portable saturating path), on the target against the host: a torus
+/// leaf whose first
 /// layer has tiny weights (±0.01 by row) and equal biases (0.5), so at the box centre all nine
 /// a-outputs are equal (a(0.5) ≈ 0.55, slope ≈ 1.03); layer b's rows are
 /// (+1000, −1000, …, +1000, −500, −500), which cancel on equal inputs (H_b = 0, slope 1.144),
@@ -278,6 +279,60 @@ fn q16_slope_kernel_falls_back_like_the_host() {
     // 0.01 × about 24 000 per coordinate).
     let length = expected[0].1.iter().map(|c| c * c).sum::<f64>().sqrt();
     assert!(length > 100.0, "|∇Φ| {length}: the fallback is not reached");
+    assert_q16_target_equals(&bytes, &points, &expected);
+}
+
+/// The same fallback in the chain-rule kernel that node modules use (`q16_times_slope_9`: their
+/// 18-column transposes have no kernel), on the head ((0,1),2). The root's children end in
+/// saturated layers b (biases 15, |Σ W·a| < 4), so each child's nine outputs are a(10) in
+/// Q16.16 whatever the point,
+/// and the root's layer a, with rows (+1000 × 9 on the left child, −1000 × 9 on the right),
+/// sums them to exactly 0 (H = 0, slope 1.144). With the root's layer b at 0.1 and output
+/// weights of 2, every δ of the root's layer a is about 2.7, and the transpose hands each child
+/// about ±24 000 per neuron: above the fast range, below saturation. The children's slope
+/// there is tiny (a′(a(10)) is 2 in Q16.16 bits), so the fallback turns 24 000 into about 0.7,
+/// which their positive layer-b weights carry down into ∇Φ. Checked by dropping the kernel's mask bit (the
+/// unchanged δ kept): this test then fails.
+#[test]
+fn q16_node_slope_kernel_falls_back_like_the_host() {
+    let mut trained = head();
+    let root = trained.network.root();
+    let (left, right) = trained.network.children(root).unwrap();
+    for child in [left, right] {
+        let layout = trained.network.trained_layout(child);
+        let params = trained.network.trained_params_mut(child);
+        let width = layout.width;
+        for i in 0..width {
+            for k in 0..width {
+                params[layout.b_weights + i * width + k] = 0.01 * (i + 1) as f64 + 0.02 * k as f64;
+            }
+            params[layout.b_biases + i] = 15.0;
+        }
+    }
+    let layout = trained.network.trained_layout(root);
+    let params = trained.network.trained_params_mut(root);
+    let width = layout.width;
+    for j in 0..width {
+        for i in 0..layout.inputs {
+            let half = if i < width { 1000.0 } else { -1000.0 };
+            params[layout.a_weights + j * layout.inputs + i] = half;
+        }
+        params[layout.a_biases + j] = 0.0;
+        for k in 0..width {
+            params[layout.b_weights + j * width + k] = 0.1;
+        }
+        params[layout.b_biases + j] = 0.0;
+        params[layout.out_weights + j] = 2.0;
+    }
+    params[layout.out_bias] = 0.0;
+    let bytes = blob(&trained, ScalarKind::Q16_16);
+    let points: Vec<[f64; 3]> = queries(&Shape::Head, 31).into_iter().take(6).collect();
+    let expected = host(&bytes, &points, Precision::Q16);
+    // The construction's premise: the fallback's δ reaches ∇Φ.
+    let reached = expected
+        .iter()
+        .any(|(_, g)| g.iter().any(|c| c.abs() > 1e-3));
+    assert!(reached, "the fallback's δ does not reach ∇Φ");
     assert_q16_target_equals(&bytes, &points, &expected);
 }
 

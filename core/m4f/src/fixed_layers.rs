@@ -848,7 +848,7 @@ pub fn q16_normalize(normalization: &[I16F16; 12], x: &[I16F16; 3]) -> [I16F16; 
 /// The chain rule's tail for column `$c` of a fused transpose, its rounded accumulator
 /// `$lo`/`$hi` = Σⱼ W[j][`$c`]·gⱼ + 2¹⁵ (Q32.32, high word `$hi`): with a = `a[$c]` (r2 points
 /// at a, r0 = square·2¹⁶, r1 = offset·2¹⁴), t = the sum rounded to Q16.16 and, when
-/// −2 ≤ a < 2 and |t| < 2¹³ (so t needs no saturation), δ = round(t·a′/2¹⁶) with
+/// −2 ≤ a < 2 and −2¹³ ≤ t < 2¹³ (so t needs no saturation), δ = round(t·a′/2¹⁶) with
 /// a′ = offset − round(square·round(a²/2¹⁶)/2¹⁶), as [`slope9!`]; stores δ at lr + 4·`$c`.
 /// Outside that range label 1`$c` (out of line, [`slope_tail_slow!`]) stores t instead and
 /// marks the column. Uses r3, r4 and r9.
@@ -1084,7 +1084,7 @@ pub fn q16_transposed_slope_1x9(
     square: i32,
 ) -> Option<([I16F16; 9], u32)> {
     let g = g.to_bits();
-    // |g| < 2¹⁷ bits, as the 1×9 kernel's test.
+    // −2¹⁷ ≤ g < 2¹⁷ in bits: (g + 2¹⁷) as u32 < 2¹⁸.
     if (g.wrapping_add(0x2_0000) as u32) >= 0x4_0000 {
         return None;
     }

@@ -67,7 +67,7 @@
 //!   (`q16_transposed_slope_9x9`, `q16_transposed_slope_1x9`, the core's
 //!   `Scalar::transposed_slope_kernel`): the 9×9 reads two columns at once, one `ldrd` of two
 //!   weights per row with g₀…g₄ and then g₅…g₈ in registers, and tests the slope's fast range
-//!   (−2 ≤ a < 2, |t| < 2¹³) on the accumulator's high word, so that path needs no saturation
+//!   (−2 ≤ a < 2, −2¹³ ≤ t < 2¹³) on the accumulator's high word, so that path needs no saturation
 //!   test. A neuron outside it keeps its rounded sum and comes back in a mask, which the core
 //!   finishes on its portable saturating path. `q16_transposed_9x3` (back through a leaf's
 //!   first layer) reads columns 0 and 1 the same way.
@@ -91,9 +91,10 @@
 //!
 //! The simulator tests hold the Q16.16 kernels to the host's bits too, including a model built
 //! so that every column of its transposes saturates, at both ends, and every pre-activation
-//! is clamped; a model built so that the chain rule's δ leaves the fast range without
-//! saturating, so its fallback changes the result; and a model whose normalized input
-//! saturates where it shows in Φ.
+//! is clamped; two models built so that the chain rule's δ leaves the fast range without
+//! saturating, so that its fallback changes the result — a leaf (the fused 9×9 transpose) and
+//! a node module's children (`q16_times_slope_9`); and a model whose normalized input
+//! saturates where it shows in Φ (row 0; rows 1 and 2 share its code).
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]

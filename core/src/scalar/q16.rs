@@ -2,8 +2,8 @@
 //!
 //! Designed for a Cortex-M4 without relying on its FPU: products are 32×32→64-bit
 //! (`SMULL`/`SMLAL`), dot products accumulate in Q32.32 and are rounded once, the activation is
-//! a 641-entry table (padded to H = 16, so a masked index needs no bounds check) with linear
-//! interpolation (no division anywhere in a neuron). Every operation saturates at the ends of
+//! a 641-entry table of a(H) for H in [0, 10], stored as (value, rise) segments over both
+//! signs, with linear interpolation (no division anywhere in a neuron). Every operation saturates at the ends of
 //! the range instead of wrapping.
 
 use super::activation_table::{FRACTION_BITS, LAST, SEGMENTS};
@@ -80,8 +80,8 @@ fn activation_bits(bits: i32) -> i32 {
     if bits < 0 { -value } else { value }
 }
 
-/// a(|H|) for |H| = `magnitude`·2⁻¹⁶ below 16: the segment of the table's upper half below
-/// |H| (from 10 on the last, which is flat), interpolated and rounded.
+/// a(|H|) for |H| = `magnitude`·2⁻¹⁶ (callers pass |H| ≤ 10): the segment of the table's upper
+/// half below |H| (its index clamped to the last, which is flat), interpolated and rounded.
 #[inline(always)]
 fn interpolate(magnitude: u32) -> i32 {
     let index = (magnitude >> FRACTION_BITS).min(LAST as u32) as usize;
@@ -219,7 +219,7 @@ impl Scalar for Q16 {
         let rounded = acc.wrapping_add(HALF_BITS);
         let high = (rounded >> 32) as i32;
         Q16::from_bits(if (high as u32).wrapping_add(10) < 20 {
-            // |H| ≤ 10: within the table's 16, no second range check.
+            // |H| ≤ 10: within the table, no second range check.
             let bits = (rounded >> 16) as i32;
             let value = interpolate(bits.unsigned_abs());
             if bits < 0 { -value } else { value }
@@ -391,11 +391,11 @@ mod tests {
         }
     }
 
-    /// The masked, padded table gives the bits of the checked 641-entry lookup it replaced,
-    /// for every H below 32 in magnitude and at the ends of the range.
+    /// The segment lookup gives the bits of the checked 641-entry lookup it replaced, for every
+    /// H below 32 in magnitude and at the ends of the range.
     #[test]
     #[allow(clippy::indexing_slicing)] // the reference as it was written, with its checks
-    fn masked_table_lookup_equals_the_checked_one() {
+    fn segment_lookup_equals_the_checked_one() {
         let checked = |bits: i32| -> i32 {
             let magnitude = bits.unsigned_abs();
             let index = (magnitude >> FRACTION_BITS) as usize;
