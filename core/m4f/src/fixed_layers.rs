@@ -548,10 +548,34 @@ macro_rules! bias_pair {
     };
 }
 
-/// A whole forward layer of nine outputs: the rows (`$row!`, inputs loaded by `$load`) into
-/// the nine pre-activations on the stack, then their activations through the table.
-macro_rules! layer9 {
-    ($row:ident, $load:literal, $w:expr, $b:expr, $x:expr, $out:expr, $table:expr) => {
+/// The activation table's layout that [`q16_layer_9x9`] and [`q16_layer_9x3`] read: at index
+/// 640 + k for k = −640 … 640, a(H) in Q16.16 bits at H = k/64 and its rise to the entry at
+/// (k + 1)/64 (rise 0 at k = 640, where a has saturated).
+pub type ActivationTable = [[i32; 2]; 1281];
+
+/// The index of H = 0 in an [`ActivationTable`].
+const TABLE_ZERO: usize = 640;
+
+/// A forward layer of nine outputs on nine inputs in Q16.16: output j is the core's
+/// `activation_from_acc(to_acc(bⱼ) + Σᵢ W[j][i]·xᵢ)` with `table` the core's activation
+/// table — the accumulation exact in 64 bits, rounded once and clamped to ±10, then the table's
+/// segment below H interpolated ([`table_activation!`]). The rows go first, each into its
+/// pre-activation on the stack (the nine inputs hold r0–r8), then the nine activations.
+#[inline(always)]
+pub fn q16_layer_9x9(
+    w: &[[I16F16; 9]; 9],
+    b: &[I16F16; 9],
+    x: &[I16F16; 9],
+    table: &ActivationTable,
+) -> [I16F16; 9] {
+    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
+    // SAFETY: reads the 81 words behind `w`, the 9 behind `b` and `x` and the table at
+    // indices 640 + (H >> 10) for H clamped to [−10, 10] (0 … 1 280); writes the 9 words of `out`
+    // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses 96 bytes of
+    // stack (saving r2, r3, r6, r7, r11 and lr there, below them the nine biases as Q32.32
+    // pairs, overwritten by the nine pre-activations), keeps it 8-byte aligned, and declares
+    // every other register it changes.
+    unsafe {
         asm!(
             // r2 (out) and r3 (table) are saved for the second pass; 24 + 72 bytes keep sp
             // 8-byte aligned.
@@ -570,16 +594,16 @@ macro_rules! layer9 {
             bias_pair!("r8", "6"),
             bias_pair!("r9", "7"),
             bias_pair!("r10", "8"),
-            $load,
-            $row!("0"),
-            $row!("1"),
-            $row!("2"),
-            $row!("3"),
-            $row!("4"),
-            $row!("5"),
-            $row!("6"),
-            $row!("7"),
-            $row!("8"),
+            "ldm r0, {{r0-r8}}",
+            layer_row9!("0"),
+            layer_row9!("1"),
+            layer_row9!("2"),
+            layer_row9!("3"),
+            layer_row9!("4"),
+            layer_row9!("5"),
+            layer_row9!("6"),
+            layer_row9!("7"),
+            layer_row9!("8"),
             "ldr r2, [sp, #72]",
             "ldr r3, [sp, #76]",
             "mov r6, #512",
@@ -605,56 +629,17 @@ macro_rules! layer9 {
             "3:",
             "add sp, sp, #72",
             "pop {{r2, r3, r6, r7, r11, lr}}",
-            inout("r0") $x => _,
-            inout("r1") $b => _,
-            inout("r2") $out => _,
-            inout("r3") $table => _,
+            inout("r0") x.as_ptr() => _,
+            inout("r1") b.as_ptr() => _,
+            inout("r2") out.as_mut_ptr() => _,
+            inout("r3") table.as_ptr().wrapping_add(TABLE_ZERO) => _,
             out("r4") _,
             out("r5") _,
             out("r8") _,
             out("r9") _,
             out("r10") _,
-            inout("r12") $w => _,
+            inout("r12") w.as_ptr() => _,
             out("lr") _,
-        )
-    };
-}
-
-/// The activation table's layout that [`q16_layer_9x9`] and [`q16_layer_9x3`] read: at index
-/// 640 + k for k = −640 … 640, a(H) in Q16.16 bits at H = k/64 and its rise to the entry at
-/// (k + 1)/64 (rise 0 at k = 640, where a has saturated).
-pub type ActivationTable = [[i32; 2]; 1281];
-
-/// The index of H = 0 in an [`ActivationTable`].
-const TABLE_ZERO: usize = 640;
-
-/// A forward layer of nine outputs on nine inputs in Q16.16: output j is the core's
-/// `activation_from_acc(to_acc(bⱼ) + Σᵢ W[j][i]·xᵢ)` with `table` the core's activation
-/// table — the accumulation exact in 64 bits, rounded once, then the table entry below |H|
-/// interpolated towards the next; |H| ≥ 10 gives the saturated entry.
-#[inline(always)]
-pub fn q16_layer_9x9(
-    w: &[[I16F16; 9]; 9],
-    b: &[I16F16; 9],
-    x: &[I16F16; 9],
-    table: &ActivationTable,
-) -> [I16F16; 9] {
-    let mut out = MaybeUninit::<[I16F16; 9]>::uninit();
-    // SAFETY: reads the 81 words behind `w`, the 9 behind `b` and `x` and the table at
-    // indices 640 + (H >> 10) for H clamped to [−10, 10] (0 … 1 280); writes the 9 words of `out`
-    // (lengths fixed by the array types; `I16F16` is a transparent `i32`); uses 96 bytes of
-    // stack (saving r2, r3, r6, r7, r11 and lr there, below them the nine biases as Q32.32
-    // pairs, overwritten by the nine pre-activations), keeps it 8-byte aligned, and declares
-    // every other register it changes.
-    unsafe {
-        layer9!(
-            layer_row9,
-            "ldm r0, {{r0-r8}}",
-            w.as_ptr(),
-            b.as_ptr(),
-            x.as_ptr(),
-            out.as_mut_ptr(),
-            table.as_ptr().wrapping_add(TABLE_ZERO)
         );
         out.assume_init()
     }
