@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs what the Cortex-M4F simulation needs, idempotently (see ../shared/mcu.md):
+# Installs what the Cortex-M4F simulation needs, idempotently:
 # - Debian's Rust 1.96 with its library sources (builds `core` for thumbv7em-none-eabihf with
 #   -Zbuild-std=core; rustup cannot download targets here) and lld-22;
 # - QEMU's runtime libraries, and qemu-system-arm unpacked from its .deb into .tools/qemu

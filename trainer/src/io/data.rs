@@ -1,5 +1,5 @@
-//! Where the public test meshes are: `../shared/data/` next to the checkout (the project's
-//! convention), or the folder the `NEUROSURF_DATA` environment variable names.
+//! Where the public test meshes are: the repository's `data/` folder (see its README for each
+//! mesh's source and terms), or the folder the `NEUROSURF_DATA` environment variable names.
 
 use std::path::PathBuf;
 
@@ -8,11 +8,11 @@ use crate::error::{Error, Result};
 /// Environment variable that overrides the test-mesh folder.
 pub const DATA_VARIABLE: &str = "NEUROSURF_DATA";
 
-/// The test-mesh folder: `$NEUROSURF_DATA` if set, else `shared/data` beside the checkout.
+/// The test-mesh folder: `$NEUROSURF_DATA` if set, else the repository's `data/`.
 pub fn data_dir() -> PathBuf {
     match std::env::var_os(DATA_VARIABLE) {
         Some(dir) => PathBuf::from(dir),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../data"),
     }
 }
 
@@ -27,8 +27,8 @@ pub fn data_file(name: &str) -> Result<PathBuf> {
         return Ok(path);
     }
     Err(Error::invalid(format!(
-        "test mesh {name} not found at {}: the checkout expects the shared data folder at \
-         ../shared/data beside it; set {DATA_VARIABLE}=DIR to use another folder",
+        "test mesh {name} not found at {}: the repository ships it in data/; \
+         set {DATA_VARIABLE}=DIR to use another folder",
         path.display()
     )))
 }
