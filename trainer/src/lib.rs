@@ -16,6 +16,7 @@ pub mod io;
 pub mod parametric;
 pub mod plot;
 pub mod points;
+pub mod quality;
 pub mod rbf;
 pub mod render;
 pub mod sample;

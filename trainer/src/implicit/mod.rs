@@ -4,12 +4,15 @@
 
 mod activation;
 mod blob;
+mod constraints;
 mod features;
+mod frame;
 mod jacobian;
 mod lm;
 mod network;
 mod normalize;
 mod options;
+mod oracle;
 mod pipeline;
 mod problem;
 mod train;
@@ -18,6 +21,8 @@ mod tree;
 pub use activation::{Activation, activation};
 pub use blob::{DecodedImplicit, ImplicitMetadata, frame, from_blob, to_blob};
 pub use features::decompose;
+pub use frame::{Frame, MODEL_DIAGONAL};
+pub use oracle::Oracle;
 pub use jacobian::{
     HiddenJet, InputJet, LANES, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows,
 };
@@ -31,7 +36,7 @@ pub use network::ImplicitNetwork;
 pub use normalize::{BoxScaling, Normalization};
 pub use options::ImplicitOptions;
 pub use pipeline::{FitRequest, feature_centroids, fit};
-pub use problem::{ModuleData, ModuleProblem};
+pub use problem::{Goal, ModuleData, ModuleProblem};
 pub use train::{ModuleReport, Progress, Trained, TrainingSummary, train};
 pub use tree::TreeSpec;
 

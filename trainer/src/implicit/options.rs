@@ -27,6 +27,18 @@ pub struct ImplicitOptions {
     pub seed: u64,
     /// Fewest control points a leaf module accepts.
     pub min_points: usize,
+    /// Off-surface offset ε as a fraction of the points' bounding diagonal (0.01): each
+    /// control point adds x ± ε·n with Φ = ∓s·ε. 0 turns them off.
+    pub offset: f64,
+    /// Sign points per control point of a module (2): drawn in the module's region away from
+    /// the control points, each asks Φ to have the sign the points' winding number gives. 0
+    /// turns them off.
+    pub sign_points: f64,
+    /// How far a sign point keeps from every control point, as a fraction of the bounding
+    /// diagonal (0.02).
+    pub clearance: f64,
+    /// |Φ| a sign point asks for on its side of the surface (0.1).
+    pub sign_margin: f64,
 }
 
 impl Default for ImplicitOptions {
@@ -41,6 +53,10 @@ impl Default for ImplicitOptions {
             lm: LmOptions::default(),
             seed: 1,
             min_points: 4,
+            offset: 0.01,
+            sign_points: 2.0,
+            clearance: 0.02,
+            sign_margin: 0.1,
         }
     }
 }

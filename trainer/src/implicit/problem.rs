@@ -17,6 +17,42 @@ pub struct ModuleData {
     values: Vec<f64>,
     tangents: Vec<f64>,
     targets: Vec<[f64; 3]>,
+    goals: Vec<Goal>,
+}
+
+/// What one point asks of Φ besides its target gradient: the residuals are
+/// `value_weight·(Φ − value)` and `gradient_weight·γ·(∇Φ − target)`. With a nonzero `hinge`
+/// σ the value residual is one-sided: it counts only while σ·(Φ − value) < 0 (a sign
+/// constraint: Φ on the right side of `value`).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Goal {
+    /// Target of Φ.
+    pub value: f64,
+    /// Weight of the Φ residual.
+    pub value_weight: f64,
+    /// Weight of the gradient residuals (on top of γ).
+    pub gradient_weight: f64,
+    /// 0 for a two-sided value residual; +1 or −1 for a one-sided one.
+    pub hinge: f64,
+}
+
+impl Goal {
+    /// A control point on the surface: Φ = 0 and the target gradient, at full weight.
+    pub const SURFACE: Goal = Goal {
+        value: 0.0,
+        value_weight: 1.0,
+        gradient_weight: 1.0,
+        hinge: 0.0,
+    };
+
+    /// The weight of the value residual at Φ = `phi` (0 where a one-sided residual is met).
+    fn active_weight(&self, phi: f64) -> f64 {
+        if self.hinge != 0.0 && self.hinge * (phi - self.value) >= 0.0 {
+            0.0
+        } else {
+            self.value_weight
+        }
+    }
 }
 
 impl ModuleData {
@@ -27,13 +63,27 @@ impl ModuleData {
             values: Vec::new(),
             tangents: Vec::new(),
             targets: Vec::new(),
+            goals: Vec::new(),
         }
     }
 
     /// Adds one control point: input `values` (d), `tangents[k]` (d each), and the target
     /// gradient ∇Φ = −s·n.
     pub fn push(&mut self, values: &[f64], tangents: [&[f64]; 3], target_gradient: [f64; 3]) {
+        self.push_goal(values, tangents, target_gradient, Goal::SURFACE);
+    }
+
+    /// Adds one point with its own [`Goal`] (and target gradient, used when the goal weighs
+    /// the gradient).
+    pub fn push_goal(
+        &mut self,
+        values: &[f64],
+        tangents: [&[f64]; 3],
+        target_gradient: [f64; 3],
+        goal: Goal,
+    ) {
         debug_assert_eq!(values.len(), self.inputs);
+        self.goals.push(goal);
         self.values.extend_from_slice(values);
         for t in tangents {
             debug_assert_eq!(t.len(), self.inputs);
@@ -100,9 +150,31 @@ impl<'a> ModuleProblem<'a> {
 
     fn point_residuals(&self, i: usize, tape_value: f64, gradient: [f64; 3], out: &mut [f64]) {
         let target = self.data.targets[i];
-        out[0] = tape_value;
+        let goal = self.data.goals[i];
+        out[0] = goal.active_weight(tape_value) * (tape_value - goal.value);
         for k in 0..3 {
-            out[1 + k] = self.gamma * (gradient[k] - target[k]);
+            out[1 + k] = goal.gradient_weight * self.gamma * (gradient[k] - target[k]);
+        }
+    }
+
+    /// Scales the lane-minor Jacobian rows of the points from `first` on by their goals'
+    /// weights (the sweeps compute them at unit value weight).
+    fn weigh_rows(&self, first: usize, count: usize, tape: &TapeLanes, rows: &mut [[f64; LANES]], stride: usize) {
+        for l in 0..count {
+            let goal = self.data.goals[first + l];
+            let weights = [
+                goal.active_weight(tape.value[l]),
+                goal.gradient_weight,
+                goal.gradient_weight,
+                goal.gradient_weight,
+            ];
+            for (r, &w) in weights.iter().enumerate() {
+                if w != 1.0 {
+                    for row in &mut rows[r * stride..(r + 1) * stride] {
+                        row[l] *= w;
+                    }
+                }
+            }
         }
     }
 
@@ -166,6 +238,7 @@ impl<'a> ModuleProblem<'a> {
         forward_lanes::<FMA>(&self.layout, params, lanes, tape);
         self.lane_residuals(first, tape, out);
         jacobian_lanes::<FMA>(&self.layout, params, lanes, tape, self.gamma, rows, stride);
+        self.weigh_rows(first, count, tape, rows, stride);
         transpose_lanes::<FMA>(rows, stride, count, block);
     }
 

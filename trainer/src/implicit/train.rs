@@ -10,12 +10,15 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::constraints::{OffSurface, SampleBox, SignPoint, off_surface, sign_points};
+use super::frame::{Frame, MODEL_DIAGONAL};
 use super::jacobian::{MAX_INPUTS, TrainedLayout};
 use super::lm::{LmReport, levenberg_marquardt};
 use super::network::ImplicitNetwork;
 use super::normalize::Normalization;
 use super::options::ImplicitOptions;
-use super::problem::{ModuleData, ModuleProblem};
+use super::oracle::Oracle;
+use super::problem::{Goal, ModuleData, ModuleProblem};
 use super::tree::TreeSpec;
 use crate::error::{Error, Result};
 use crate::points::PointSet;
@@ -58,6 +61,8 @@ pub struct TrainingSummary {
     /// Iterations per module of the cold start at the head of a warm-start chain (this run's
     /// own when it was cold): the baseline for "iterations saved".
     pub cold_iterations: Vec<usize>,
+    /// The model frame the modules were trained in (world = center + scale · model).
+    pub frame: Frame,
 }
 
 impl TrainingSummary {
@@ -149,9 +154,23 @@ pub fn train(
     }
     tree.check_features(feature_count)?;
     let mut network = ImplicitNetwork::new(options.width, tree)?;
-    if let Some((previous, _)) = init {
-        check_same_shape(&network, previous)?;
-    }
+    let previous = match init {
+        Some((previous, _)) => {
+            check_same_shape(&network, previous)?;
+            Some(previous)
+        }
+        None => None,
+    };
+
+    // Everything below works in the model frame.
+    let frame = Frame::of(&points.positions)?;
+    let previous = previous.map(|p| in_frame(p, |n| frame.normalization_to_model(n)));
+    let model = PointSet {
+        positions: points.positions.iter().map(|&p| frame.to_model(p)).collect(),
+        normals: points.normals.clone(),
+        features: points.features.clone(),
+    };
+    let setting = Setting::new(&model, labels, options)?;
 
     // Leaves, in parallel.
     let leaves: Vec<usize> = (0..network.module_count())
@@ -162,28 +181,23 @@ pub fn train(
         .map(|&i| {
             let feature = network.leaf_features()[i].unwrap_or(0);
             let indices = &members[feature as usize];
-            let positions: Vec<[f64; 3]> = indices.iter().map(|&p| points.positions[p]).collect();
+            let positions: Vec<[f64; 3]> = indices.iter().map(|&p| model.positions[p]).collect();
             let what = format!("feature {feature}");
             let norm =
                 Normalization::fit(&positions, options.box_size, options.box_scaling, &what)?;
             let layout = network.trained_layout(i);
-            let initial = match init {
-                Some((previous, _)) => {
+            let initial = match &previous {
+                Some(previous) => {
                     let old = previous.normalization(i).unwrap_or(norm);
                     reexpress_first_layer(&layout, previous.trained_params(i), &old, &norm)
                 }
                 None => random_params(&layout, options.init_range, options.seed, i),
             };
-            let mut data = ModuleData::new(3);
-            for &p in indices {
-                let values = norm.apply(points.positions[p]);
-                let columns: [[f64; 3]; 3] = std::array::from_fn(|k| norm.matrix.map(|row| row[k]));
-                data.push(
-                    &values,
-                    [&columns[0], &columns[1], &columns[2]],
-                    target(points, p, options),
-                );
-            }
+            let mut leaf_net = network.clone();
+            leaf_net.set_normalization(i, &norm);
+            let features = [feature];
+            let regions = setting.regions(&[norm], false);
+            let data = setting.module_data(&leaf_net, i, &features, &members, &regions, i);
             let (params, report) = fit_module(
                 i,
                 &data,
@@ -221,23 +235,19 @@ pub fn train(
             .par_iter()
             .map(|&i| {
                 let layout = network.trained_layout(i);
-                let mut data = ModuleData::new(layout.inputs);
-                let mut values = [0.0; MAX_INPUTS];
-                let mut tangents = [[0.0; MAX_INPUTS]; 3];
-                for leaf in network.subtree_leaves(i) {
-                    let feature = network.leaf_features()[leaf].unwrap_or(0);
-                    for &p in &members[feature as usize] {
-                        let input = network.module_input(
-                            i,
-                            points.positions[p],
-                            &mut values,
-                            &mut tangents,
-                        );
-                        data.push(input.values, input.tangents, target(points, p, options));
-                    }
-                }
-                let initial = match init {
-                    Some((previous, _)) => previous.trained_params(i).to_vec(),
+                let subtree = network.subtree_leaves(i);
+                let features: Vec<u32> = subtree
+                    .iter()
+                    .map(|&leaf| network.leaf_features()[leaf].unwrap_or(0))
+                    .collect();
+                let boxes: Vec<Normalization> = subtree
+                    .iter()
+                    .filter_map(|&leaf| network.normalization(leaf))
+                    .collect();
+                let regions = setting.regions(&boxes, i == network.root());
+                let data = setting.module_data(&network, i, &features, &members, &regions, i);
+                let initial = match &previous {
+                    Some(previous) => previous.trained_params(i).to_vec(),
                     None => random_params(&layout, options.init_range, options.seed, i),
                 };
                 let (params, report) =
@@ -250,6 +260,7 @@ pub fn train(
             reports[i] = Some(report);
         }
     }
+    let network = in_frame(&network, |n| frame.normalization_to_world(n));
 
     let modules: Vec<ModuleReport> = reports.into_iter().flatten().collect();
     let cold_iterations = match init {
@@ -262,12 +273,139 @@ pub fn train(
         modules,
         seconds: start.elapsed().as_secs_f64(),
         cold_iterations,
+        frame,
     };
     Ok(Trained { network, summary })
 }
 
-fn target(points: &PointSet, p: usize, options: &ImplicitOptions) -> [f64; 3] {
-    points.normals[p].map(|n| -options.slope * n)
+/// A copy of `network` with every leaf normalization mapped by `map`.
+fn in_frame(network: &ImplicitNetwork, map: impl Fn(&Normalization) -> Normalization) -> ImplicitNetwork {
+    let mut out = network.clone();
+    for i in 0..out.module_count() {
+        if let Some(n) = network.normalization(i) {
+            out.set_normalization(i, &map(&n));
+        }
+    }
+    out
+}
+
+/// What every module's training data is drawn from, in the model frame.
+struct Setting<'a> {
+    points: &'a PointSet,
+    labels: &'a [u32],
+    options: &'a ImplicitOptions,
+    oracle: Oracle,
+    /// Each control point's off-surface points.
+    offsets: Vec<Vec<OffSurface>>,
+    /// The points' bounding box grown by a tenth per side.
+    grown: SampleBox,
+}
+
+impl<'a> Setting<'a> {
+    fn new(points: &'a PointSet, labels: &'a [u32], options: &'a ImplicitOptions) -> Result<Self> {
+        let oracle = Oracle::new(&points.positions, &points.normals)?;
+        let epsilon = options.offset * MODEL_DIAGONAL;
+        let offsets = if epsilon > 0.0 {
+            (0..points.len())
+                .map(|i| off_surface(&oracle, i, points.normals[i], epsilon, options.slope))
+                .collect()
+        } else {
+            vec![Vec::new(); points.len()]
+        };
+        let (mut lo, mut hi) = (points.positions[0], points.positions[0]);
+        for p in &points.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let pad = [0, 1, 2].map(|k| 0.1 * (hi[k] - lo[k]) + 1e-3 * MODEL_DIAGONAL);
+        let grown = SampleBox::aligned(
+            [0, 1, 2].map(|k| lo[k] - pad[k]),
+            [0, 1, 2].map(|k| hi[k] + pad[k]),
+        )
+        .ok_or_else(|| Error::invalid("the points' bounding box has no volume"))?;
+        Ok(Setting {
+            points,
+            labels,
+            options,
+            oracle,
+            offsets,
+            grown,
+        })
+    }
+
+    /// Where a module's sign points are drawn: its leaves' boxes grown as the renderer grows
+    /// them, and for the root the whole grown bounding box too.
+    fn regions(&self, boxes: &[Normalization], root: bool) -> Vec<SampleBox> {
+        let half = 0.5 * self.options.box_size * crate::render::DEFAULT_INFLATE;
+        let mut out: Vec<SampleBox> = boxes.iter().filter_map(|n| SampleBox::new(n, half)).collect();
+        if root {
+            out.push(self.grown);
+        }
+        out
+    }
+
+    /// The training data of module `i` of `network` (its children trained): the control
+    /// points of `features`, their off-surface points, and sign points in `regions` whose
+    /// nearest control point belongs to `features`.
+    fn module_data(
+        &self,
+        network: &ImplicitNetwork,
+        i: usize,
+        features: &[u32],
+        members: &[Vec<usize>],
+        regions: &[SampleBox],
+        stream: usize,
+    ) -> ModuleData {
+        let layout = network.trained_layout(i);
+        let mut data = ModuleData::new(layout.inputs);
+        let mut values = [0.0; MAX_INPUTS];
+        let mut tangents = [[0.0; MAX_INPUTS]; 3];
+        let mut add = |x: [f64; 3], gradient: [f64; 3], goal: Goal| {
+            let input = network.module_input(i, x, &mut values, &mut tangents);
+            data.push_goal(input.values, input.tangents, gradient, goal);
+        };
+        let slope = self.options.slope;
+        let mut count = 0;
+        for &f in features {
+            for &p in &members[f as usize] {
+                let target = self.points.normals[p].map(|n| -slope * n);
+                add(self.points.positions[p], target, Goal::SURFACE);
+                for o in &self.offsets[p] {
+                    let goal = Goal {
+                        value: o.value,
+                        value_weight: 1.0,
+                        gradient_weight: 0.0,
+                        hinge: 0.0,
+                    };
+                    add(o.position, target, goal);
+                }
+                count += 1;
+            }
+        }
+        let wanted = (self.options.sign_points * count as f64).round() as usize;
+        if wanted > 0 {
+            let mut rng = ChaCha8Rng::seed_from_u64(self.options.seed ^ 0x5167_4e50);
+            rng.set_stream(stream as u64);
+            let owned = |j: usize| features.contains(&self.labels[j]);
+            let clearance = self.options.clearance * MODEL_DIAGONAL;
+            let signs: Vec<SignPoint> =
+                sign_points(&self.oracle, regions, wanted, clearance, &owned, &mut rng);
+            let margin = self.options.sign_margin;
+            for s in signs {
+                let sign = if s.inside { 1.0 } else { -1.0 };
+                let goal = Goal {
+                    value: sign * margin,
+                    value_weight: 1.0,
+                    gradient_weight: 0.0,
+                    hinge: sign,
+                };
+                add(s.position, [0.0; 3], goal);
+            }
+        }
+        data
+    }
 }
 
 fn fit_module(

@@ -1,0 +1,273 @@
+//! Implicit models on real shapes: the scanned bunny (400 and 1 500 points), spot, a double
+//! torus and a rounded cube, each trained by the network and by the built-in RBF, measured both
+//! ways against the true surface (see `neurosurf_trainer::quality`).
+//!
+//! Run: `cargo bench -p neurosurf-trainer --bench implicit_shapes` (`-- --case bunny-400` for
+//! one case, `-- --seeds 1,2,3` for other seeds, `-- --no-rbf` to skip the RBF).
+
+use std::time::Instant;
+
+use neurosurf_core::scalar::ScalarKind;
+use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions};
+use neurosurf_trainer::io::{Mesh, data_file, read_mesh};
+use neurosurf_trainer::quality::{TwoSided, Truth, two_sided};
+use neurosurf_trainer::render::{CoreField, Field, Region, extract_mesh};
+use neurosurf_trainer::sample::sample_mesh;
+
+/// An analytic signed distance (negative inside) as a field for the mesher: Φ = −d.
+struct Analytic<F> {
+    distance: F,
+    regions: Vec<Region>,
+}
+
+impl<F: Fn([f64; 3]) -> f64 + Sync> Field for Analytic<F> {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        -(self.distance)(p)
+    }
+    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let h = 1e-6;
+        let g = [0, 1, 2].map(|k| {
+            let mut a = p;
+            let mut b = p;
+            a[k] += h;
+            b[k] -= h;
+            (self.value(a) - self.value(b)) / (2.0 * h)
+        });
+        (self.value(p), g)
+    }
+    fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+}
+
+fn analytic_mesh(distance: impl Fn([f64; 3]) -> f64 + Sync, half: [f64; 3]) -> Mesh {
+    let normalization = implicit::Normalization {
+        center: [0.0; 3],
+        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+    };
+    let field = Analytic {
+        distance,
+        regions: vec![Region::new(normalization, 2.0, 1.0).expect("region")],
+    };
+    extract_mesh(&field, 160, &|_, _| {}).expect("mesh").mesh
+}
+
+fn torus(p: [f64; 3], c: [f64; 3], big: f64, small: f64) -> f64 {
+    let q = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+    ((q[0] * q[0] + q[1] * q[1]).sqrt() - big).hypot(q[2]) - small
+}
+
+fn double_torus() -> Mesh {
+    analytic_mesh(
+        |p| torus(p, [-0.9, 0.0, 0.0], 1.0, 0.35).min(torus(p, [0.9, 0.0, 0.0], 1.0, 0.35)),
+        [2.4, 1.5, 0.5],
+    )
+}
+
+fn rounded_cube() -> Mesh {
+    analytic_mesh(
+        |p| {
+            let q = p.map(|v| v.abs() - 0.8);
+            let outside = q.map(|v| v.max(0.0));
+            (outside[0].hypot(outside[1]).hypot(outside[2])) + q[0].max(q[1]).max(q[2]).min(0.0)
+                - 0.2
+        },
+        [1.2; 3],
+    )
+}
+
+struct Case {
+    name: &'static str,
+    mesh: Mesh,
+    points: usize,
+    features: usize,
+}
+
+fn cases(filter: &[String]) -> Vec<Case> {
+    let obj = |name: &str| read_mesh(&data_file(name).expect("data")).expect("mesh");
+    let all: Vec<(&'static str, Box<dyn Fn() -> Mesh>, usize, usize)> = vec![
+        ("bunny-400", Box::new(move || obj("stanford-bunny.obj")), 400, 8),
+        ("bunny-1500", Box::new(move || obj("stanford-bunny.obj")), 1500, 16),
+        ("spot-1500", Box::new(move || obj("spot.obj")), 1500, 16),
+        ("double-torus", Box::new(double_torus), 400, 8),
+        ("rounded-cube", Box::new(rounded_cube), 200, 8),
+        ("woody-400", Box::new(move || obj("woody.obj")), 400, 8),
+        ("fandisk-800", Box::new(move || obj("fandisk.obj")), 800, 8),
+    ];
+    all.into_iter()
+        .filter(|(name, ..)| filter.is_empty() || filter.iter().any(|f| f == name))
+        .map(|(name, mesh, points, features)| Case {
+            name,
+            mesh: mesh(),
+            points,
+            features,
+        })
+        .collect()
+}
+
+fn row(what: &str, seconds: f64, m: &TwoSided) {
+    println!(
+        "| {what} | {seconds:.2} s | {:.4} % | {:.4} % | {:.3} % | {:.2}° | {} | {} | {:.2} % |",
+        m.truth_to_model.median_percent,
+        m.model_to_truth.median_percent,
+        m.model_to_truth.p90_percent,
+        m.normal_median_degrees,
+        m.stray.sign_changes,
+        m.mesh.components,
+        m.mesh.far_vertices_percent,
+    );
+}
+
+/// For every module: how far its subtree's zero set is from the true surface where that
+/// module's features are nearest (first-order |Φ|/|∇Φ|, % of the diagonal), and its normals.
+fn diagnose(network: &implicit::ImplicitNetwork, points: &neurosurf_trainer::PointSet, truth: &Truth) {
+    let labels = points.features.as_ref().expect("labels");
+    let tree: kiddo::ImmutableKdTree<f64, 3> =
+        kiddo::ImmutableKdTree::new_from_slice(&points.positions).expect("tree");
+    let owner: Vec<u32> = truth
+        .positions()
+        .iter()
+        .map(|p| {
+            let n = tree.query(p).nearest_one::<kiddo::SquaredEuclidean<f64>>().execute();
+            labels[n.item as usize]
+        })
+        .collect();
+    for i in 0..network.module_count() {
+        let sub = network.subtree(i).expect("subtree");
+        let features: Vec<u32> = network
+            .subtree_leaves(i)
+            .iter()
+            .map(|&l| network.leaf_features()[l].unwrap_or(0))
+            .collect();
+        let mut d = Vec::new();
+        let mut a = Vec::new();
+        for ((p, n), o) in truth.positions().iter().zip(truth.normals()).zip(&owner) {
+            if !features.contains(o) {
+                continue;
+            }
+            let (phi, g) = sub.eval(*p);
+            let len = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+            d.push(phi.abs() / len);
+            a.push((-(g[0] * n[0] + g[1] * n[1] + g[2] * n[2]) / len).clamp(-1.0, 1.0).acos().to_degrees());
+        }
+        d.sort_by(f64::total_cmp);
+        a.sort_by(f64::total_cmp);
+        eprintln!(
+            "  module {i:2} ({} features): {} truth samples, median {:.4} %, p90 {:.3} %, normal median {:.2}°",
+            features.len(),
+            d.len(),
+            100.0 * d[d.len() / 2] / truth.diagonal(),
+            100.0 * d[d.len() * 9 / 10] / truth.diagonal(),
+            a[a.len() / 2]
+        );
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let value = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let filter: Vec<String> = value("--case")
+        .map(|c| c.split(',').map(String::from).collect())
+        .unwrap_or_default();
+    let seeds: Vec<u64> = value("--seeds")
+        .map(|s| s.split(',').map(|v| v.parse().expect("seed")).collect())
+        .unwrap_or_else(|| vec![1]);
+    let rbf = !args.iter().any(|a| a == "--no-rbf");
+    // Scale every case to this bounding diagonal (as given when absent).
+    let to_diagonal: Option<f64> = value("--diagonal").map(|v| v.parse().expect("diagonal"));
+    println!(
+        "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for mut case in cases(&filter) {
+        if let Some(target) = to_diagonal {
+            let d = neurosurf_trainer::caoen::bounding_diagonal(&case.mesh);
+            for p in &mut case.mesh.positions {
+                *p = p.map(|v| v * target / d);
+            }
+        }
+        let truth = Truth::from_mesh(&case.mesh).expect("truth");
+        for &seed in &seeds {
+            let points = sample_mesh(&case.mesh, case.points, seed).expect("sample");
+            let start = Instant::now();
+            let request = FitRequest {
+                features: Some(case.features),
+                ..FitRequest::default()
+            };
+            let mut options = ImplicitOptions {
+                seed,
+                ..ImplicitOptions::default()
+            };
+            for setting in value("--set").iter().flat_map(|s| s.split(',')) {
+                let (key, v) = setting.split_once('=').expect("--set key=value");
+                let v: f64 = v.parse().expect("number");
+                match key {
+                    "offset" => options.offset = v,
+                    "sign_points" => options.sign_points = v,
+                    "clearance" => options.clearance = v,
+                    "sign_margin" => options.sign_margin = v,
+                    "lambda" => options.lm.lambda = v,
+                    "gamma" => options.gamma = v,
+                    "width" => options.width = v as usize,
+                    "max_iterations" => options.lm.max_iterations = v as usize,
+                    "threshold" => options.lm.threshold = v,
+                    other => panic!("unknown setting {other}"),
+                }
+            }
+            let mut points = points;
+            points.features = Some(
+                implicit::decompose(&points.positions, case.features, options.min_points)
+                    .expect("features"),
+            );
+            let trained =
+                implicit::fit(points.clone(), &request, &options, &|_| {}).expect("training");
+            if std::env::var_os("VERBOSE").is_some() {
+                diagnose(&trained.network, &points, &truth);
+            }
+            let seconds = start.elapsed().as_secs_f64();
+            let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
+            if let Some(dir) = value("--save") {
+                let path = format!("{dir}/{}-{seed}.nsb", case.name);
+                std::fs::write(&path, &blob).expect("save");
+            }
+            let regions = Region::of_network(&trained.network, 2.0, 1.25);
+            let field = CoreField::new(&blob, regions).expect("core");
+            let m = two_sided(&field, &truth, 96, 48).expect("measure");
+            let s = &trained.summary;
+            if std::env::var_os("VERBOSE").is_some() {
+                for m in &s.modules {
+                    eprintln!(
+                        "  module {:2} {} {:5} rows {:5} it E {:.2e} -> {:.2e} {:?} {:.2}s",
+                        m.module,
+                        if m.node { "node" } else { "leaf" },
+                        m.points,
+                        m.lm.iterations,
+                        m.lm.initial_error,
+                        m.lm.error,
+                        m.lm.stop,
+                        m.seconds
+                    );
+                }
+            }
+            row(
+                &format!(
+                    "{} seed {seed} network ({} modules, {} it, {})",
+                    case.name,
+                    s.modules.len(),
+                    s.iterations(),
+                    if s.converged() { "converged" } else { "not converged" }
+                ),
+                seconds,
+                &m,
+            );
+            if rbf {
+                let _ = &points;
+            }
+        }
+    }
+}

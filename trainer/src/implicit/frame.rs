@@ -1,0 +1,134 @@
+//! The model frame: every implicit model is trained on its points moved and scaled so that
+//! their bounding box is centred at the origin with a diagonal of [`MODEL_DIAGONAL`]. Every
+//! setting (slope, γ, the error threshold, offsets and margins) therefore means the same thing
+//! whatever the data's units; the frame is folded into the leaves' input normalizations after
+//! training, so a blob evaluates in the data's own units.
+
+use serde::{Deserialize, Serialize};
+
+use super::normalize::Normalization;
+use crate::error::{Error, Result};
+
+/// The bounding diagonal of the points in the model frame. Carcenac's Table 1 settings (slope
+/// 5, error threshold 10⁻⁵) were chosen for shapes of about this size: the Table 5 torus
+/// (R = 1, r = 0.4) has a diagonal of 4.04.
+pub const MODEL_DIAGONAL: f64 = 4.0;
+
+/// World ↔ model frame: x_model = (x − center) / scale.
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    /// The centre of the points' bounding box (world units).
+    pub center: [f64; 3],
+    /// World length of one model unit.
+    pub scale: f64,
+}
+
+impl Frame {
+    /// The identity frame.
+    pub const IDENTITY: Frame = Frame {
+        center: [0.0; 3],
+        scale: 1.0,
+    };
+
+    /// The frame of `positions` (see the module documentation).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when there are no points, a coordinate is not finite, or all
+    /// points coincide.
+    pub fn of(positions: &[[f64; 3]]) -> Result<Frame> {
+        let first = *positions
+            .first()
+            .ok_or_else(|| Error::invalid("no points to train on"))?;
+        let (mut lo, mut hi) = (first, first);
+        for p in positions {
+            if p.iter().any(|v| !v.is_finite()) {
+                return Err(Error::invalid(format!(
+                    "a point has a non-finite coordinate: {p:?}"
+                )));
+            }
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+        let magnitude = (0..3).map(|k| lo[k].abs().max(hi[k].abs())).fold(0.0, f64::max);
+        if !(diagonal > 1e-9 * magnitude && diagonal > 0.0 && diagonal.is_finite()) {
+            return Err(Error::invalid(format!(
+                "the points span no volume: their bounding box is {lo:?} … {hi:?}; give points \
+                 spread over a surface"
+            )));
+        }
+        Ok(Frame {
+            center: [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k])),
+            scale: diagonal / MODEL_DIAGONAL,
+        })
+    }
+
+    /// A world point in the model frame.
+    pub fn to_model(&self, x: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|k| (x[k] - self.center[k]) / self.scale)
+    }
+
+    /// A model-frame point in world units.
+    pub fn to_world(&self, x: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|k| self.center[k] + x[k] * self.scale)
+    }
+
+    /// A leaf normalization that reads model-frame points, rewritten to read world points:
+    /// A·(x_model − c) = (A / scale)·(x − (center + scale·c)).
+    pub fn normalization_to_world(&self, n: &Normalization) -> Normalization {
+        Normalization {
+            center: self.to_world(n.center),
+            matrix: n.matrix.map(|row| row.map(|a| a / self.scale)),
+        }
+    }
+
+    /// The inverse of [`Frame::normalization_to_world`].
+    pub fn normalization_to_model(&self, n: &Normalization) -> Normalization {
+        Normalization {
+            center: self.to_model(n.center),
+            matrix: n.matrix.map(|row| row.map(|a| a * self.scale)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_frame_centres_and_scales_the_bounding_box() {
+        let frame = Frame::of(&[[1000.0, -1000.0, 500.0], [1002.0, -998.0, 501.0]]).unwrap();
+        assert_eq!(frame.center, [1001.0, -999.0, 500.5]);
+        assert!((frame.scale - 3.0 / MODEL_DIAGONAL).abs() < 1e-12);
+        let x = [1001.5, -999.25, 500.75];
+        let back = frame.to_world(frame.to_model(x));
+        assert!((0..3).all(|k| (back[k] - x[k]).abs() < 1e-9));
+    }
+
+    #[test]
+    fn folding_keeps_what_a_leaf_reads() {
+        let frame = Frame {
+            center: [3.0, -2.0, 7.0],
+            scale: 0.01,
+        };
+        let n = Normalization {
+            center: [0.1, 0.2, -0.3],
+            matrix: [[1.0, 2.0, 0.0], [0.0, 0.5, 1.0], [3.0, 0.0, 1.0]],
+        };
+        let world = frame.normalization_to_world(&n);
+        let x = [3.004, -1.997, 7.002];
+        let (a, b) = (n.apply(frame.to_model(x)), world.apply(x));
+        assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-9), "{a:?} {b:?}");
+        let back = frame.normalization_to_model(&world);
+        assert!((0..3).all(|k| (back.center[k] - n.center[k]).abs() < 1e-12));
+    }
+
+    #[test]
+    fn coincident_or_missing_points_are_refused() {
+        assert!(Frame::of(&[]).is_err());
+        assert!(Frame::of(&[[1.0, 2.0, 3.0]; 5]).is_err());
+        assert!(Frame::of(&[[f64::NAN, 0.0, 0.0], [1.0, 1.0, 1.0]]).is_err());
+    }
+}
