@@ -118,6 +118,87 @@ fn row(what: &str, seconds: f64, m: &TwoSided) {
     );
 }
 
+/// Slices through the middle of the grown box along each axis, as a PNG: white where model and
+/// winding number agree on inside, dark where they agree on outside, red where the model is
+/// inside and the points say outside, blue the reverse; pixels near the surface are dimmed.
+fn slices(field: &dyn Fn([f64; 3]) -> f64, points: &neurosurf_trainer::PointSet, truth: &Truth, path: &str) {
+    let model: Vec<[f64; 3]> = points.positions.clone();
+    let oracle = implicit::Oracle::new(&model, &points.normals).expect("oracle");
+    let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
+    let n = 200;
+    let mut img = image::RgbImage::new(3 * n, n);
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        for j in 0..n {
+            for i in 0..n {
+                let mut p = b.center();
+                p[u] = b.lo[u] + (b.hi[u] - b.lo[u]) * (i as f64 + 0.5) / n as f64;
+                p[v] = b.lo[v] + (b.hi[v] - b.lo[v]) * ((n - 1 - j) as f64 + 0.5) / n as f64;
+                let mine = field(p) > 0.0;
+                let theirs = oracle.inside(p);
+                let near = truth.distance(p) < 0.05 * truth.diagonal();
+                let mut c = match (mine, theirs) {
+                    (true, true) => [230, 230, 230],
+                    (false, false) => [60, 60, 70],
+                    (true, false) => [230, 40, 40],
+                    (false, true) => [40, 80, 230],
+                };
+                if near {
+                    c = c.map(|x| x / 2 + 40);
+                }
+                img.put_pixel(axis as u32 * n as u32 + i as u32, j as u32, image::Rgb(c.map(|x| x as u8)));
+            }
+        }
+    }
+    img.save(path).expect("png");
+}
+
+/// The exact winding number of a closed (or nearly closed) triangle mesh at q (Van Oosterom
+/// and Strackee's solid angle per triangle).
+fn mesh_winding(mesh: &Mesh, q: [f64; 3]) -> f64 {
+    let mut sum = 0.0;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|v| {
+            let p = mesh.positions[v as usize];
+            [p[0] - q[0], p[1] - q[1], p[2] - q[2]]
+        });
+        let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let dot = |u: [f64; 3], v: [f64; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+        let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let (la, lb, lc) = (n(a), n(b), n(c));
+        let det = dot(cross, c);
+        let den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+        sum += 2.0 * det.atan2(den);
+    }
+    sum / (4.0 * std::f64::consts::PI)
+}
+
+/// How often the points' winding number disagrees with the mesh's on far random points.
+fn check_oracle(mesh: &Mesh, points: &neurosurf_trainer::PointSet, truth: &Truth) {
+    use rand::{Rng, SeedableRng};
+    let oracle = implicit::Oracle::new(&points.positions, &points.normals).expect("oracle");
+    let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let mut checked = 0;
+    let mut wrong = 0;
+    let mut examples = Vec::new();
+    while checked < 1500 {
+        let q = [0, 1, 2].map(|k| rng.random_range(b.lo[k]..b.hi[k]));
+        if truth.distance(q) < 0.02 * truth.diagonal() {
+            continue;
+        }
+        checked += 1;
+        let exact = mesh_winding(mesh, q);
+        if (exact > 0.5) != oracle.inside(q) {
+            wrong += 1;
+            if examples.len() < 5 {
+                examples.push((exact, oracle.winding(q), truth.distance(q) / truth.diagonal()));
+            }
+        }
+    }
+    eprintln!("  oracle: {wrong} of {checked} far points disagree with the mesh; e.g. {examples:?}");
+}
+
 /// For every module: how far its subtree's zero set is from the true surface where that
 /// module's features are nearest (first-order |Φ|/|∇Φ|, % of the diagonal), and its normals.
 fn diagnose(network: &implicit::ImplicitNetwork, points: &neurosurf_trainer::PointSet, truth: &Truth) {
@@ -229,6 +310,13 @@ fn main() {
             if std::env::var_os("VERBOSE").is_some() {
                 diagnose(&trained.network, &points, &truth);
             }
+            if std::env::var_os("ORACLE").is_some() {
+                check_oracle(&case.mesh, &points, &truth);
+            }
+            if let Some(dir) = value("--slices") {
+                let net = &trained.network;
+                slices(&|p| net.eval(p).0, &points, &truth, &format!("{dir}/{}-{seed}-slices.png", case.name));
+            }
             let seconds = start.elapsed().as_secs_f64();
             let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
             if let Some(dir) = value("--save") {
@@ -236,7 +324,9 @@ fn main() {
                 std::fs::write(&path, &blob).expect("save");
             }
             let regions = Region::of_network(&trained.network, 2.0, 1.25);
-            let field = CoreField::new(&blob, regions).expect("core");
+            let _ = CoreField::new;
+            let field = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25).expect("field");
+            let _ = regions;
             let m = two_sided(&field, &truth, 96, 48).expect("measure");
             let s = &trained.summary;
             if std::env::var_os("VERBOSE").is_some() {

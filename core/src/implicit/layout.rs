@@ -112,7 +112,7 @@ impl ModuleLayout {
     pub const fn new(kind: ModuleKind, width: usize) -> Self {
         let (start, inputs) = match kind {
             ModuleKind::Leaf => (NORMALIZATION_LEN, 3),
-            ModuleKind::Node => (0, 2 * width),
+            ModuleKind::Node => (NORMALIZATION_LEN, 2 * width + 3),
         };
         let hidden_a = DenseLayout::at(start, inputs, width);
         let hidden_b = DenseLayout::at(hidden_a.end(), width, width);

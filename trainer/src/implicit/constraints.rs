@@ -103,6 +103,8 @@ pub struct SignPoint {
     pub position: [f64; 3],
     /// Inside the surface (Φ > 0) or outside (Φ < 0).
     pub inside: bool,
+    /// Distance to the nearest control point.
+    pub distance: f64,
 }
 
 /// Up to `count` sign points drawn uniformly in the union of `boxes` (by volume), each at
@@ -141,6 +143,7 @@ pub fn sign_points(
         out.push(SignPoint {
             position: q,
             inside: oracle.inside(q),
+            distance,
         });
     }
     out

@@ -22,7 +22,7 @@ use super::activation::activation;
 use super::lm::madd;
 
 /// Most inputs a module can have (a node: two children of width [`MAX_WIDTH`]).
-pub const MAX_INPUTS: usize = 2 * MAX_WIDTH;
+pub const MAX_INPUTS: usize = 2 * MAX_WIDTH + 3;
 
 /// Offsets of a module's trained parameters, relative to the first trained parameter.
 ///

@@ -141,7 +141,7 @@ pub fn levenberg_marquardt(
 
     // Every buffer is allocated once; an iteration allocates nothing.
     let mut residuals = vec![0.0; ns];
-    let mut normal = NormalEquations::new(p);
+    let mut normal = NormalEquations::single_precision(p);
     let mut system = DampedSystem::new(p);
     let mut trial = vec![0.0; p];
     problem.residuals(params, &mut residuals);

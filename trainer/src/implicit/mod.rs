@@ -17,6 +17,7 @@ mod pipeline;
 mod problem;
 mod train;
 mod tree;
+mod value_rows;
 
 pub use activation::{Activation, activation};
 pub use blob::{DecodedImplicit, ImplicitMetadata, frame, from_blob, to_blob};
@@ -36,7 +37,7 @@ pub use network::ImplicitNetwork;
 pub use normalize::{BoxScaling, Normalization};
 pub use options::ImplicitOptions;
 pub use pipeline::{FitRequest, feature_centroids, fit};
-pub use problem::{Goal, ModuleData, ModuleProblem};
+pub use problem::{ModuleData, ModuleProblem, ValueGoal};
 pub use train::{ModuleReport, Progress, Trained, TrainingSummary, train};
 pub use tree::TreeSpec;
 

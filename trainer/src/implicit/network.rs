@@ -207,19 +207,15 @@ impl ImplicitNetwork {
 
     /// A leaf's input normalization.
     pub fn normalization(&self, i: usize) -> Option<Normalization> {
-        (self.kinds[i] == ModuleKind::Leaf).then(|| {
-            Normalization::from_params(
-                &self.params[self.offsets[i]..self.offsets[i] + NORMALIZATION_LEN],
-            )
-        })
+        Some(Normalization::from_params(
+            &self.params[self.offsets[i]..self.offsets[i] + NORMALIZATION_LEN],
+        ))
     }
 
     /// Sets a leaf's input normalization.
     pub fn set_normalization(&mut self, i: usize, normalization: &Normalization) {
-        if self.kinds[i] == ModuleKind::Leaf {
-            let o = self.offsets[i];
-            self.params[o..o + NORMALIZATION_LEN].copy_from_slice(&normalization.to_params());
-        }
+        let o = self.offsets[i];
+        self.params[o..o + NORMALIZATION_LEN].copy_from_slice(&normalization.to_params());
     }
 
     /// Module `i`'s inputs at world point `x`: values and world tangents, written into
@@ -255,7 +251,17 @@ impl ImplicitNetwork {
                             .copy_from_slice(&jet.tangents[k][..n]);
                     }
                 }
-                2 * n
+                let norm = self.normalization(i).unwrap_or(Normalization {
+                    center: [0.0; 3],
+                    matrix: [[0.0; 3]; 3],
+                });
+                values[2 * n..2 * n + 3].copy_from_slice(&norm.apply(x));
+                for (k, tangent) in tangents.iter_mut().enumerate() {
+                    for c in 0..3 {
+                        tangent[2 * n + c] = norm.matrix[c][k];
+                    }
+                }
+                2 * n + 3
             }
         };
         let [t0, t1, t2] = tangents;

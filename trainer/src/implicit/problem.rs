@@ -1,10 +1,12 @@
-//! The least-squares problem of one module: its control points' inputs and target gradients.
+//! The least-squares problem of one module: its control points' inputs and target gradients,
+//! and the points that constrain only its value (off-surface and sign points).
 
 use super::jacobian::{
-    InputJet, InputLanes, LANES, TapeLanes, TrainedLayout, forward_lanes, jacobian_lanes,
-    transpose_lanes,
+    InputJet, InputLanes, LANES, Lanes, MAX_INPUTS, TapeLanes, TrainedLayout, forward_lanes,
+    jacobian_lanes, transpose_lanes,
 };
 use super::lm::{LeastSquares, NormalEquations, cpu_has_fma};
+use super::value_rows::{ValueTape, forward_value_lanes, value_row_lanes};
 
 /// A module's training data: per control point, the module's inputs with their tangents
 /// (derivatives with respect to world x), and the target gradient −s·n.
@@ -17,40 +19,31 @@ pub struct ModuleData {
     values: Vec<f64>,
     tangents: Vec<f64>,
     targets: Vec<[f64; 3]>,
-    goals: Vec<Goal>,
+    /// Inputs of the value points (`inputs` each) and what each asks of Φ.
+    point_values: Vec<f64>,
+    goals: Vec<ValueGoal>,
 }
 
-/// What one point asks of Φ besides its target gradient: the residuals are
-/// `value_weight·(Φ − value)` and `gradient_weight·γ·(∇Φ − target)`. With a nonzero `hinge`
-/// σ the value residual is one-sided: it counts only while σ·(Φ − value) < 0 (a sign
-/// constraint: Φ on the right side of `value`).
+/// What a value point asks of Φ: the residual `weight·(Φ − value)`. With a nonzero `hinge`
+/// σ it is one-sided, counting only while σ·(Φ − value) < 0: a sign constraint that keeps Φ
+/// beyond `value` on the σ side.
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub struct Goal {
+pub struct ValueGoal {
     /// Target of Φ.
     pub value: f64,
-    /// Weight of the Φ residual.
-    pub value_weight: f64,
-    /// Weight of the gradient residuals (on top of γ).
-    pub gradient_weight: f64,
-    /// 0 for a two-sided value residual; +1 or −1 for a one-sided one.
+    /// Weight of the residual.
+    pub weight: f64,
+    /// 0 for a two-sided residual; +1 or −1 for a one-sided one.
     pub hinge: f64,
 }
 
-impl Goal {
-    /// A control point on the surface: Φ = 0 and the target gradient, at full weight.
-    pub const SURFACE: Goal = Goal {
-        value: 0.0,
-        value_weight: 1.0,
-        gradient_weight: 1.0,
-        hinge: 0.0,
-    };
-
-    /// The weight of the value residual at Φ = `phi` (0 where a one-sided residual is met).
+impl ValueGoal {
+    /// The residual's weight at Φ = `phi`: 0 where a one-sided residual is met.
     fn active_weight(&self, phi: f64) -> f64 {
         if self.hinge != 0.0 && self.hinge * (phi - self.value) >= 0.0 {
             0.0
         } else {
-            self.value_weight
+            self.weight
         }
     }
 }
@@ -63,6 +56,7 @@ impl ModuleData {
             values: Vec::new(),
             tangents: Vec::new(),
             targets: Vec::new(),
+            point_values: Vec::new(),
             goals: Vec::new(),
         }
     }
@@ -70,20 +64,7 @@ impl ModuleData {
     /// Adds one control point: input `values` (d), `tangents[k]` (d each), and the target
     /// gradient ∇Φ = −s·n.
     pub fn push(&mut self, values: &[f64], tangents: [&[f64]; 3], target_gradient: [f64; 3]) {
-        self.push_goal(values, tangents, target_gradient, Goal::SURFACE);
-    }
-
-    /// Adds one point with its own [`Goal`] (and target gradient, used when the goal weighs
-    /// the gradient).
-    pub fn push_goal(
-        &mut self,
-        values: &[f64],
-        tangents: [&[f64]; 3],
-        target_gradient: [f64; 3],
-        goal: Goal,
-    ) {
         debug_assert_eq!(values.len(), self.inputs);
-        self.goals.push(goal);
         self.values.extend_from_slice(values);
         for t in tangents {
             debug_assert_eq!(t.len(), self.inputs);
@@ -92,14 +73,26 @@ impl ModuleData {
         self.targets.push(target_gradient);
     }
 
+    /// Adds one value point: its input `values` (d) and what it asks of Φ.
+    pub fn push_value(&mut self, values: &[f64], goal: ValueGoal) {
+        debug_assert_eq!(values.len(), self.inputs);
+        self.point_values.extend_from_slice(values);
+        self.goals.push(goal);
+    }
+
     /// Number of control points.
     pub fn len(&self) -> usize {
         self.targets.len()
     }
 
-    /// Whether there are no control points.
+    /// Number of value points.
+    pub fn value_len(&self) -> usize {
+        self.goals.len()
+    }
+
+    /// Whether there are no points of either kind.
     pub fn is_empty(&self) -> bool {
-        self.targets.is_empty()
+        self.targets.is_empty() && self.goals.is_empty()
     }
 
     /// Inputs per point.
@@ -150,31 +143,9 @@ impl<'a> ModuleProblem<'a> {
 
     fn point_residuals(&self, i: usize, tape_value: f64, gradient: [f64; 3], out: &mut [f64]) {
         let target = self.data.targets[i];
-        let goal = self.data.goals[i];
-        out[0] = goal.active_weight(tape_value) * (tape_value - goal.value);
+        out[0] = tape_value;
         for k in 0..3 {
-            out[1 + k] = goal.gradient_weight * self.gamma * (gradient[k] - target[k]);
-        }
-    }
-
-    /// Scales the lane-minor Jacobian rows of the points from `first` on by their goals'
-    /// weights (the sweeps compute them at unit value weight).
-    fn weigh_rows(&self, first: usize, count: usize, tape: &TapeLanes, rows: &mut [[f64; LANES]], stride: usize) {
-        for l in 0..count {
-            let goal = self.data.goals[first + l];
-            let weights = [
-                goal.active_weight(tape.value[l]),
-                goal.gradient_weight,
-                goal.gradient_weight,
-                goal.gradient_weight,
-            ];
-            for (r, &w) in weights.iter().enumerate() {
-                if w != 1.0 {
-                    for row in &mut rows[r * stride..(r + 1) * stride] {
-                        row[l] *= w;
-                    }
-                }
-            }
+            out[1 + k] = self.gamma * (gradient[k] - target[k]);
         }
     }
 
@@ -206,13 +177,88 @@ impl<'a> ModuleProblem<'a> {
 
     #[inline(always)]
     fn residuals_impl<const FMA: bool>(&self, params: &[f64], residuals: &mut [f64]) {
+        let (surface, values) = residuals.split_at_mut(4 * self.data.len());
         let mut lanes = InputLanes::ZERO;
         let mut tape = TapeLanes::ZERO;
-        for (group, out) in residuals.chunks_mut(4 * LANES).enumerate() {
+        for (group, out) in surface.chunks_mut(4 * LANES).enumerate() {
             let first = group * LANES;
             self.gather(first, out.len() / 4, &mut lanes);
             forward_lanes::<FMA>(&self.layout, params, &lanes, &mut tape);
             self.lane_residuals(first, &tape, out);
+        }
+        let mut inputs = [[0.0; LANES]; MAX_INPUTS];
+        let mut tape = ValueTape::ZERO;
+        for (group, out) in values.chunks_mut(LANES).enumerate() {
+            let first = group * LANES;
+            self.gather_values(first, out.len(), &mut inputs);
+            forward_value_lanes::<FMA>(&self.layout, params, &inputs, &mut tape);
+            for (l, e) in out.iter_mut().enumerate() {
+                *e = self.value_residual(first + l, tape.value[l]).0;
+            }
+        }
+    }
+
+    /// Loads value points `first..first + count` into lanes (the last repeated in spare lanes).
+    fn gather_values(&self, first: usize, count: usize, inputs: &mut [Lanes; MAX_INPUTS]) {
+        let d = self.data.inputs;
+        for l in 0..LANES {
+            let i = first + l.min(count - 1);
+            let values = &self.data.point_values[i * d..(i + 1) * d];
+            for c in 0..d {
+                inputs[c][l] = values[c];
+            }
+        }
+    }
+
+    /// The residual of value point `i` at Φ = `phi`, and the weight its Jacobian row carries.
+    fn value_residual(&self, i: usize, phi: f64) -> (f64, f64) {
+        let goal = self.data.goals[i];
+        let weight = goal.active_weight(phi);
+        (weight * (phi - goal.value), weight)
+    }
+
+    /// The value points' residuals, and the Jacobian rows of those whose residual is active,
+    /// [`LANES`] points at a time: `emit(rows, residuals, points)` receives each group's active
+    /// rows (row-major with `stride`), their residuals and their point indices.
+    #[inline(always)]
+    fn value_rows<const FMA: bool>(
+        &self,
+        params: &[f64],
+        residuals: &mut [f64],
+        stride: usize,
+        emit: &mut dyn FnMut(&[f64], &[f64], &[usize]),
+    ) {
+        let p = self.layout.len;
+        let mut inputs = [[0.0; LANES]; MAX_INPUTS];
+        let mut tape = ValueTape::ZERO;
+        let mut lanes = vec![[0.0; LANES]; p];
+        let mut rows = vec![0.0; LANES * stride];
+        let mut active = [0.0; LANES];
+        let mut points = [0; LANES];
+        for (group, out) in residuals.chunks_mut(LANES).enumerate() {
+            let first = group * LANES;
+            self.gather_values(first, out.len(), &mut inputs);
+            forward_value_lanes::<FMA>(&self.layout, params, &inputs, &mut tape);
+            let mut count = 0;
+            for (l, e) in out.iter_mut().enumerate() {
+                let (residual, weight) = self.value_residual(first + l, tape.value[l]);
+                *e = residual;
+                if weight != 0.0 {
+                    active[count] = residual;
+                    points[count] = first + l;
+                    if count == 0 {
+                        value_row_lanes::<FMA>(&self.layout, params, &inputs, &tape, &mut lanes);
+                    }
+                    let row = &mut rows[count * stride..(count + 1) * stride];
+                    for (r, x) in row.iter_mut().zip(&lanes) {
+                        *r = weight * x[l];
+                    }
+                    count += 1;
+                }
+            }
+            if count > 0 {
+                emit(&rows[..count * stride], &active[..count], &points[..count]);
+            }
         }
     }
 
@@ -238,7 +284,6 @@ impl<'a> ModuleProblem<'a> {
         forward_lanes::<FMA>(&self.layout, params, lanes, tape);
         self.lane_residuals(first, tape, out);
         jacobian_lanes::<FMA>(&self.layout, params, lanes, tape, self.gamma, rows, stride);
-        self.weigh_rows(first, count, tape, rows, stride);
         transpose_lanes::<FMA>(rows, stride, count, block);
     }
 
@@ -260,12 +305,18 @@ impl<'a> ModuleProblem<'a> {
     ) {
         let stride = normal.stride();
         let mut work = Self::jacobian_work(stride);
-        for (group, out) in residuals.chunks_mut(4 * LANES).enumerate() {
+        let (surface, values) = residuals.split_at_mut(4 * self.data.len());
+        for (group, out) in surface.chunks_mut(4 * LANES).enumerate() {
             // The group's rows go straight into the accumulator's block.
             let (block, e) = normal.rows_mut(out.len());
             self.jacobian_group::<FMA>(params, group * LANES, out, &mut work, stride, block);
             e.copy_from_slice(out);
         }
+        self.value_rows::<FMA>(params, values, stride, &mut |rows, residuals, _| {
+            let (block, e) = normal.rows_mut(residuals.len());
+            block.copy_from_slice(rows);
+            e.copy_from_slice(residuals);
+        });
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -292,7 +343,7 @@ impl LeastSquares for ModuleProblem<'_> {
     }
 
     fn residual_count(&self) -> usize {
-        4 * self.data.len()
+        4 * self.data.len() + self.data.value_len()
     }
 
     fn residuals(&self, params: &[f64], residuals: &mut [f64]) {
@@ -311,15 +362,25 @@ impl LeastSquares for ModuleProblem<'_> {
         let stride = p.div_ceil(4) * 4;
         let mut work = Self::jacobian_work(stride);
         let mut block = vec![0.0; 4 * LANES * stride];
-        let groups = residuals
+        let surface_rows = 4 * self.data.len();
+        let (surface, values) = residuals.split_at_mut(surface_rows);
+        let (surface_j, values_j) = jacobian.split_at_mut(surface_rows * p);
+        let groups = surface
             .chunks_mut(4 * LANES)
-            .zip(jacobian.chunks_mut(4 * LANES * p));
+            .zip(surface_j.chunks_mut(4 * LANES * p));
         for (group, (out, dst)) in groups.enumerate() {
             self.jacobian_group::<false>(params, group * LANES, out, &mut work, stride, &mut block);
             for (d, s) in dst.chunks_exact_mut(p).zip(block.chunks_exact(stride)) {
                 d.copy_from_slice(&s[..p]);
             }
         }
+        // Value points: inactive rows stay zero.
+        values_j.fill(0.0);
+        self.value_rows::<false>(params, values, stride, &mut |rows, _, points| {
+            for (row, &i) in rows.chunks_exact(stride).zip(points) {
+                values_j[i * p..(i + 1) * p].copy_from_slice(&row[..p]);
+            }
+        });
     }
 
     /// J [`LANES`] points at a time, straight into the accumulator's block: J is never stored
@@ -372,6 +433,77 @@ mod tests {
     /// The batched residuals, Jacobian and normal equations equal the per-point `forward` and
     /// `jacobian_rows` (up to rounding: lanes use their own tanh, and FMA when the CPU has it),
     /// in the portable build and, when the CPU has it, the AVX2 one.
+    /// Value points: two-sided ones and one-sided ones on both sides of their margin. Their
+    /// Jacobian rows match central differences of the residuals (zero where a one-sided
+    /// residual is met), and the normal equations hold exactly the active rows.
+    #[test]
+    fn value_points_have_the_right_rows() {
+        for (d, n, seed) in [(3, 9, 5), (21, 9, 6), (3, 4, 7)] {
+            let (mut data, params) = random_problem(d, n, 6, seed);
+            let mut rng = ChaCha8Rng::seed_from_u64(seed + 100);
+            for k in 0..11 {
+                let values: Vec<f64> = (0..d).map(|_| rng.random_range(-1.5..1.5)).collect();
+                let hinge = [0.0, 1.0, -1.0][k % 3];
+                let goal = ValueGoal {
+                    value: rng.random_range(-0.5..0.5),
+                    weight: rng.random_range(0.5..2.0),
+                    hinge,
+                };
+                data.push_value(&values, goal);
+            }
+            for fma in [false, cpu_has_fma()] {
+                let mut problem = ModuleProblem::new(&data, n, 0.3);
+                problem.fma = fma;
+                let (m, p) = (problem.residual_count(), problem.parameter_count());
+                let mut e = vec![0.0; m];
+                let mut j = vec![0.0; m * p];
+                problem.jacobian(&params, &mut e, &mut j);
+                let first = 4 * data.len();
+                let mut plus = vec![0.0; m];
+                let mut minus = vec![0.0; m];
+                let h = 1e-6;
+                let mut inactive = 0;
+                for t in 0..p {
+                    let mut shifted = params.clone();
+                    shifted[t] += h;
+                    problem.residuals(&shifted, &mut plus);
+                    shifted[t] -= 2.0 * h;
+                    problem.residuals(&shifted, &mut minus);
+                    for r in first..m {
+                        let numeric = (plus[r] - minus[r]) / (2.0 * h);
+                        let analytic = j[r * p + t];
+                        // A one-sided residual that is met is 0 on both sides (away from its kink).
+                        assert!(
+                            (numeric - analytic).abs() <= 1e-6 * (1.0 + numeric.abs()),
+                            "d {d} row {r} param {t}: {numeric} vs {analytic}"
+                        );
+                    }
+                }
+                for r in first..m {
+                    if j[r * p..(r + 1) * p].iter().all(|&x| x == 0.0) {
+                        inactive += 1;
+                        assert_eq!(e[r], 0.0);
+                    }
+                }
+                assert!(inactive > 0 && inactive < m - first, "{inactive}");
+                let mut normal = NormalEquations::new(p);
+                let mut e2 = vec![0.0; m];
+                problem.normal_equations(&params, &mut e2, &mut normal);
+                normal.finish();
+                assert!(e.iter().zip(&e2).all(|(a, b)| close(*a, *b)));
+                let mut reference = NormalEquations::new(p);
+                reference.add_jacobian(&j, &e);
+                reference.finish();
+                for r in 0..p {
+                    assert!(close(normal.gradient(r), reference.gradient(r)));
+                    for c in r..p {
+                        assert!(close(normal.gram(r, c), reference.gram(r, c)), "{r} {c}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn lanes_match_the_per_point_sweeps() {
         for (d, n, points, seed) in [(3, 9, 13, 1), (3, 1, 4, 2), (3, 16, 9, 3), (18, 9, 7, 4)] {

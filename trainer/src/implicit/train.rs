@@ -18,7 +18,7 @@ use super::network::ImplicitNetwork;
 use super::normalize::Normalization;
 use super::options::ImplicitOptions;
 use super::oracle::Oracle;
-use super::problem::{Goal, ModuleData, ModuleProblem};
+use super::problem::{ModuleData, ModuleProblem, ValueGoal};
 use super::tree::TreeSpec;
 use crate::error::{Error, Result};
 use crate::points::PointSet;
@@ -231,7 +231,7 @@ pub fn train(
         if ready.is_empty() {
             break;
         }
-        let results: Vec<(usize, Vec<f64>, ModuleReport)> = ready
+        let results: Vec<(usize, Normalization, Vec<f64>, ModuleReport)> = ready
             .par_iter()
             .map(|&i| {
                 let layout = network.trained_layout(i);
@@ -245,17 +245,47 @@ pub fn train(
                     .filter_map(|&leaf| network.normalization(leaf))
                     .collect();
                 let regions = setting.regions(&boxes, i == network.root());
-                let data = setting.module_data(&network, i, &features, &members, &regions, i);
+                let positions: Vec<[f64; 3]> = features
+                    .iter()
+                    .flat_map(|&f| members[f as usize].iter().map(|&p| model.positions[p]))
+                    .collect();
+                let norm = Normalization::fit(&positions, options.box_size, options.box_scaling, "node")
+                    .unwrap_or(boxes[0]);
+                let mut node_net = network.clone();
+                node_net.set_normalization(i, &norm);
+                let mut data =
+                    setting.module_data(&node_net, i, &features, &members, &regions, i);
                 let initial = match &previous {
                     Some(previous) => previous.trained_params(i).to_vec(),
                     None => random_params(&layout, options.init_range, options.seed, i),
                 };
-                let (params, report) =
+                let (mut params, mut report) =
                     fit_module(i, &data, initial, options, None, init.is_some(), progress);
-                (i, params, report)
+                if i == network.root() {
+                    for round in 0..REFINE_ROUNDS {
+                        node_net.trained_params_mut(i).copy_from_slice(&params);
+                        let added = setting.add_violations(&node_net, i, &regions, &mut data, round);
+                        if std::env::var_os("VERBOSE").is_some() {
+                            eprintln!("  root round {round}: {added} violations");
+                        }
+                        if added == 0 {
+                            break;
+                        }
+                        let (p, r) =
+                            fit_module(i, &data, params, options, None, true, progress);
+                        params = p;
+                        report.lm.iterations += r.lm.iterations;
+                        report.lm.error = r.lm.error;
+                        report.lm.stop = r.lm.stop;
+                        report.seconds += r.seconds;
+                        report.points = r.points;
+                    }
+                }
+                (i, norm, params, report)
             })
             .collect();
-        for (i, params, report) in results {
+        for (i, norm, params, report) in results {
+            network.set_normalization(i, &norm);
             network.trained_params_mut(i).copy_from_slice(&params);
             reports[i] = Some(report);
         }
@@ -277,6 +307,11 @@ pub fn train(
     };
     Ok(Trained { network, summary })
 }
+
+/// Rounds of adding the sign points a trained root still gets wrong and training on.
+const REFINE_ROUNDS: usize = 3;
+/// Candidate points drawn per round, per control point.
+const REFINE_CANDIDATES: usize = 12;
 
 /// A copy of `network` with every leaf normalization mapped by `map`.
 fn in_frame(network: &ImplicitNetwork, map: impl Fn(&Normalization) -> Normalization) -> ImplicitNetwork {
@@ -346,6 +381,51 @@ impl<'a> Setting<'a> {
         out
     }
 
+    /// |Φ| a sign point asks for: the sign margin times s·d at distance d from the control
+    /// points (Φ grows away from the surface as a distance does), at most 1.
+    fn margin(&self, s: &SignPoint) -> f64 {
+        (self.options.sign_margin * self.options.slope * s.distance).min(1.0)
+    }
+
+    /// Draws fresh sign points in `regions`, keeps those where module `i` of `network` has Φ
+    /// on the wrong side of half the margin, and adds them to `data`; returns how many.
+    fn add_violations(
+        &self,
+        network: &ImplicitNetwork,
+        i: usize,
+        regions: &[SampleBox],
+        data: &mut ModuleData,
+        round: usize,
+    ) -> usize {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.options.seed ^ 0x7e51_0a11);
+        rng.set_stream((i * REFINE_ROUNDS + round) as u64);
+        let wanted = REFINE_CANDIDATES * self.points.len();
+        let clearance = self.options.clearance * MODEL_DIAGONAL;
+        let candidates = sign_points(&self.oracle, regions, wanted, clearance, &|_| true, &mut rng);
+        let wrong: Vec<(SignPoint, f64)> = candidates
+            .par_iter()
+            .filter_map(|s| {
+                let phi = network.eval_module(i, s.position).0;
+                let sign = if s.inside { 1.0 } else { -1.0 };
+                (sign * phi < 0.5 * self.margin(s)).then_some((*s, sign))
+            })
+            .collect();
+        let mut values = [0.0; MAX_INPUTS];
+        let mut tangents = [[0.0; MAX_INPUTS]; 3];
+        for (s, sign) in &wrong {
+            let input = network.module_input(i, s.position, &mut values, &mut tangents);
+            data.push_value(
+                input.values,
+                ValueGoal {
+                    value: sign * self.margin(s),
+                    weight: 1.0,
+                    hinge: *sign,
+                },
+            );
+        }
+        wrong.len()
+    }
+
     /// The training data of module `i` of `network` (its children trained): the control
     /// points of `features`, their off-surface points, and sign points in `regions` whose
     /// nearest control point belongs to `features`.
@@ -362,29 +442,29 @@ impl<'a> Setting<'a> {
         let mut data = ModuleData::new(layout.inputs);
         let mut values = [0.0; MAX_INPUTS];
         let mut tangents = [[0.0; MAX_INPUTS]; 3];
-        let mut add = |x: [f64; 3], gradient: [f64; 3], goal: Goal| {
-            let input = network.module_input(i, x, &mut values, &mut tangents);
-            data.push_goal(input.values, input.tangents, gradient, goal);
-        };
+        let mut value_points = Vec::new();
         let slope = self.options.slope;
         let mut count = 0;
         for &f in features {
             for &p in &members[f as usize] {
                 let target = self.points.normals[p].map(|n| -slope * n);
-                add(self.points.positions[p], target, Goal::SURFACE);
+                let input =
+                    network.module_input(i, self.points.positions[p], &mut values, &mut tangents);
+                data.push(input.values, input.tangents, target);
                 for o in &self.offsets[p] {
-                    let goal = Goal {
+                    let goal = ValueGoal {
                         value: o.value,
-                        value_weight: 1.0,
-                        gradient_weight: 0.0,
+                        weight: 1.0,
                         hinge: 0.0,
                     };
-                    add(o.position, target, goal);
+                    value_points.push((o.position, goal));
                 }
                 count += 1;
             }
         }
-        let wanted = (self.options.sign_points * count as f64).round() as usize;
+        let root = i == network.root() && network.module_count() > 1;
+        let ratio = if root { 4.0 * self.options.sign_points } else { self.options.sign_points };
+        let wanted = (ratio * count as f64).round() as usize;
         if wanted > 0 {
             let mut rng = ChaCha8Rng::seed_from_u64(self.options.seed ^ 0x5167_4e50);
             rng.set_stream(stream as u64);
@@ -392,17 +472,19 @@ impl<'a> Setting<'a> {
             let clearance = self.options.clearance * MODEL_DIAGONAL;
             let signs: Vec<SignPoint> =
                 sign_points(&self.oracle, regions, wanted, clearance, &owned, &mut rng);
-            let margin = self.options.sign_margin;
             for s in signs {
                 let sign = if s.inside { 1.0 } else { -1.0 };
-                let goal = Goal {
-                    value: sign * margin,
-                    value_weight: 1.0,
-                    gradient_weight: 0.0,
+                let goal = ValueGoal {
+                    value: sign * self.margin(&s),
+                    weight: 1.0,
                     hinge: sign,
                 };
-                add(s.position, [0.0; 3], goal);
+                value_points.push((s.position, goal));
             }
+        }
+        for (x, goal) in value_points {
+            let input = network.module_input(i, x, &mut values, &mut tangents);
+            data.push_value(input.values, goal);
         }
         data
     }

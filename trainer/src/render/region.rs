@@ -102,6 +102,7 @@ impl Region {
     /// normalization is singular are skipped.
     pub fn of_network(network: &ImplicitNetwork, box_size: f64, inflate: f64) -> Vec<Region> {
         (0..network.module_count())
+            .filter(|&i| network.kinds()[i] == neurosurf_core::implicit::ModuleKind::Leaf)
             .filter_map(|i| network.normalization(i))
             .filter_map(|n| Region::new(n, box_size, inflate))
             .collect()
