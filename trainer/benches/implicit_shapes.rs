@@ -91,6 +91,7 @@ fn cases(filter: &[String]) -> Vec<Case> {
         ("spot-1500", Box::new(move || obj("spot.obj")), 1500, 16),
         ("double-torus", Box::new(double_torus), 400, 8),
         ("rounded-cube", Box::new(rounded_cube), 200, 8),
+        ("rounded-cube-800", Box::new(rounded_cube), 800, 8),
         ("woody-400", Box::new(move || obj("woody.obj")), 400, 8),
         ("fandisk-800", Box::new(move || obj("fandisk.obj")), 800, 8),
     ];
@@ -199,6 +200,71 @@ fn check_oracle(mesh: &Mesh, points: &neurosurf_trainer::PointSet, truth: &Truth
     eprintln!("  oracle: {wrong} of {checked} far points disagree with the mesh; e.g. {examples:?}");
 }
 
+/// Prints where the stray grid finds sign changes between far neighbours.
+fn locate_strays(field: &dyn Fn([f64; 3]) -> f64, points: &neurosurf_trainer::PointSet, truth: &Truth) {
+    let oracle = implicit::Oracle::new(&points.positions, &points.normals).expect("oracle");
+    let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
+    let n = 48;
+    let at = |i: [usize; 3]| [0, 1, 2].map(|k| b.lo[k] + (b.hi[k] - b.lo[k]) * i[k] as f64 / (n - 1) as f64);
+    let far = 0.05 * truth.diagonal();
+    let mut shown = 0;
+    for z in 0..n { for y in 0..n { for x in 0..n {
+        let p = at([x, y, z]);
+        if truth.distance(p) <= far { continue; }
+        for d in 0..3 {
+            let mut j = [x, y, z];
+            j[d] += 1;
+            if j[d] >= n { continue; }
+            let q = at(j);
+            if truth.distance(q) <= far { continue; }
+            let (a, c) = (field(p), field(q));
+            if (a > 0.0) != (c > 0.0) && shown < 12 {
+                shown += 1;
+                let rel = [0, 1, 2].map(|k| ((p[k] - b.lo[k]) / (b.hi[k] - b.lo[k]) * 100.0).round());
+                eprintln!("  stray at {rel:?}% of the box: Φ {a:.3} / {c:.3}, winding {:.2} / {:.2}, distance {:.1} % diag",
+                    oracle.winding(p), oracle.winding(q), 100.0 * truth.distance(p) / truth.diagonal());
+            }
+        }
+    }}}
+}
+
+/// Lists the pieces of the model's mesh over the grown box: size, where, how far.
+fn pieces(field: &dyn Field, truth: &Truth) {
+    let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
+    let half = b.half();
+    let normalization = implicit::Normalization {
+        center: b.center(),
+        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+    };
+    struct W<'a> { f: &'a dyn Field, r: Vec<Region> }
+    impl Field for W<'_> {
+        fn value(&self, p: [f64; 3]) -> f64 { self.f.value(p) }
+        fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) { self.f.value_gradient(p) }
+        fn regions(&self) -> &[Region] { &self.r }
+        fn values(&self, p: &[[f64; 3]], o: &mut [f64]) { self.f.values(p, o) }
+    }
+    let mut regions = vec![Region::new(normalization, 2.0, 1.0).expect("region")];
+    regions.extend(field.regions().iter().copied());
+    let w = W { f: field, r: regions };
+    let mesh = extract_mesh(&w, 96, &|_, _| {}).expect("mesh").mesh;
+    let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
+    fn find(p: &mut [usize], mut v: usize) -> usize { while p[v] != v { p[v] = p[p[v]]; v = p[v]; } v }
+    for t in &mesh.triangles {
+        let a = find(&mut parent, t[0] as usize);
+        for &v in &t[1..] { let c = find(&mut parent, v as usize); if a != c { parent[c] = a; } }
+    }
+    let mut groups: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+    for v in 0..mesh.positions.len() { let r = find(&mut parent, v); groups.entry(r).or_default().push(v); }
+    let mut list: Vec<Vec<usize>> = groups.into_values().collect();
+    list.sort_by_key(|g| std::cmp::Reverse(g.len()));
+    for g in list.iter().skip(1).take(8) {
+        let c = g.iter().fold([0.0; 3], |a, &v| { let p = mesh.positions[v]; [a[0] + p[0], a[1] + p[1], a[2] + p[2]] }).map(|x| x / g.len() as f64);
+        let rel = [0, 1, 2].map(|k| ((c[k] - b.lo[k]) / (b.hi[k] - b.lo[k]) * 100.0).round());
+        let dmax = g.iter().map(|&v| truth.distance(mesh.positions[v])).fold(0.0, f64::max);
+        eprintln!("  piece of {} vertices at {rel:?}% of the box, farthest {:.2} % diag from the truth", g.len(), 100.0 * dmax / truth.diagonal());
+    }
+}
+
 /// For every module: how far its subtree's zero set is from the true surface where that
 /// module's features are nearest (first-order |Φ|/|∇Φ|, % of the diagonal), and its normals.
 fn diagnose(network: &implicit::ImplicitNetwork, points: &neurosurf_trainer::PointSet, truth: &Truth) {
@@ -297,6 +363,8 @@ fn main() {
                     "width" => options.width = v as usize,
                     "max_iterations" => options.lm.max_iterations = v as usize,
                     "threshold" => options.lm.threshold = v,
+                    "window" => options.lm.stagnation_window = v as usize,
+                    "decrease" => options.lm.stagnation_decrease = v,
                     other => panic!("unknown setting {other}"),
                 }
             }
@@ -305,13 +373,28 @@ fn main() {
                 implicit::decompose(&points.positions, case.features, options.min_points)
                     .expect("features"),
             );
-            let trained =
-                implicit::fit(points.clone(), &request, &options, &|_| {}).expect("training");
+            let trace = std::env::var_os("TRACE").is_some();
+            let trained = implicit::fit(points.clone(), &request, &options, &|p| {
+                if let (true, implicit::Progress::Iteration { module, iteration, error }) = (trace, p)
+                    && iteration % 10 == 0
+                {
+                    eprintln!("    trace module {module} it {iteration} E {error:.3e}");
+                }
+            })
+            .expect("training");
             if std::env::var_os("VERBOSE").is_some() {
                 diagnose(&trained.network, &points, &truth);
             }
             if std::env::var_os("ORACLE").is_some() {
                 check_oracle(&case.mesh, &points, &truth);
+            }
+            if std::env::var_os("PIECES").is_some() {
+                let f = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25).expect("field");
+                pieces(&f, &truth);
+            }
+            if std::env::var_os("STRAYS").is_some() {
+                let net = &trained.network;
+                locate_strays(&|p| net.eval(p).0, &points, &truth);
             }
             if let Some(dir) = value("--slices") {
                 let net = &trained.network;

@@ -103,12 +103,12 @@ pub struct SignPoint {
     pub position: [f64; 3],
     /// Inside the surface (Φ > 0) or outside (Φ < 0).
     pub inside: bool,
-    /// Distance to the nearest control point.
+    /// A lower bound of its distance to the surface ([`Oracle::surface_distance`]).
     pub distance: f64,
 }
 
 /// Up to `count` sign points drawn uniformly in the union of `boxes` (by volume), each at
-/// least `clearance` from every control point and owned by the module: `owned(j)` says whether
+/// least `clearance` from the sampled surface (by [`Oracle::surface_distance`]) and owned by the module: `owned(j)` says whether
 /// the nearest control point j belongs to it. Gives up after 20·`count` draws.
 pub fn sign_points(
     oracle: &Oracle,
@@ -136,7 +136,7 @@ pub fn sign_points(
             })
             .unwrap_or(&boxes[boxes.len() - 1]);
         let q = chosen.draw(rng);
-        let (nearest, distance) = oracle.nearest(q);
+        let (nearest, distance) = oracle.surface_distance(q);
         if distance < clearance || !owned(nearest) {
             continue;
         }

@@ -21,8 +21,15 @@ use nalgebra::{DMatrix, DVector};
 pub trait LeastSquares {
     /// Number of parameters V.
     fn parameter_count(&self) -> usize;
-    /// Number of residuals N_s.
+    /// Number of residuals.
     fn residual_count(&self) -> usize;
+    /// N_s, the number of error terms E_s is the mean over (and the weight decay is scaled
+    /// by); by default every residual. A problem with auxiliary residuals (constraints beside
+    /// the paper's error terms) counts only the error terms, so that the auxiliary ones add to
+    /// E_s without diluting it.
+    fn error_terms(&self) -> usize {
+        self.residual_count()
+    }
     /// Writes e(V).
     fn residuals(&self, params: &[f64], residuals: &mut [f64]);
     /// Writes e(V) and J = ∂e/∂V (row-major, N_s × parameters).
@@ -72,6 +79,12 @@ pub struct LmOptions {
     pub max_iterations: usize,
     /// Give up when μ grows past this without a decrease of E_s.
     pub mu_max: f64,
+    /// Stop as stagnated when E_s fell by less than [`Self::stagnation_decrease`] (relative)
+    /// over this many accepted iterations (10); 0 never stops so.
+    pub stagnation_window: usize,
+    /// The relative decrease of E_s over [`Self::stagnation_window`] iterations below which
+    /// training has stagnated (0.02).
+    pub stagnation_decrease: f64,
 }
 
 impl Default for LmOptions {
@@ -84,6 +97,8 @@ impl Default for LmOptions {
             threshold: 1e-5,
             max_iterations: 2000,
             mu_max: 1e12,
+            stagnation_window: 10,
+            stagnation_decrease: 0.02,
         }
     }
 }
@@ -97,6 +112,8 @@ pub enum StopReason {
     IterationLimit,
     /// μ exceeded its cap without a decrease of E_s.
     Stalled,
+    /// E_s stopped falling: less than the stagnation decrease over the stagnation window.
+    Stagnated,
 }
 
 /// What a run did.
@@ -116,10 +133,10 @@ pub struct LmReport {
     pub evaluations: usize,
 }
 
-/// Half the mean squared residual: E_s.
-fn half_mean_square(residuals: &[f64]) -> f64 {
+/// E_s = ½Σe² / N_s.
+fn half_mean_square(residuals: &[f64], terms: usize) -> f64 {
     let sum: f64 = residuals.iter().map(|e| e * e).sum();
-    0.5 * sum / residuals.len().max(1) as f64
+    0.5 * sum / terms.max(1) as f64
 }
 
 /// Runs Levenberg–Marquardt on `problem` from `params` (updated in place). `progress` is called
@@ -131,7 +148,7 @@ pub fn levenberg_marquardt(
     progress: &mut dyn FnMut(usize, f64),
 ) -> LmReport {
     let p = problem.parameter_count();
-    let ns = problem.residual_count();
+    let ns = problem.error_terms();
     let decay = match options.decay {
         DecayScale::PerTerm => options.lambda / ns.max(1) as f64,
         DecayScale::Normalized => options.lambda,
@@ -140,22 +157,37 @@ pub fn levenberg_marquardt(
     let decay_energy = |v: &[f64]| 0.5 * decay * v.iter().map(|x| x * x).sum::<f64>();
 
     // Every buffer is allocated once; an iteration allocates nothing.
-    let mut residuals = vec![0.0; ns];
+    let mut residuals = vec![0.0; problem.residual_count()];
     let mut normal = NormalEquations::single_precision(p);
     let mut system = DampedSystem::new(p);
     let mut trial = vec![0.0; p];
     problem.residuals(params, &mut residuals);
     let mut evaluations = 1;
-    let initial_error = half_mean_square(&residuals);
+    let initial_error = half_mean_square(&residuals, ns);
     let mut error = initial_error;
     let mut mu = options.mu0;
     let mut iterations = 0;
     let mut stop = StopReason::Converged;
 
+    // E_s after each of the last `stagnation_window` accepted iterations (a ring: slot
+    // i mod window holds E_s after iteration i).
+    let window = options.stagnation_window;
+    let mut history = vec![error; window.max(1)];
     while error > options.threshold {
         if iterations >= options.max_iterations {
             stop = StopReason::IterationLimit;
             break;
+        }
+        if window > 0
+            && iterations >= window
+            && error > (1.0 - options.stagnation_decrease) * history[iterations % window]
+        {
+            stop = StopReason::Stagnated;
+            break;
+        }
+        if window > 0 {
+            // Read again `window` iterations from now.
+            history[iterations % window] = error;
         }
         normal.clear();
         problem.normal_equations(params, &mut residuals, &mut normal);
@@ -180,7 +212,7 @@ pub fn levenberg_marquardt(
             }
             problem.residuals(&trial, &mut residuals);
             evaluations += 1;
-            let trial_error = half_mean_square(&residuals);
+            let trial_error = half_mean_square(&residuals, ns);
             if trial_error.is_finite() && trial_error <= error {
                 params.copy_from_slice(&trial);
                 error = trial_error;
@@ -402,6 +434,23 @@ impl NormalEquations {
     /// Multiplies the pending rows in.
     pub fn finish(&mut self) {
         self.flush();
+    }
+
+    /// Empty sums of the same size and precision.
+    pub fn empty_like(&self) -> Self {
+        let single = self.single.as_ref().map(|s| vec![0.0; s.len()]);
+        Self::with_block(self.p, self.block_rows, single)
+    }
+
+    /// Adds another accumulator's finished sums to these (finished) sums.
+    pub fn add(&mut self, other: &NormalEquations) {
+        debug_assert!(self.pending == 0 && other.pending == 0 && self.p == other.p);
+        for (a, b) in self.gram.iter_mut().zip(&other.gram) {
+            *a += b;
+        }
+        for (a, b) in self.gradient.iter_mut().zip(&other.gradient) {
+            *a += b;
+        }
     }
 
     /// Σ JᵀJ at (i, j), either order.

@@ -19,6 +19,9 @@ pub struct Oracle {
     positions: Vec<[f64; 3]>,
     normals: Vec<[f64; 3]>,
     areas: Vec<f64>,
+    /// Each point's distance to its [`AREA_NEIGHBOURS`]-th neighbour: how far the surface may
+    /// stray from the samples around it.
+    gaps: Vec<f64>,
     tree: ImmutableKdTree<f64, 3>,
 }
 
@@ -38,18 +41,22 @@ impl Oracle {
         let tree = ImmutableKdTree::new_from_slice(positions)
             .map_err(|e| Error::invalid(format!("k-d tree construction failed: {e}")))?;
         let k = NonZeroUsize::new(AREA_NEIGHBOURS + 1).unwrap_or(NonZeroUsize::MIN);
-        let areas = positions
+        let gaps: Vec<f64> = positions
             .iter()
             .map(|p| {
                 let found = tree.query(p).nearest_n::<SquaredEuclidean<f64>>(k).execute();
-                let r2 = found.last().map_or(0.0, |n| n.distance);
-                PI * r2 / AREA_NEIGHBOURS as f64
+                found.last().map_or(0.0, |n| n.distance.sqrt())
             })
+            .collect();
+        let areas = gaps
+            .iter()
+            .map(|r| PI * r * r / AREA_NEIGHBOURS as f64)
             .collect();
         Ok(Oracle {
             positions: positions.to_vec(),
             normals: normals.to_vec(),
             areas,
+            gaps,
             tree,
         })
     }
@@ -80,6 +87,14 @@ impl Oracle {
             .nearest_one::<SquaredEuclidean<f64>>()
             .execute();
         (found.item as usize, found.distance.sqrt())
+    }
+
+    /// A lower bound of the distance from `q` to the sampled surface: the distance to the
+    /// nearest control point less that point's gap (the surface between samples can come
+    /// that much closer). Also returns the nearest control point.
+    pub fn surface_distance(&self, q: [f64; 3]) -> (usize, f64) {
+        let (i, d) = self.nearest(q);
+        (i, d - self.gaps[i])
     }
 
     /// The control points.

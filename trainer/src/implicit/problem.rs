@@ -112,6 +112,17 @@ impl ModuleData {
     }
 }
 
+/// Rows beyond which [`ModuleProblem`] sums its normal equations on two threads.
+pub const PARALLEL_ROWS: usize = 4096;
+
+/// A contiguous share of a problem's points and their residuals.
+struct Part<'r> {
+    surface_first: usize,
+    surface: &'r mut [f64],
+    value_first: usize,
+    values: &'r mut [f64],
+}
+
 /// Residuals e = [Φ, γ(∂Φ/∂xₖ + s·nₖ)] of every control point of a module, as a
 /// [`LeastSquares`] problem over the module's trained parameters.
 ///
@@ -224,6 +235,7 @@ impl<'a> ModuleProblem<'a> {
     fn value_rows<const FMA: bool>(
         &self,
         params: &[f64],
+        first_point: usize,
         residuals: &mut [f64],
         stride: usize,
         emit: &mut dyn FnMut(&[f64], &[f64], &[usize]),
@@ -236,7 +248,7 @@ impl<'a> ModuleProblem<'a> {
         let mut active = [0.0; LANES];
         let mut points = [0; LANES];
         for (group, out) in residuals.chunks_mut(LANES).enumerate() {
-            let first = group * LANES;
+            let first = first_point + group * LANES;
             self.gather_values(first, out.len(), &mut inputs);
             forward_value_lanes::<FMA>(&self.layout, params, &inputs, &mut tape);
             let mut count = 0;
@@ -296,27 +308,40 @@ impl<'a> ModuleProblem<'a> {
         )
     }
 
+    /// Accumulates the rows of `part`'s control points and value points.
     #[inline(always)]
     fn normal_equations_impl<const FMA: bool>(
         &self,
         params: &[f64],
-        residuals: &mut [f64],
+        part: Part<'_>,
         normal: &mut NormalEquations,
     ) {
         let stride = normal.stride();
         let mut work = Self::jacobian_work(stride);
-        let (surface, values) = residuals.split_at_mut(4 * self.data.len());
-        for (group, out) in surface.chunks_mut(4 * LANES).enumerate() {
+        for (group, out) in part.surface.chunks_mut(4 * LANES).enumerate() {
             // The group's rows go straight into the accumulator's block.
             let (block, e) = normal.rows_mut(out.len());
-            self.jacobian_group::<FMA>(params, group * LANES, out, &mut work, stride, block);
+            let first = part.surface_first + group * LANES;
+            self.jacobian_group::<FMA>(params, first, out, &mut work, stride, block);
             e.copy_from_slice(out);
         }
-        self.value_rows::<FMA>(params, values, stride, &mut |rows, residuals, _| {
+        let emit = &mut |rows: &[f64], residuals: &[f64], _: &[usize]| {
             let (block, e) = normal.rows_mut(residuals.len());
             block.copy_from_slice(rows);
             e.copy_from_slice(residuals);
-        });
+        };
+        self.value_rows::<FMA>(params, part.value_first, part.values, stride, emit);
+    }
+
+    /// One thread's share of the normal equations.
+    fn normal_equations_part(&self, params: &[f64], part: Part<'_>, normal: &mut NormalEquations) {
+        #[cfg(target_arch = "x86_64")]
+        if self.fma {
+            // SAFETY: `fma` comes from `cpu_has_fma`: this CPU has AVX2 and FMA.
+            unsafe { self.normal_equations_fma(params, part, normal) };
+            return;
+        }
+        self.normal_equations_impl::<false>(params, part, normal);
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -327,13 +352,8 @@ impl<'a> ModuleProblem<'a> {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn normal_equations_fma(
-        &self,
-        params: &[f64],
-        residuals: &mut [f64],
-        normal: &mut NormalEquations,
-    ) {
-        self.normal_equations_impl::<true>(params, residuals, normal);
+    fn normal_equations_fma(&self, params: &[f64], part: Part<'_>, normal: &mut NormalEquations) {
+        self.normal_equations_impl::<true>(params, part, normal);
     }
 }
 
@@ -344,6 +364,11 @@ impl LeastSquares for ModuleProblem<'_> {
 
     fn residual_count(&self) -> usize {
         4 * self.data.len() + self.data.value_len()
+    }
+
+    /// The control points' four terms each: the value points add to E_s without counting.
+    fn error_terms(&self) -> usize {
+        4 * self.data.len()
     }
 
     fn residuals(&self, params: &[f64], residuals: &mut [f64]) {
@@ -376,7 +401,7 @@ impl LeastSquares for ModuleProblem<'_> {
         }
         // Value points: inactive rows stay zero.
         values_j.fill(0.0);
-        self.value_rows::<false>(params, values, stride, &mut |rows, _, points| {
+        self.value_rows::<false>(params, 0, values, stride, &mut |rows, _, points| {
             for (row, &i) in rows.chunks_exact(stride).zip(points) {
                 values_j[i * p..(i + 1) * p].copy_from_slice(&row[..p]);
             }
@@ -385,19 +410,56 @@ impl LeastSquares for ModuleProblem<'_> {
 
     /// J [`LANES`] points at a time, straight into the accumulator's block: J is never stored
     /// whole. The residuals are those of [`Self::residuals`].
+    ///
+    /// Problems of more than [`PARALLEL_ROWS`] rows are split in two halves summed on two
+    /// threads (the sums are added in a fixed order, so the result does not depend on the
+    /// thread count).
     fn normal_equations(
         &self,
         params: &[f64],
         residuals: &mut [f64],
         normal: &mut NormalEquations,
     ) {
-        #[cfg(target_arch = "x86_64")]
-        if self.fma {
-            // SAFETY: `fma` comes from `cpu_has_fma`: this CPU has AVX2 and FMA.
-            unsafe { self.normal_equations_fma(params, residuals, normal) };
+        let (surface, values) = residuals.split_at_mut(4 * self.data.len());
+        if surface.len() + values.len() <= PARALLEL_ROWS {
+            let part = Part {
+                surface_first: 0,
+                surface,
+                value_first: 0,
+                values,
+            };
+            self.normal_equations_part(params, part, normal);
             return;
         }
-        self.normal_equations_impl::<false>(params, residuals, normal);
+        // Halves on lane-group boundaries.
+        let surface_half = self.data.len().div_ceil(2 * LANES) * LANES;
+        let value_half = self.data.value_len().div_ceil(2 * LANES) * LANES;
+        let (surface_a, surface_b) = surface.split_at_mut(4 * surface_half);
+        let (values_a, values_b) = values.split_at_mut(value_half);
+        let mut other = normal.empty_like();
+        rayon::join(
+            || {
+                let part = Part {
+                    surface_first: 0,
+                    surface: surface_a,
+                    value_first: 0,
+                    values: values_a,
+                };
+                self.normal_equations_part(params, part, normal);
+                normal.finish();
+            },
+            || {
+                let part = Part {
+                    surface_first: surface_half,
+                    surface: surface_b,
+                    value_first: value_half,
+                    values: values_b,
+                };
+                self.normal_equations_part(params, part, &mut other);
+                other.finish();
+            },
+        );
+        normal.add(&other);
     }
 }
 
@@ -500,6 +562,43 @@ mod tests {
                         assert!(close(normal.gram(r, c), reference.gram(r, c)), "{r} {c}");
                     }
                 }
+            }
+        }
+    }
+
+    /// A problem large enough to be summed on two threads gives the sums of its whole J.
+    #[test]
+    fn split_normal_equations_match_the_whole_jacobian() {
+        let (mut data, params) = random_problem(3, 9, 1100, 8);
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for k in 0..301 {
+            let values: Vec<f64> = (0..3).map(|_| rng.random_range(-1.5..1.5)).collect();
+            let goal = ValueGoal {
+                value: 0.1,
+                weight: 1.0,
+                hinge: [0.0, 1.0, -1.0][k % 3],
+            };
+            data.push_value(&values, goal);
+        }
+        let problem = ModuleProblem::new(&data, 9, 0.05);
+        let (m, p) = (problem.residual_count(), problem.parameter_count());
+        assert!(m > PARALLEL_ROWS);
+        let mut e = vec![0.0; m];
+        let mut j = vec![0.0; m * p];
+        problem.jacobian(&params, &mut e, &mut j);
+        let mut reference = NormalEquations::new(p);
+        reference.add_jacobian(&j, &e);
+        reference.finish();
+        let mut normal = NormalEquations::new(p);
+        let mut e2 = vec![0.0; m];
+        problem.normal_equations(&params, &mut e2, &mut normal);
+        normal.finish();
+        assert!(e.iter().zip(&e2).all(|(a, b)| close(*a, *b)));
+        for r in 0..p {
+            assert!(close(normal.gradient(r), reference.gradient(r)));
+            for c in r..p {
+                let (a, b) = (normal.gram(r, c), reference.gram(r, c));
+                assert!((a - b).abs() <= 1e-10 * (1.0 + a.abs()), "{r} {c}: {a} {b}");
             }
         }
     }

@@ -244,7 +244,8 @@ pub fn train(
                     .iter()
                     .filter_map(|&leaf| network.normalization(leaf))
                     .collect();
-                let regions = setting.regions(&boxes, i == network.root());
+                let whole = i == network.root() || std::env::var_os("NODES_WHOLE").is_some();
+                let regions = setting.regions(&boxes, whole);
                 let positions: Vec<[f64; 3]> = features
                     .iter()
                     .flat_map(|&f| members[f as usize].iter().map(|&p| model.positions[p]))
@@ -262,7 +263,8 @@ pub fn train(
                 let (mut params, mut report) =
                     fit_module(i, &data, initial, options, None, init.is_some(), progress);
                 if i == network.root() {
-                    for round in 0..REFINE_ROUNDS {
+                    let rounds = std::env::var("ROUNDS").ok().and_then(|v| v.parse().ok()).unwrap_or(REFINE_ROUNDS);
+                    for round in 0..rounds {
                         node_net.trained_params_mut(i).copy_from_slice(&params);
                         let added = setting.add_violations(&node_net, i, &regions, &mut data, round);
                         if std::env::var_os("VERBOSE").is_some() {
@@ -383,8 +385,22 @@ impl<'a> Setting<'a> {
 
     /// |Φ| a sign point asks for: the sign margin times s·d at distance d from the control
     /// points (Φ grows away from the surface as a distance does), at most 1.
+    fn sign_weight(&self) -> f64 {
+        std::env::var("SIGN_WEIGHT").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0)
+    }
+
+    fn distance_weight(&self, s: &SignPoint) -> f64 {
+        let clearance = self.options.clearance * MODEL_DIAGONAL;
+        let power: f64 = std::env::var("WEIGHT_POWER").ok().and_then(|v| v.parse().ok()).unwrap_or(2.0);
+        (self.sign_weight() * (s.distance / clearance).powf(power)).min(1.0)
+    }
+
     fn margin(&self, s: &SignPoint) -> f64 {
-        (self.options.sign_margin * self.options.slope * s.distance).min(1.0)
+        if std::env::var_os("MARGIN_CONST").is_some() {
+            return self.options.sign_margin;
+        }
+        let cap: f64 = std::env::var("MARGIN_CAP").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0);
+        (self.options.sign_margin * self.options.slope * s.distance).min(cap)
     }
 
     /// Draws fresh sign points in `regions`, keeps those where module `i` of `network` has Φ
@@ -418,7 +434,7 @@ impl<'a> Setting<'a> {
                 input.values,
                 ValueGoal {
                     value: sign * self.margin(s),
-                    weight: 1.0,
+                    weight: std::env::var("VIOLATION_WEIGHT").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0),
                     hinge: *sign,
                 },
             );
@@ -470,13 +486,17 @@ impl<'a> Setting<'a> {
             rng.set_stream(stream as u64);
             let owned = |j: usize| features.contains(&self.labels[j]);
             let clearance = self.options.clearance * MODEL_DIAGONAL;
-            let signs: Vec<SignPoint> =
+            let mut signs: Vec<SignPoint> =
                 sign_points(&self.oracle, regions, wanted, clearance, &owned, &mut rng);
+            let band: f64 = std::env::var("BAND").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0);
+            if band > 0.0 && !root {
+                signs.retain(|s| s.distance <= band * clearance);
+            }
             for s in signs {
                 let sign = if s.inside { 1.0 } else { -1.0 };
                 let goal = ValueGoal {
                     value: sign * self.margin(&s),
-                    weight: 1.0,
+                    weight: self.distance_weight(&s),
                     hinge: sign,
                 };
                 value_points.push((s.position, goal));
