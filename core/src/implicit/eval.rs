@@ -112,7 +112,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         let params = model.module_parameters(entry.offset, layout.len);
         let last = model.last_hidden::<L, N, EXACT>(self.module, points, MAX_HEIGHT);
         let hidden = last.get(..width).unwrap_or(&[]);
-        let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[]));
+        let [out] = forward::<S, L, 1, 1>(params, &layout.output, [hidden]);
         out
     }
 }
@@ -146,30 +146,29 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             ModuleKind::Leaf => {
                 let (layout, params) = module(ModuleKind::Leaf);
                 let input = normalized_input(params, points);
-                (
-                    layout,
-                    params,
-                    forward(params, &layout.hidden_a, (&input, &[])),
-                )
+                (layout, params, forward(params, &layout.hidden_a, [&input]))
             }
             ModuleKind::Node => {
                 let (layout, params) = module(ModuleKind::Node);
                 let left = self.last_hidden::<L, N, EXACT>(entry.left, points, budget);
                 let right =
                     self.last_hidden::<L, N, EXACT>(index.saturating_sub(1), points, budget);
-                let inputs = (
+                let position = normalized_input(params, points);
+                let inputs = [
                     left.get(..width).unwrap_or(&[]),
                     right.get(..width).unwrap_or(&[]),
-                );
+                    &position,
+                ];
                 (layout, params, forward(params, &layout.hidden_a, inputs))
             }
         };
         let hidden_a = hidden_a.get(..width).unwrap_or(&[]);
-        forward(params, &layout.hidden_b, (hidden_a, &[]))
+        forward(params, &layout.hidden_b, [hidden_a])
     }
 }
 
-/// A leaf's input x′ = A·(x − c), lane by lane.
+/// A module's normalized position x′ = A·(x − c), lane by lane: a leaf's input, and the last
+/// three inputs of a node's layer a′ (both store c and A first, see [`ModuleLayout`]).
 #[inline]
 pub(crate) fn normalized_input<S: Scalar, const L: usize>(
     params: &[S],
