@@ -58,7 +58,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
                     width,
                 } = model.pass::<N, EXACT>(entry.offset, entry.kind);
                 let hidden = hidden.get(..width).unwrap_or(&[]);
-                let [out] = forward::<S, L, 1, 1>(params, &layout.output, [hidden]);
+                let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[], &[]));
                 value = out;
                 let mut slope = [out];
                 for lanes in &mut slope {
@@ -109,7 +109,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             ModuleKind::Leaf => {
                 let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Leaf);
                 let input = normalized_input(pass.params, points);
-                let delta_a = pass.run::<L, N, EXACT, 1>([&input], gradient, above);
+                let delta_a = pass.run::<L, N, EXACT>((&input, &[], &[]), gradient, above);
                 let delta_a = delta_a.get(..pass.width).unwrap_or(&[]);
                 let hidden_a = &pass.layout.hidden_a;
                 let delta_input =
@@ -138,8 +138,8 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                                     right.get(..width).unwrap_or(&[]),
                                 );
                                 let position = normalized_input(params, points);
-                                let delta_a = pass.run::<L, N, EXACT, 3>(
-                                    [left, right, &position],
+                                let delta_a = pass.run::<L, N, EXACT>(
+                                    (left, right, &position),
                                     gradient,
                                     &mut *above,
                                 );
@@ -208,16 +208,16 @@ impl<S: Scalar> Pass<'_, S> {
     /// for the rest, then back through b: returns ∂Φ/∂Hₐ, the gradient at layer a's
     /// pre-activations (its transpose gives ∂Φ/∂inputs).
     #[inline(always)]
-    fn run<const L: usize, const N: usize, const EXACT: bool, const PARTS: usize>(
+    fn run<const L: usize, const N: usize, const EXACT: bool>(
         &self,
-        inputs: [&[[S; L]]; PARTS],
+        inputs: (&[[S; L]], &[[S; L]], &[[S; L]]),
         gradient: &mut Gradient<S, L>,
         above: &mut Above<'_, S, L, N>,
     ) -> [[S; L]; N] {
         let (params, layout, width) = (self.params, &self.layout, self.width);
         let a: [[S; L]; N] = forward(params, &layout.hidden_a, inputs);
         let a = a.get(..width).unwrap_or(&[]);
-        let b: [[S; L]; N] = forward(params, &layout.hidden_b, [a]);
+        let b: [[S; L]; N] = forward(params, &layout.hidden_b, (a, &[], &[]));
         let delta_b = above(&b, gradient);
         let delta_b = delta_b.get(..width).unwrap_or(&[]);
         transposed_through_activation::<S, L, N, EXACT>(
