@@ -24,6 +24,10 @@ use crate::scalar::Scalar;
 /// Columns a blocked transposed layer accumulates together.
 const BLOCK: usize = 4;
 
+/// A layer's input in up to three parts, read one after the other (see [`forward`]): a
+/// single-part input leaves the last two empty.
+pub(crate) type LayerInputs<'a, S, const L: usize> = (&'a [[S; L]], &'a [[S; L]], &'a [[S; L]]);
+
 /// Evaluates the layer at `layout` inside `params` on the concatenation of `inputs.0`,
 /// `inputs.1` and `inputs.2` (a leaf's layer a: its normalized input alone; a node's layer a′:
 /// its children's last hidden layers and its normalized position; every other layer: the
@@ -38,7 +42,7 @@ const BLOCK: usize = 4;
 pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
     params: &[S],
     layout: &DenseLayout,
-    inputs: (&[[S; L]], &[[S; L]], &[[S; L]]),
+    inputs: LayerInputs<'_, S, L>,
 ) -> [[S; L]; OUT] {
     let (count, outputs) = (layout.inputs, layout.outputs);
     let (Some(weights), Some(biases)) = (

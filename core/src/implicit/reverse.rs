@@ -17,7 +17,7 @@ use super::eval::{FieldGradient, ModuleView, normalized_input};
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
 use super::width::{at_width, width};
-use crate::dense::{forward, transposed, transposed_through_activation};
+use crate::dense::{LayerInputs, forward, transposed, transposed_through_activation};
 use crate::scalar::Scalar;
 
 /// ∇Φ summed over the modules, per coordinate and lane, in the wide accumulator.
@@ -210,7 +210,7 @@ impl<S: Scalar> Pass<'_, S> {
     #[inline(always)]
     fn run<const L: usize, const N: usize, const EXACT: bool>(
         &self,
-        inputs: (&[[S; L]], &[[S; L]], &[[S; L]]),
+        inputs: LayerInputs<'_, S, L>,
         gradient: &mut Gradient<S, L>,
         above: &mut Above<'_, S, L, N>,
     ) -> [[S; L]; N] {
