@@ -402,14 +402,14 @@ fn q16_slope_kernel_falls_back_like_the_host() {
 /// The same fallback in the chain-rule kernel that node modules use (`q16_times_slope_9`: their
 /// 21-column transposes have no kernel), on the head ((0,1),2). The root's children end in
 /// saturated layers b (biases 15, |Σ W·a| < 4), so each child's nine outputs are a(10) in
-/// Q16.16 whatever the point,
-/// and the root's layer a, with rows (+1000 × 9 on the left child, −1000 × 9 on the right,
-/// 0 on its own position x′), sums them to exactly 0 (H = 0, slope 1.144). With the root's layer b at 0.1 and output
-/// weights of 2, every δ of the root's layer a is about 2.7, and the transpose hands each child
-/// about ±24 000 per neuron: above the fast range, below saturation. The children's slope
-/// there is tiny (a′(a(10)) is 2 in Q16.16 bits), so the fallback turns 24 000 into about 0.7,
-/// which their positive layer-b weights carry down into ∇Φ. Checked by dropping the kernel's mask bit (the
-/// unchanged δ kept): this test then fails.
+/// Q16.16 whatever the point, and the root's layer a, with rows (+1000 × 9 on the left child,
+/// −1000 × 9 on the right, 0 on its own position x′), sums them to exactly 0 (H = 0, slope
+/// 1.144). With the root's layer b at 0.1 and output weights of 2, every δ of the root's layer
+/// a is about 2.7, and the transpose hands each child about ±24 000 per neuron: above the fast
+/// range, below saturation. The children's slope there is tiny (a′(a(10)) is 2 in Q16.16
+/// bits), so the fallback turns 24 000 into about 0.7, which their positive layer-b weights
+/// carry down into ∇Φ. Checked by dropping the kernel's mask bit (the unchanged δ kept): this
+/// test then fails.
 #[test]
 fn q16_node_slope_kernel_falls_back_like_the_host() {
     let mut trained = head();

@@ -10,8 +10,9 @@
 //! the largest model; instead each module hands the rest of the evaluation to its parent as a
 //! continuation ([`Above`]) and keeps its slopes in its own stack frame until the pass comes back
 //! down through it. Stack use is therefore proportional to the model actually loaded (about
-//! `4·N·L` scalars per module, plus `3·L` for a node's position, N the layer capacity: the width itself for the specialized widths,
-//! else `MAX_WIDTH`; see `width.rs`), and nothing is allocated beyond that.
+//! `4·N·L` scalars per module, plus `3·L` for a node's position, N the layer capacity: the
+//! width itself for the specialized widths, else `MAX_WIDTH`; see `width.rs`), and nothing is
+//! allocated beyond that.
 
 use super::eval::{FieldGradient, ModuleView, normalized_input};
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
