@@ -24,17 +24,25 @@ use crate::scalar::Scalar;
 /// Columns a blocked transposed layer accumulates together.
 const BLOCK: usize = 4;
 
-/// Evaluates the layer at `layout` inside `params` on the concatenation of `inputs.0` and
-/// `inputs.1`: Hⱼ = bⱼ + Σᵢ Wⱼᵢ·xᵢ, output j = a(Hⱼ) for j below the layer's width (at most `OUT`).
+/// A layer's input in up to three parts, read one after the other (see [`forward`]): a
+/// single-part input leaves the last two empty.
+pub(crate) type LayerInputs<'a, S, const L: usize> = (&'a [[S; L]], &'a [[S; L]], &'a [[S; L]]);
+
+/// Evaluates the layer at `layout` inside `params` on the concatenation of `inputs.0`,
+/// `inputs.1` and `inputs.2` (a leaf's layer a: its normalized input alone; a node's layer a′:
+/// its children's last hidden layers and its normalized position; every other layer: the
+/// layer below alone): Hⱼ = bⱼ + Σᵢ Wⱼᵢ·xᵢ, summed part after part in input order, output
+/// j = a(Hⱼ) for j below the layer's width (at most `OUT`).
 ///
 /// Outputs beyond the layer's width are unspecified (callers slice the layer to its width); all
 /// outputs are zero when `params` is too short for the layout or the inputs do not match it
-/// (the model loader rules both out).
+/// (the model loader rules both out). Only single-part layers are offered to the scalar's
+/// target kernels.
 #[inline(always)]
 pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
     params: &[S],
     layout: &DenseLayout,
-    inputs: (&[[S; L]], &[[S; L]]),
+    inputs: LayerInputs<'_, S, L>,
 ) -> [[S; L]; OUT] {
     let (count, outputs) = (layout.inputs, layout.outputs);
     let (Some(weights), Some(biases)) = (
@@ -43,23 +51,26 @@ pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
     ) else {
         return [[S::ZERO; L]; OUT];
     };
-    if count == 0 || inputs.0.len() + inputs.1.len() != count {
+    if count == 0 || inputs.0.len() + inputs.1.len() + inputs.2.len() != count {
         return [[S::ZERO; L]; OUT];
     }
     if S::TARGET_KERNELS
         && L == 1
         && inputs.1.is_empty()
+        && inputs.2.is_empty()
         && let Some(out) = forward_by_kernel(weights, biases, inputs.0)
     {
         return out;
     }
-    let split = inputs.0.len();
+    let (first, second) = (inputs.0.len(), inputs.1.len());
     let mut out = unwritten();
     for ((out, row), &bias) in out.iter_mut().zip(weights.chunks_exact(count)).zip(biases) {
-        let (first, second) = row.split_at_checked(split).unwrap_or((row, &[]));
+        let (row_0, rest) = row.split_at_checked(first).unwrap_or((row, &[]));
+        let (row_1, row_2) = rest.split_at_checked(second).unwrap_or((rest, &[]));
         let mut acc = [bias.to_acc(); L];
-        accumulate_row(&mut acc, first, inputs.0);
-        accumulate_row(&mut acc, second, inputs.1);
+        accumulate_row(&mut acc, row_0, inputs.0);
+        accumulate_row(&mut acc, row_1, inputs.1);
+        accumulate_row(&mut acc, row_2, inputs.2);
         for (out, &acc) in out.iter_mut().zip(&acc) {
             *out = S::activation_from_acc(acc);
         }

@@ -22,7 +22,7 @@ use neurosurf_core::blob::{
 };
 use neurosurf_core::implicit::{
     DEFAULT_MODULES, DEFAULT_PARAMETERS, FieldGradient, ImplicitModel, ImplicitPayload, MAX_HEIGHT,
-    MAX_WIDTH, ModuleKind, ModuleLayout,
+    MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN,
 };
 use neurosurf_core::scalar::{ACTIVATION_AMPLITUDE, Q16, Scalar, ScalarKind};
 
@@ -325,21 +325,77 @@ fn bad_magic() {
 
 #[test]
 fn unsupported_version() {
+    // Version 2: every module, node included, stores its normalization first.
+    assert_eq!(FORMAT_VERSION, 2);
     let blob = Sample::new(1, 3, PAIR).blob(ScalarKind::F32);
-    for version in [0_u16, 2, u16::MAX] {
+    for version in [0_u16, 1, 3, u16::MAX] {
         let mut bad = blob.clone();
         bad[4..6].copy_from_slice(&version.to_le_bytes());
         // Checked before the CRC: with or without a consistent checksum.
-        rejected(
-            &bad,
-            |e| matches!(e, BlobError::UnsupportedVersion { found, supported: 1 } if *found == version),
-        );
+        let unsupported = |e: &BlobError| {
+            matches!(e, BlobError::UnsupportedVersion { found, supported }
+                if *found == version && *supported == FORMAT_VERSION)
+        };
+        rejected(&bad, unsupported);
         fix_crc(&mut bad);
-        rejected(
-            &bad,
-            |e| matches!(e, BlobError::UnsupportedVersion { found, supported: 1 } if *found == version),
-        );
+        rejected(&bad, unsupported);
     }
+}
+
+/// The parameter count of `tree` at `width` in format version 1, whose nodes had no
+/// normalization and an a′ layer of 2N inputs.
+fn version_1_parameter_count(tree: &[u8], width: usize) -> usize {
+    let node = (2 * width + 1) * width + (width + 1) * width + width + 1;
+    tree.iter()
+        .map(|&c| match common::kind(c) {
+            ModuleKind::Leaf => ModuleLayout::new(ModuleKind::Leaf, width).len,
+            ModuleKind::Node => node,
+        })
+        .sum()
+}
+
+/// A blob of format version 1 — framed by hand as that version's writer did, with its node
+/// layout — gets the named version error, from the core and from the simulated target's
+/// core alike (see the simulator tests); the same parameters framed as version 2 do not
+/// match the tree.
+#[test]
+fn version_1_blobs_are_rejected_by_their_version() {
+    let width = 3;
+    let old = version_1_parameter_count(PAIR, width);
+    let new = common::parameter_count(PAIR, width);
+    assert_eq!(new - old, NORMALIZATION_LEN + 3 * width);
+    let stored = encode_parameters(&vec![0.25; old], ScalarKind::F32);
+    let payload = postcard_payload(3, PAIR, &stored, b"");
+    let version_1 = frame(
+        1,
+        ModelKind::Implicit.code(),
+        ScalarKind::F32.code(),
+        &payload,
+    );
+    for bytes in [
+        &version_1[..],
+        &frame(1, 1, ScalarKind::Q16_16.code(), &payload)[..],
+    ] {
+        let e = rejected(bytes, |e| {
+            *e == BlobError::UnsupportedVersion {
+                found: 1,
+                supported: FORMAT_VERSION,
+            }
+        });
+        assert_eq!(
+            e.to_string(),
+            "blob format version 1 is not supported (this core reads 2)"
+        );
+        assert_eq!(ImplicitPayload::from_blob(bytes).unwrap_err(), e);
+    }
+    let version_2 = frame(FORMAT_VERSION, 1, ScalarKind::F32.code(), &payload);
+    rejected(&version_2, |e| {
+        *e == BlobError::ShapeMismatch {
+            what: Quantity::Parameters,
+            expected: new,
+            found: old,
+        }
+    });
 }
 
 #[test]
@@ -601,13 +657,15 @@ fn capacity_exceeded() {
             capacity: 1000,
         }
     );
-    assert_eq!(needed, 1547);
-    assert!(ImplicitModel::<Q16, 1547, 4>::from_blob(&wide).is_ok());
-    // More parameters than the default capacity (a width-16 tree of 31 modules needs 16 092
+    // Two leaves of 365 and a node of 877 (12 + 16·35 + 16 + 16·16 + 16 + 16 + 1).
+    assert_eq!(needed, 1607);
+    assert!(ImplicitModel::<Q16, 1607, 4>::from_blob(&wide).is_ok());
+    // More parameters than the default capacity (a width-16 tree of 31 modules needs 18 995
     // words; the blob carries them all, so the count matches and the capacity check fires).
     let big_tree = [PAIR, PAIR, &[1], PAIR, PAIR, &[1], &[1]].concat();
     let big_tree = [&big_tree[..], &big_tree[..], &[1]].concat();
     let needed = common::parameter_count(&big_tree, 16);
+    assert_eq!(needed, 18_995);
     assert!(needed > DEFAULT_PARAMETERS);
     rejected(&shaped(16, &big_tree, needed), |e| {
         *e == BlobError::CapacityExceeded {
@@ -718,6 +776,76 @@ fn parameter_out_of_range() {
         BlobError::ParameterOutOfRange { index: 0 }
     );
     assert!(load_f32(&blob).is_ok());
+}
+
+/// Every module stores its normalization c, A first (format version 2): a node's twelve words
+/// are checked exactly as a leaf's — finite in `f32` storage, within ±`MAX_PARAMETER` for
+/// Q16.16 — with the same errors naming the word's index in the whole parameter array; and
+/// what is not checked for a leaf (a singular A) is not checked for a node either.
+#[test]
+fn node_normalization_is_validated_like_a_leafs() {
+    let width = 3;
+    let sample = Sample::new(1, width, PAIR);
+    let offsets = common::offsets(PAIR, width);
+    let limit = f64::from(<Q16 as Scalar>::MAX_PARAMETER);
+    let mut outcomes: Vec<Vec<String>> = Vec::new();
+    for (module, &code) in PAIR.iter().enumerate() {
+        let layout = ModuleLayout::new(common::kind(code), width);
+        assert_eq!(layout.trainable_start, NORMALIZATION_LEN);
+        let mut module_outcomes = Vec::new();
+        for word in 0..NORMALIZATION_LEN {
+            let index = offsets[module] + word;
+            for value in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                let mut stored = sample.stored(ScalarKind::F32);
+                stored[4 * index..4 * index + 4].copy_from_slice(&value.to_le_bytes());
+                let blob = implicit_blob(ScalarKind::F32, 3, PAIR, &stored, &[]);
+                rejected(&blob, |e| *e == BlobError::NonFiniteParameter { index });
+                module_outcomes.push(format!("{word} {value}: not finite"));
+            }
+            for (value, ok) in [
+                (limit, true),
+                (-limit, true),
+                (limit + 1.0 / 8192.0, false),
+                (-limit - 1.0, false),
+            ] {
+                let mut params = sample.params.clone();
+                params[index] = value;
+                for kind in [ScalarKind::F32, ScalarKind::Q16_16] {
+                    let blob = model_blob(kind, width, PAIR, &params);
+                    assert!(load_f32(&blob).is_ok(), "f32 takes {value}");
+                    let outcome = match load_q16(&blob) {
+                        Ok(_) => {
+                            assert!(ok, "module {module} word {word}: {value} accepted");
+                            "ok".to_string()
+                        }
+                        Err(e) => {
+                            assert!(!ok, "module {module} word {word}: {value} rejected");
+                            assert_eq!(e, BlobError::ParameterOutOfRange { index });
+                            "out of range".to_string()
+                        }
+                    };
+                    module_outcomes.push(format!("{word} {value} {kind:?}: {outcome}"));
+                }
+            }
+        }
+        // A singular (here: zero) A is accepted and evaluates: the node then ignores its
+        // position, a leaf its input.
+        let mut params = sample.params.clone();
+        for a in &mut params[offsets[module] + 3..offsets[module] + NORMALIZATION_LEN] {
+            *a = 0.0;
+        }
+        for kind in [ScalarKind::F32, ScalarKind::Q16_16] {
+            let blob = model_blob(kind, width, PAIR, &params);
+            let (f, q) = (load_f32(&blob).unwrap(), load_q16(&blob).unwrap());
+            let fg = f.field_gradient([0.5, -0.25, 0.125]);
+            assert!(fg.value.is_finite() && fg.gradient.iter().all(|g| g.is_finite()));
+            let _ = q.field_gradient([Q16::from_num(0.5); 3]);
+        }
+        outcomes.push(module_outcomes);
+    }
+    // Leaf 0, leaf 1 and the node: the same outcome for the same word of the normalization.
+    assert_eq!(outcomes[0], outcomes[1]);
+    assert_eq!(outcomes[0], outcomes[2]);
 }
 
 #[test]

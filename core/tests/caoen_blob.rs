@@ -103,7 +103,12 @@ fn corrupt_and_truncated_blobs() {
     }
     // A payload cut short but framed with a correct CRC does not decode.
     let (_, payload) = neurosurf_core::blob::parse(&blob).unwrap();
-    let cut = caoen_support::frame(1, ModelKind::CaoEn.code(), 1, &payload[..payload.len() - 3]);
+    let cut = caoen_support::frame(
+        neurosurf_core::blob::FORMAT_VERSION,
+        ModelKind::CaoEn.code(),
+        1,
+        &payload[..payload.len() - 3],
+    );
     rejected(&cut, BlobError::MalformedPayload);
     // Another model kind's blob.
     let mut other = blob.clone();

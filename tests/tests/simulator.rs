@@ -12,7 +12,9 @@ use neurosurf_core::implicit::ImplicitModel;
 use neurosurf_core::scalar::ScalarKind;
 use neurosurf_firmware_sim::{Job, Mode, Op, SimError, Simulator, Status};
 use neurosurf_trainer::evaluate::{LoadedModel, Precision, Sample};
-use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions, Trained};
+use neurosurf_trainer::implicit::{
+    self, FitRequest, ImplicitNetwork, ImplicitOptions, Normalization, Trained, TreeSpec,
+};
 use neurosurf_trainer::points::PointSet;
 use neurosurf_trainer::sample::{Shape, sample_shape};
 
@@ -127,45 +129,160 @@ fn assert_target_equals_host(scalar: ScalarKind, precision: Precision, seed: u64
     for (name, trained, shape) in [("torus", torus(), TORUS), ("head", head(), Shape::Head)] {
         let points = queries(&shape, seed);
         let bytes = blob(&trained, scalar);
-        let expected = host(&bytes, &points, precision);
-        let points_f32 = as_f32(&points);
-        for mode in [Mode::Batch, Mode::Single] {
-            let job = Job {
-                mode,
-                ..Job::field_gradient(&bytes, scalar, &points_f32)
-            };
-            let samples = sim.run(&job).unwrap().samples();
-            let mut worst = 0;
-            for (got, want) in samples.iter().zip(&expected) {
-                worst = worst.max(ulps(got.0, want.0));
-                for k in 0..3 {
-                    worst = worst.max(ulps(got.1[k], want.1[k]));
+        assert_runs_equal_host(&sim, name, &bytes, scalar, precision, &points);
+    }
+}
+
+/// Runs the blob `bytes` at `points` on the target in `scalar` — batches and single points,
+/// field + gradient and field alone — and asserts that every result is the host core's
+/// (`precision`), bit for bit.
+fn assert_runs_equal_host(
+    sim: &Simulator,
+    name: &str,
+    bytes: &[u8],
+    scalar: ScalarKind,
+    precision: Precision,
+    points: &[[f64; 3]],
+) {
+    let expected = host(bytes, points, precision);
+    let points_f32 = as_f32(points);
+    for mode in [Mode::Batch, Mode::Single] {
+        let job = Job {
+            mode,
+            ..Job::field_gradient(bytes, scalar, &points_f32)
+        };
+        let run = sim.run(&job).unwrap();
+        let samples = run.samples();
+        let mut worst = 0;
+        for (got, want) in samples.iter().zip(&expected) {
+            worst = worst.max(ulps(got.0, want.0));
+            for k in 0..3 {
+                worst = worst.max(ulps(got.1[k], want.1[k]));
+            }
+        }
+        eprintln!(
+            "{name}, {scalar:?}, {mode:?}: worst difference target vs host: {worst} f32 ulp, \
+             {:.0} instructions per field + gradient",
+            run.instructions_per_point()
+        );
+        // Bits, not values: +0.0 and −0.0 must not pass for each other.
+        assert_eq!(
+            sample_bits(&samples),
+            sample_bits(&expected),
+            "{name}, {scalar:?}, {mode:?}"
+        );
+        let fields = sim
+            .run(&Job {
+                op: Op::Field,
+                ..job
+            })
+            .unwrap()
+            .values();
+        let expected_fields: Vec<f64> = expected.iter().map(|s| s.0).collect();
+        let field_bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            field_bits(&fields),
+            field_bits(&expected_fields),
+            "{name}, {scalar:?}, field only, {mode:?}"
+        );
+    }
+}
+
+/// A network of `tree` at `width` with every parameter random (no training): each module —
+/// node included — normalized by a rotation scaled per axis into [0.5, 2] around a centre in
+/// [−0.3, 0.3]³, weights and biases in [−0.6, 0.6] (a node's position columns included).
+fn random_network(tree: &str, width: usize, seed: u64) -> ImplicitNetwork {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut next = move |lo: f64, hi: f64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        lo + (hi - lo) * ((state >> 11) as f64 / (1_u64 << 53) as f64)
+    };
+    let mut network = ImplicitNetwork::new(width, &tree.parse::<TreeSpec>().unwrap()).unwrap();
+    for module in 0..network.module_count() {
+        let q = [(); 4].map(|()| next(-1.0, 1.0));
+        let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let [w, x, y, z] = q.map(|v| v / n);
+        let rotation = [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - w * z),
+                2.0 * (x * z + w * y),
+            ],
+            [
+                2.0 * (x * y + w * z),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - w * x),
+            ],
+            [
+                2.0 * (x * z - w * y),
+                2.0 * (y * z + w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ];
+        let normalization = Normalization {
+            center: [(); 3].map(|()| next(-0.3, 0.3)),
+            matrix: rotation.map(|row| {
+                let scale = next(0.5, 2.0);
+                row.map(|v| scale * v)
+            }),
+        };
+        network.set_normalization(module, &normalization);
+        for p in network.trained_params_mut(module) {
+            *p = next(-0.6, 0.6);
+        }
+    }
+    network
+}
+
+/// Models with nodes that no training produced — every module with its own normalization,
+/// every weight random, a node's position columns included — on the target against the host,
+/// bit for bit, in both scalars: field and field + gradient, single points and batches. The
+/// node path is portable code (no kernel has its 2N + 3 inputs; its position goes through the
+/// leaves' normalization, a kernel in Q16.16 on the M4F) and runs here at N = 9 (beside the
+/// leaves' M4F kernels), at N = 4 (a width compiled as a constant) and at N = 6 (a run-time
+/// width). The points spread through [−2, 2]³ and reach far outside (saturated neurons).
+#[test]
+fn random_models_with_nodes_on_the_target_equal_the_host_bit_for_bit() {
+    let sim = simulator();
+    for (tree, width, seed) in [
+        ("((0,1),(2,3))", 9, 1),
+        ("((0,1),2)", 4, 2),
+        ("(((0,1),2),3)", 6, 3),
+    ] {
+        let network = random_network(tree, width, seed);
+        let mut points = queries(&Shape::Head, seed + 40);
+        points.truncate(150);
+        points.extend([[40.0, -300.0, 7.5], [-1000.0, 1000.0, 0.0], [0.0; 3]]);
+        // The premise: the nodes' positions matter. With their position weights set to zero,
+        // the f64 field moves at most points.
+        let mut blind = network.clone();
+        for module in 0..blind.module_count() {
+            if blind.children(module).is_some() {
+                let layout = blind.trained_layout(module);
+                let params = blind.trained_params_mut(module);
+                for j in 0..width {
+                    let row = layout.a_weights + j * layout.inputs;
+                    params[row + 2 * width..row + 2 * width + 3].fill(0.0);
                 }
             }
-            eprintln!(
-                "{name}, {scalar:?}, {mode:?}: worst difference target vs host: {worst} f32 ulp"
-            );
-            // Bits, not values: +0.0 and −0.0 must not pass for each other.
-            assert_eq!(
-                sample_bits(&samples),
-                sample_bits(&expected),
-                "{name}, {scalar:?}, {mode:?}"
-            );
-            let fields = sim
-                .run(&Job {
-                    op: Op::Field,
-                    ..job
-                })
-                .unwrap()
-                .values();
-            let expected_fields: Vec<f64> = expected.iter().map(|s| s.0).collect();
-            let field_bits =
-                |values: &[f64]| values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-            assert_eq!(
-                field_bits(&fields),
-                field_bits(&expected_fields),
-                "{name}, {scalar:?}, field only, {mode:?}"
-            );
+        }
+        let moved = points
+            .iter()
+            .filter(|&&p| (network.eval(p).0 - blind.eval(p).0).abs() > 1e-3)
+            .count();
+        assert!(
+            moved * 10 > points.len() * 8,
+            "{tree}: moved at {moved} points"
+        );
+        for (scalar, precision) in [
+            (ScalarKind::F32, Precision::F32),
+            (ScalarKind::Q16_16, Precision::Q16),
+        ] {
+            let bytes = implicit::to_blob(&network, None, scalar).unwrap();
+            let name = format!("random {tree} N = {width}");
+            assert_runs_equal_host(&sim, &name, &bytes, scalar, precision, &points);
         }
     }
 }
@@ -283,16 +400,16 @@ fn q16_slope_kernel_falls_back_like_the_host() {
 }
 
 /// The same fallback in the chain-rule kernel that node modules use (`q16_times_slope_9`: their
-/// 18-column transposes have no kernel), on the head ((0,1),2). The root's children end in
+/// 21-column transposes have no kernel), on the head ((0,1),2). The root's children end in
 /// saturated layers b (biases 15, |Σ W·a| < 4), so each child's nine outputs are a(10) in
-/// Q16.16 whatever the point,
-/// and the root's layer a, with rows (+1000 × 9 on the left child, −1000 × 9 on the right),
-/// sums them to exactly 0 (H = 0, slope 1.144). With the root's layer b at 0.1 and output
-/// weights of 2, every δ of the root's layer a is about 2.7, and the transpose hands each child
-/// about ±24 000 per neuron: above the fast range, below saturation. The children's slope
-/// there is tiny (a′(a(10)) is 2 in Q16.16 bits), so the fallback turns 24 000 into about 0.7,
-/// which their positive layer-b weights carry down into ∇Φ. Checked by dropping the kernel's mask bit (the
-/// unchanged δ kept): this test then fails.
+/// Q16.16 whatever the point, and the root's layer a, with rows (+1000 × 9 on the left child,
+/// −1000 × 9 on the right, 0 on its own position x′), sums them to exactly 0 (H = 0, slope
+/// 1.144). With the root's layer b at 0.1 and output weights of 2, every δ of the root's layer
+/// a is about 2.7, and the transpose hands each child about ±24 000 per neuron: above the fast
+/// range, below saturation. The children's slope there is tiny (a′(a(10)) is 2 in Q16.16
+/// bits), so the fallback turns 24 000 into about 0.7, which their positive layer-b weights
+/// carry down into ∇Φ. Checked by dropping the kernel's mask bit (the unchanged δ kept): this
+/// test then fails.
 #[test]
 fn q16_node_slope_kernel_falls_back_like_the_host() {
     let mut trained = head();
@@ -314,7 +431,12 @@ fn q16_node_slope_kernel_falls_back_like_the_host() {
     let width = layout.width;
     for j in 0..width {
         for i in 0..layout.inputs {
-            let half = if i < width { 1000.0 } else { -1000.0 };
+            let half = match i {
+                _ if i < width => 1000.0,
+                _ if i < 2 * width => -1000.0,
+                // The node's normalized position: not read here.
+                _ => 0.0,
+            };
             params[layout.a_weights + j * layout.inputs + i] = half;
         }
         params[layout.a_biases + j] = 0.0;
@@ -427,12 +549,26 @@ fn corrupt_truncated_and_foreign_blobs_are_rejected_with_the_cores_error() {
     let truncated = good[..good.len() - 7].to_vec();
     let foreign = b"\x89PNG\r\n\x1a\n not a model at all".to_vec();
     let empty = Vec::new();
+    // Format version 1 (nodes without normalization), with a consistent CRC.
+    let mut version_1 = good.clone();
+    version_1[4..6].copy_from_slice(&1_u16.to_le_bytes());
+    let body = version_1.len() - 4;
+    let crc = neurosurf_core::blob::crc32(&version_1[..body]);
+    version_1[body..].copy_from_slice(&crc.to_le_bytes());
+    assert_eq!(
+        ImplicitModel::<f32>::from_blob(&version_1).unwrap_err(),
+        neurosurf_core::BlobError::UnsupportedVersion {
+            found: 1,
+            supported: 2
+        }
+    );
     let points = [[0.5_f32, 0.0, 0.1]];
     for (name, bytes) in [
         ("corrupt", &corrupt),
         ("truncated", &truncated),
         ("foreign", &foreign),
         ("empty", &empty),
+        ("version 1", &version_1),
     ] {
         let host_error = ImplicitModel::<f32>::from_blob(bytes).unwrap_err();
         match sim.run(&Job::field_gradient(bytes, ScalarKind::F32, &points)) {

@@ -295,3 +295,59 @@ fn bad_inputs_get_clear_errors_and_leave_outputs_alone() {
     let err = fails(&["info", s(&junk)]);
     assert!(err.contains("junk.nsb"), "{err}");
 }
+
+/// `neurosurf info` on a model with nodes, built without training: every module, node
+/// included, stores its normalization (blob format 2), so the head ((0,1),2) at N = 9 has
+/// 3 × 148 + 2 × 310 = 1 064 parameters, and a node's a′ reads 2N + 3 = 21 inputs: field
+/// 3 × 126 + 2 × 288 = 954 MACs, field + gradient twice that. A version-1 blob (nodes without
+/// normalization) is refused with the core's version error.
+#[test]
+fn info_counts_the_nodes_normalization_and_position_inputs() {
+    use neurosurf_core::scalar::ScalarKind;
+    use neurosurf_trainer::implicit::{ImplicitNetwork, Normalization, TreeSpec, to_blob};
+
+    let dir = tempfile::tempdir().unwrap();
+    let tree: TreeSpec = "((0,1),2)".parse().unwrap();
+    let mut network = ImplicitNetwork::new(9, &tree).unwrap();
+    for module in 0..network.module_count() {
+        network.set_normalization(
+            module,
+            &Normalization {
+                center: [0.1 * module as f64, 0.0, -0.2],
+                matrix: [[1.0, 0.1, 0.0], [0.0, 0.9, 0.2], [0.1, 0.0, 1.1]],
+            },
+        );
+        for (k, p) in network.trained_params_mut(module).iter_mut().enumerate() {
+            *p = ((k * 7 + module) % 11) as f64 / 20.0 - 0.25;
+        }
+    }
+    let model = path(dir.path(), "head.nsb");
+    fs::write(&model, to_blob(&network, None, ScalarKind::Q16_16).unwrap()).unwrap();
+    let info = ok(&["info", s(&model), "--json"]);
+    let info: serde_json::Value = serde_json::from_str(&info).unwrap();
+    assert_eq!(info["kind"], "implicit", "{info}");
+    assert_eq!(info["parameters"], 1064, "{info}");
+    assert_eq!(info["modules"], 5, "{info}");
+    assert_eq!(info["leaves"], 3, "{info}");
+    assert_eq!(info["macs"], serde_json::json!([954, 1908]), "{info}");
+    let text = ok(&["info", s(&model)]);
+    assert!(text.contains("parameters   1064"), "{text}");
+    assert!(
+        text.contains("MACs         954 per field, 1908 per field+gradient"),
+        "{text}"
+    );
+
+    // The same file with the header of format version 1 (and a consistent CRC).
+    let mut old = fs::read(&model).unwrap();
+    old[4..6].copy_from_slice(&1_u16.to_le_bytes());
+    let body = old.len() - 4;
+    let crc = neurosurf_core::blob::crc32(&old[..body]);
+    old[body..].copy_from_slice(&crc.to_le_bytes());
+    let old_model = path(dir.path(), "old.nsb");
+    fs::write(&old_model, &old).unwrap();
+    let err = fails(&["info", s(&old_model)]);
+    assert!(
+        err.contains("blob format version 1 is not supported (this core reads 2)"),
+        "{err}"
+    );
+}

@@ -1,11 +1,11 @@
 //! The blob: a self-checking container for one trained model.
 //!
-//! # Format (version 1)
+//! # Format (version 2)
 //!
 //! | offset | size | field |
 //! |---:|---:|---|
 //! | 0 | 4 | magic `NSRF` |
-//! | 4 | 2 | format version, `u16` little endian (currently 1) |
+//! | 4 | 2 | format version, `u16` little endian (currently 2) |
 //! | 6 | 1 | model kind ([`ModelKind::code`]) |
 //! | 7 | 1 | scalar kind of the stored parameters ([`ScalarKind::code`]) |
 //! | 8 | 4 | payload length *n*, `u32` little endian |
@@ -20,6 +20,18 @@
 //! Decoding checks, in order: length, magic, version, declared length, CRC, model and scalar
 //! kind; then the model's own loader validates shapes, capacities and every parameter. Any
 //! byte string gets either a model or a [`BlobError`] — never a panic.
+//!
+//! # Versions
+//!
+//! The core reads exactly one version, [`FORMAT_VERSION`]; any other gets
+//! [`BlobError::UnsupportedVersion`] (checked before the CRC), never a reinterpretation.
+//!
+//! - **2**: every implicit module starts with its normalization c, A — nodes included — and a
+//!   node's a′ layer reads [b_left, b_right, A·(x − c)] (2N + 3 inputs; see
+//!   [`crate::implicit::ModuleLayout`]). The other kinds' payloads are unchanged.
+//! - **1**: implicit nodes stored no normalization and an a′ of 2N inputs (the children only).
+//!   Retrain, or convert with a tool that chooses the nodes' normalization, to read such
+//!   models.
 //!
 //! ```
 //! use neurosurf_core::blob::{self, BlobError, ModelKind};
@@ -48,8 +60,8 @@ use crate::scalar::ScalarKind;
 
 /// The four bytes every blob starts with.
 pub const MAGIC: [u8; 4] = *b"NSRF";
-/// The format version this core reads and writes.
-pub const FORMAT_VERSION: u16 = 1;
+/// The format version this core reads and writes (see the module docs' version history).
+pub const FORMAT_VERSION: u16 = 2;
 /// Bytes before the payload.
 pub const HEADER_LEN: usize = 12;
 /// Bytes after the payload (the CRC).

@@ -1,7 +1,7 @@
 //! Evaluation of Φ, ∇Φ and the unit normal: a recursive walk over the module tree.
 
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
-use super::model::ImplicitModel;
+use super::model::{ImplicitModel, ModuleEntry};
 use super::width::{at_width, width};
 use crate::dense::forward;
 use crate::scalar::{Scalar, normalize3};
@@ -112,7 +112,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         let params = model.module_parameters(entry.offset, layout.len);
         let last = model.last_hidden::<L, N, EXACT>(self.module, points, MAX_HEIGHT);
         let hidden = last.get(..width).unwrap_or(&[]);
-        let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[]));
+        let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[], &[]));
         out
     }
 }
@@ -149,27 +149,47 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                 (
                     layout,
                     params,
-                    forward(params, &layout.hidden_a, (&input, &[])),
+                    forward(params, &layout.hidden_a, (&input, &[], &[])),
                 )
             }
             ModuleKind::Node => {
                 let (layout, params) = module(ModuleKind::Node);
-                let left = self.last_hidden::<L, N, EXACT>(entry.left, points, budget);
-                let right =
-                    self.last_hidden::<L, N, EXACT>(index.saturating_sub(1), points, budget);
-                let inputs = (
-                    left.get(..width).unwrap_or(&[]),
-                    right.get(..width).unwrap_or(&[]),
-                );
-                (layout, params, forward(params, &layout.hidden_a, inputs))
+                let hidden_a = self.node_hidden_a::<L, N, EXACT>(index, entry, points, budget);
+                (layout, params, hidden_a)
             }
         };
         let hidden_a = hidden_a.get(..width).unwrap_or(&[]);
-        forward(params, &layout.hidden_b, (hidden_a, &[]))
+        forward(params, &layout.hidden_b, (hidden_a, &[], &[]))
+    }
+
+    /// A node's layer a′ on [b of the left child, b of the right child, its normalized
+    /// position x′]. Out of line (and in portable code: no kernel has its 2N + 3 inputs), so
+    /// that [`Self::last_hidden`], which also runs every leaf, keeps the leaf's code as it was.
+    #[inline(never)]
+    fn node_hidden_a<const L: usize, const N: usize, const EXACT: bool>(
+        &self,
+        index: usize,
+        entry: &ModuleEntry,
+        points: &[[S; 3]; L],
+        budget: usize,
+    ) -> [[S; L]; N] {
+        let width = width::<N, EXACT>(self.width);
+        let layout = ModuleLayout::new(ModuleKind::Node, width);
+        let params = self.module_parameters(entry.offset, layout.len);
+        let left = self.last_hidden::<L, N, EXACT>(entry.left, points, budget);
+        let right = self.last_hidden::<L, N, EXACT>(index.saturating_sub(1), points, budget);
+        let position = normalized_input(params, points);
+        let inputs = (
+            left.get(..width).unwrap_or(&[]),
+            right.get(..width).unwrap_or(&[]),
+            position.as_slice(),
+        );
+        forward(params, &layout.hidden_a, inputs)
     }
 }
 
-/// A leaf's input x′ = A·(x − c), lane by lane.
+/// A module's normalized position x′ = A·(x − c), lane by lane: a leaf's input, and the last
+/// three inputs of a node's layer a′ (both store c and A first, see [`ModuleLayout`]).
 #[inline]
 pub(crate) fn normalized_input<S: Scalar, const L: usize>(
     params: &[S],

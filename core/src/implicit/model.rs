@@ -8,7 +8,8 @@ use crate::blob::{self, ModelKind};
 use crate::error::{BlobError, Quantity};
 use crate::scalar::{Scalar, ScalarKind};
 
-/// Default parameter capacity: a 17-leaf, 16-node body model of width 9 needs 6 852.
+/// Default parameter capacity: a 17-leaf, 16-node body model of width 9 needs 7 476
+/// (17 × 148 + 16 × 310).
 pub const DEFAULT_PARAMETERS: usize = 8192;
 /// Default module capacity.
 pub const DEFAULT_MODULES: usize = 64;

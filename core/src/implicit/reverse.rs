@@ -1,6 +1,8 @@
 //! Φ and ∇Φ together in reverse mode: one forward pass that keeps each layer's outputs (a′ follows
 //! from a),
-//! then one transposed pass from the root's output down to every leaf's input.
+//! then one transposed pass from the root's output down to every module's normalized position
+//! x′ = A·(x − c): each leaf's input and each node's last three inputs, every one of which adds
+//! Aᵀ·∂Φ/∂x′ to ∇Φ.
 //!
 //! Carcenac §4 differentiates forward (three tangents per neuron: four times the multiply–
 //! accumulates of Φ). Reverse mode needs about twice those of Φ, independent of the input
@@ -8,17 +10,18 @@
 //! the largest model; instead each module hands the rest of the evaluation to its parent as a
 //! continuation ([`Above`]) and keeps its slopes in its own stack frame until the pass comes back
 //! down through it. Stack use is therefore proportional to the model actually loaded (about
-//! `4·N·L` scalars per module, N the layer capacity: the width itself for the specialized widths,
-//! else `MAX_WIDTH`; see `width.rs`), and nothing is allocated beyond that.
+//! `4·N·L` scalars per module, plus `3·L` for a node's position, N the layer capacity: the
+//! width itself for the specialized widths, else `MAX_WIDTH`; see `width.rs`), and nothing is
+//! allocated beyond that.
 
 use super::eval::{FieldGradient, ModuleView, normalized_input};
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
 use super::width::{at_width, width};
-use crate::dense::{forward, transposed, transposed_through_activation};
+use crate::dense::{LayerInputs, forward, transposed, transposed_through_activation};
 use crate::scalar::Scalar;
 
-/// ∇Φ summed over the leaves, per coordinate and lane, in the wide accumulator.
+/// ∇Φ summed over the modules, per coordinate and lane, in the wide accumulator.
 type Gradient<S, const L: usize> = [[<S as Scalar>::Acc; L]; 3];
 
 /// The evaluation above a module: given the module's last hidden layer (b), it finishes the
@@ -56,7 +59,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
                     width,
                 } = model.pass::<N, EXACT>(entry.offset, entry.kind);
                 let hidden = hidden.get(..width).unwrap_or(&[]);
-                let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[]));
+                let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[], &[]));
                 value = out;
                 let mut slope = [out];
                 for lanes in &mut slope {
@@ -88,7 +91,8 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
 
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     /// The forward pass through module `index` and its subtree, `above` for everything higher,
-    /// then the transposed pass back down, adding each leaf's share of ∇Φ to `gradient`.
+    /// then the transposed pass back down, adding each module's share of ∇Φ (through its
+    /// normalized position) to `gradient`.
     /// Layers have capacity `N` (see [`width`]). `budget` bounds the recursion (validated tree
     /// heights never exhaust it).
     fn reverse<const L: usize, const N: usize, const EXACT: bool>(
@@ -106,7 +110,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             ModuleKind::Leaf => {
                 let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Leaf);
                 let input = normalized_input(pass.params, points);
-                let delta_a = pass.run::<L, N, EXACT>((&input, &[]), gradient, above);
+                let delta_a = pass.run::<L, N, EXACT>((&input, &[], &[]), gradient, above);
                 let delta_a = delta_a.get(..pass.width).unwrap_or(&[]);
                 let hidden_a = &pass.layout.hidden_a;
                 let delta_input =
@@ -130,28 +134,40 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                             &mut |right, gradient| {
                                 let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Node);
                                 let (params, width) = (pass.params, pass.width);
-                                let inputs = (
+                                let (left, right) = (
                                     left.get(..width).unwrap_or(&[]),
                                     right.get(..width).unwrap_or(&[]),
                                 );
-                                let delta_a =
-                                    pass.run::<L, N, EXACT>(inputs, gradient, &mut *above);
+                                let position = normalized_input(params, points);
+                                let delta_a = pass.run::<L, N, EXACT>(
+                                    (left, right, &position),
+                                    gradient,
+                                    &mut *above,
+                                );
                                 let delta_a = delta_a.get(..width).unwrap_or(&[]);
                                 let hidden_a = &pass.layout.hidden_a;
+                                // The node's own share of ∇Φ, through its position inputs.
+                                let delta_position = transposed::<S, L, 3, EXACT>(
+                                    params,
+                                    hidden_a,
+                                    (2 * width, 3),
+                                    delta_a,
+                                );
+                                add_normalization_transpose(params, &delta_position, gradient);
                                 // Each child's ∂Φ/∂H_b, through its activation.
                                 delta_left = Some(transposed_through_activation::<S, L, N, EXACT>(
                                     params,
                                     hidden_a,
                                     (0, width),
                                     delta_a,
-                                    inputs.0,
+                                    left,
                                 ));
                                 transposed_through_activation::<S, L, N, EXACT>(
                                     params,
                                     hidden_a,
                                     (width, width),
                                     delta_a,
-                                    inputs.1,
+                                    right,
                                 )
                             },
                         );
@@ -189,20 +205,20 @@ struct Pass<'p, S> {
 }
 
 impl<S: Scalar> Pass<'_, S> {
-    /// Forward through layers a and b on `inputs`, `above` for the rest, then back through b:
-    /// returns ∂Φ/∂Hₐ, the gradient at layer a's pre-activations (its transpose gives
-    /// ∂Φ/∂inputs).
+    /// Forward through layers a and b on the concatenated `inputs` (see [`forward`]), `above`
+    /// for the rest, then back through b: returns ∂Φ/∂Hₐ, the gradient at layer a's
+    /// pre-activations (its transpose gives ∂Φ/∂inputs).
     #[inline(always)]
     fn run<const L: usize, const N: usize, const EXACT: bool>(
         &self,
-        inputs: (&[[S; L]], &[[S; L]]),
+        inputs: LayerInputs<'_, S, L>,
         gradient: &mut Gradient<S, L>,
         above: &mut Above<'_, S, L, N>,
     ) -> [[S; L]; N] {
         let (params, layout, width) = (self.params, &self.layout, self.width);
         let a: [[S; L]; N] = forward(params, &layout.hidden_a, inputs);
         let a = a.get(..width).unwrap_or(&[]);
-        let b: [[S; L]; N] = forward(params, &layout.hidden_b, (a, &[]));
+        let b: [[S; L]; N] = forward(params, &layout.hidden_b, (a, &[], &[]));
         let delta_b = above(&b, gradient);
         let delta_b = delta_b.get(..width).unwrap_or(&[]);
         transposed_through_activation::<S, L, N, EXACT>(
@@ -215,7 +231,8 @@ impl<S: Scalar> Pass<'_, S> {
     }
 }
 
-/// ∇Φ += Aᵀ·∂Φ/∂x′ for a leaf whose input is x′ = A·(x − c).
+/// ∇Φ += Aᵀ·∂Φ/∂x′ for a module whose normalized position is x′ = A·(x − c) (a leaf's
+/// input, the last three inputs of a node).
 #[inline]
 fn add_normalization_transpose<S: Scalar, const L: usize>(
     params: &[S],

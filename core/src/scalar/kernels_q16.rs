@@ -2,8 +2,8 @@
 //! targets), the width-9 layers run as the `neurosurf-m4f` assembly — the forward layers
 //! (products, rounding and table lookup in one kernel each), the 9×9 and 1×9 transposes fused
 //! with the chain rule on their sums, the 9×3 transpose, the chain rule alone through nine
-//! neurons, and a leaf's input normalization — with the same bits as the portable loops;
-//! everywhere else there are none.
+//! neurons, and the input normalization (a leaf's input, a node's position) — with the same
+//! bits as the portable loops; everywhere else there are none.
 
 // The forward kernels hard-code the activation table's layout: 1 281 segments of two words,
 // H = 0 at index 640, one segment per 2¹⁰ bits of H.
@@ -139,7 +139,7 @@ pub(super) fn transposed_slope<const IN: usize, const OUT: usize>(
     }
 }
 
-/// A leaf's normalized input x′ = A·(x − c) (`normalization` = [c, A row by row]), as the
+/// A module's normalized position x′ = A·(x − c) (`normalization` = [c, A row by row]), as the
 /// core's `normalized_input`, when a kernel exists.
 #[inline(always)]
 pub(super) fn normalize(normalization: &[Q16; 12], x: &[Q16; 3]) -> Option<[Q16; 3]> {

@@ -228,8 +228,9 @@ pub trait Scalar:
         let _ = (delta, a);
         false
     }
-    /// A leaf's normalized input x′ = A·(x − c) for one point by a target kernel, when there is
-    /// one: `normalization` is [c₀, c₁, c₂, then A row by row], and x′ᵣ is
+    /// A module's normalized position x′ = A·(x − c) (a leaf's input, a node's last three
+    /// inputs) for one point by a target kernel, when there is one: `normalization` is
+    /// [c₀, c₁, c₂, then A row by row], and x′ᵣ is
     /// `from_acc(ZERO.to_acc() + Σₖ mac(A[r][k], x[k].sub(c[k])))`, bit for bit; `None` means
     /// "use the portable loop". (Q16.16 on a Cortex-M4F.)
     #[inline(always)]

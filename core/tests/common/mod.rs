@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use neurosurf_core::blob::{self, ModelKind};
-use neurosurf_core::implicit::{ImplicitPayload, ModuleKind, ModuleLayout};
+use neurosurf_core::implicit::{ImplicitPayload, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use neurosurf_core::scalar::{
     ACTIVATION_AMPLITUDE, ACTIVATION_GAIN, Q16, Q16_ACTIVATION_MAX_ERROR, ScalarKind,
 };
@@ -129,22 +129,22 @@ fn rotation(rng: &mut Rng) -> [[f64; 3]; 3] {
 }
 
 /// Random parameters for `tree` at `width`, all on the Q16.16 grid: weights and biases in
-/// [−`weight`, `weight`]; each leaf's center in [−0.25, 0.25]³ and axes A = S·R (a rotation R
-/// into the leaf's box, then per-axis scales S in [0.5, 2]).
+/// [−`weight`, `weight`] (a node's position columns included); every module's (leaf's and
+/// node's) center in [−0.25, 0.25]³ and axes A = S·R (a rotation R into the module's box, then
+/// per-axis scales S in [0.5, 2]).
 pub fn random_parameters(rng: &mut Rng, tree: &[u8], width: usize, weight: f64) -> Vec<f64> {
     let mut params = Vec::with_capacity(parameter_count(tree, width));
     for &code in tree {
         let layout = ModuleLayout::new(kind(code), width);
-        if kind(code) == ModuleKind::Leaf {
-            for _ in 0..3 {
-                params.push(rng.grid(-0.25, 0.25));
-            }
-            let r = rotation(rng);
-            for row in r {
-                let scale = 0.5 + 1.5 * rng.unit();
-                for v in row {
-                    params.push(to_grid(scale * v));
-                }
+        assert_eq!(layout.trainable_start, NORMALIZATION_LEN);
+        for _ in 0..3 {
+            params.push(rng.grid(-0.25, 0.25));
+        }
+        let r = rotation(rng);
+        for row in r {
+            let scale = 0.5 + 1.5 * rng.unit();
+            for v in row {
+                params.push(to_grid(scale * v));
             }
         }
         for _ in 0..layout.trainable_len() {
@@ -358,26 +358,27 @@ impl Reference {
         let n = self.width;
         let p = &self.params[self.offsets[i]..];
         let layout = ModuleLayout::new(kind(self.tree[i]), n);
+        // Every module's normalized position x′ = A·(x − c): exact inputs on the grid, one
+        // rounding in Q16.16, exact tangents (the rows of A).
+        let (c, a) = (&p[0..3], &p[3..12]);
+        let mut position = Neurons::default();
+        for r in 0..3 {
+            let row = &a[3 * r..3 * r + 3];
+            position
+                .value
+                .push((0..3).map(|k| row[k] * (x[k] - c[k])).sum());
+            position.gradient.push([row[0], row[1], row[2]]);
+            position.value_error.push(HALF_LSB);
+            position.gradient_error.push([0.0; 3]);
+        }
         let input = match layout.kind {
-            ModuleKind::Leaf => {
-                // x′ = A·(x − c): exact inputs on the grid, one rounding in Q16.16, exact
-                // tangents (the columns of A).
-                let (c, a) = (&p[0..3], &p[3..12]);
-                let mut input = Neurons::default();
-                for r in 0..3 {
-                    let row = &a[3 * r..3 * r + 3];
-                    input
-                        .value
-                        .push((0..3).map(|k| row[k] * (x[k] - c[k])).sum());
-                    input.gradient.push([row[0], row[1], row[2]]);
-                    input.value_error.push(HALF_LSB);
-                    input.gradient_error.push([0.0; 3]);
-                }
-                input
-            }
+            // A leaf reads x′ alone.
+            ModuleKind::Leaf => position,
+            // A node reads [b of the left child, b of the right child, x′].
             ModuleKind::Node => self
                 .hidden_b(self.lefts[i], x)
-                .concat(self.hidden_b(i - 1, x)),
+                .concat(self.hidden_b(i - 1, x))
+                .concat(position),
         };
         let a = dense(
             p,

@@ -7,7 +7,8 @@
 //! For a 3→9→9→1 leaf that is ~2 000 multiply–adds per control point instead of ~50 000.
 //!
 //! A module maps `d` inputs (a leaf: its 3 normalized coordinates; a node: the 2N last-hidden
-//! neurons of its children) through hidden layers of width N to one output. Each input comes
+//! neurons of its children, then its own 3 normalized coordinates) through hidden layers of
+//! width N to one output. Each input comes
 //! with its tangents — derivatives with respect to the world coordinates x₀, x₁, x₂ — so the
 //! module's output gradient is ∇Φ in world space.
 //!
@@ -21,7 +22,8 @@ use neurosurf_core::scalar::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN};
 use super::activation::activation;
 use super::lm::madd;
 
-/// Most inputs a module can have (a node: two children of width [`MAX_WIDTH`]).
+/// Most inputs a module can have (a node: two children of width [`MAX_WIDTH`] and its 3
+/// normalized coordinates).
 pub const MAX_INPUTS: usize = 2 * MAX_WIDTH + 3;
 
 /// Offsets of a module's trained parameters, relative to the first trained parameter.

@@ -23,7 +23,6 @@ pub use activation::{Activation, activation};
 pub use blob::{DecodedImplicit, ImplicitMetadata, frame, from_blob, to_blob};
 pub use features::decompose;
 pub use frame::{Frame, MODEL_DIAGONAL};
-pub use oracle::Oracle;
 pub use jacobian::{
     HiddenJet, InputJet, LANES, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows,
 };
@@ -36,6 +35,7 @@ pub use lm::{
 pub use network::ImplicitNetwork;
 pub use normalize::{BoxScaling, Normalization};
 pub use options::ImplicitOptions;
+pub use oracle::Oracle;
 pub use pipeline::{FitRequest, feature_centroids, fit};
 pub use problem::{ModuleData, ModuleProblem, ValueGoal};
 pub use train::{ModuleReport, Progress, Trained, TrainingSummary, train};

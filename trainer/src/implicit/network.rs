@@ -205,14 +205,15 @@ impl ImplicitNetwork {
         &mut self.params[start..self.offsets[i] + layout.len]
     }
 
-    /// A leaf's input normalization.
+    /// Module `i`'s input normalization x′ = A·(x − c): a leaf's input, a node's last three
+    /// inputs (every module stores one, blob format 2).
     pub fn normalization(&self, i: usize) -> Option<Normalization> {
         Some(Normalization::from_params(
             &self.params[self.offsets[i]..self.offsets[i] + NORMALIZATION_LEN],
         ))
     }
 
-    /// Sets a leaf's input normalization.
+    /// Sets module `i`'s input normalization (a leaf's or a node's).
     pub fn set_normalization(&mut self, i: usize, normalization: &Normalization) {
         let o = self.offsets[i];
         self.params[o..o + NORMALIZATION_LEN].copy_from_slice(&normalization.to_params());

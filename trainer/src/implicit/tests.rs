@@ -7,7 +7,8 @@ use rand_chacha::ChaCha8Rng;
 use super::*;
 use crate::points::PointSet;
 
-/// Random module inputs with tangents, like a leaf (d = 3) or a node (d = 2N).
+/// Random module inputs with tangents, like a leaf (d = 3) or a node (d = 2N + 3: both
+/// children's last hidden layers, then its normalized position).
 fn random_input(rng: &mut ChaCha8Rng, d: usize) -> (Vec<f64>, [Vec<f64>; 3]) {
     let values = (0..d).map(|_| rng.random_range(-1.5..1.5)).collect();
     let tangents = std::array::from_fn(|_| (0..d).map(|_| rng.random_range(-2.0..2.0)).collect());
@@ -74,7 +75,7 @@ fn leaf_jacobian_matches_finite_differences() {
 #[test]
 fn node_jacobian_matches_finite_differences() {
     for (width, seed) in [(2, 5), (9, 6), (16, 7)] {
-        check_jacobian(2 * width, width, seed);
+        check_jacobian(2 * width + 3, width, seed);
     }
 }
 

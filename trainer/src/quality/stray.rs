@@ -34,6 +34,9 @@ impl StrayReport {
     }
 }
 
+/// Φ at a batch of points, written into the second slice (same length).
+pub type BatchField<'a> = dyn Fn(&[[f64; 3]], &mut [f64]) + Sync + 'a;
+
 /// The grown bounding box the test (and the two-sided mesh) covers.
 pub fn grown_bounds(truth: &Truth, growth: f64) -> Aabb {
     let b = truth.bounds();
@@ -46,11 +49,7 @@ pub fn grown_bounds(truth: &Truth, growth: f64) -> Aabb {
 
 /// Runs the test on a `resolution`³ grid over the truth's bounding box grown by
 /// [`STRAY_GROWTH`] per side. `values` evaluates Φ at a batch of points.
-pub fn stray_surface(
-    truth: &Truth,
-    resolution: usize,
-    values: &(dyn Fn(&[[f64; 3]], &mut [f64]) + Sync),
-) -> StrayReport {
+pub fn stray_surface(truth: &Truth, resolution: usize, values: &BatchField<'_>) -> StrayReport {
     let n = resolution.max(2);
     let bounds = grown_bounds(truth, STRAY_GROWTH);
     let step = [0, 1, 2].map(|k| (bounds.hi[k] - bounds.lo[k]) / (n - 1) as f64);

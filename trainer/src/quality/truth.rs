@@ -51,7 +51,9 @@ impl Truth {
             }
         }
         if positions.is_empty() {
-            return Err(Error::invalid("the reference mesh has no triangle of positive area"));
+            return Err(Error::invalid(
+                "the reference mesh has no triangle of positive area",
+            ));
         }
         let triangles = Some(TriangleTree::new(&mesh)?);
         Self::build(positions, normals, triangles)

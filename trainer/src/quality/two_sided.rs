@@ -186,7 +186,10 @@ pub fn two_sided<F: Field + ?Sized>(
             };
             let len = norm(gradient);
             let angle = if len > 0.0 && len.is_finite() {
-                (-dot(gradient, n) / len).clamp(-1.0, 1.0).acos().to_degrees()
+                (-dot(gradient, n) / len)
+                    .clamp(-1.0, 1.0)
+                    .acos()
+                    .to_degrees()
             } else {
                 180.0
             };

@@ -1,5 +1,7 @@
 //! Interval arithmetic through the module tree: bounds of Φ (and of its derivative along a
-//! ray) over a ray segment or an axis-aligned box.
+//! ray) over a ray segment or an axis-aligned box. Every module's inputs are bounded: a leaf's
+//! normalized position x′ = A·(x − c), and a node's children's last hidden layers followed by
+//! its own x′ (blob format 2).
 //!
 //! Every layer is affine followed by the activation a(H) = 1.7159·tanh(2H/3), which is
 //! monotone, so an interval \[H\] maps to [a(H.lo), a(H.hi)]; affine maps are bounded in
@@ -17,7 +19,7 @@
 use neurosurf_core::implicit::MAX_WIDTH;
 use neurosurf_core::scalar::{ACTIVATION_AMPLITUDE as AMPLITUDE, ACTIVATION_GAIN as GAIN};
 
-use crate::implicit::{ImplicitNetwork, MAX_INPUTS};
+use crate::implicit::{ImplicitNetwork, MAX_INPUTS, Normalization};
 
 /// Absolute widening of every final bound, covering floating-point rounding.
 pub const ROUNDING_MARGIN: f64 = 1e-9;
@@ -165,48 +167,28 @@ pub fn box_bounds(network: &ImplicitNetwork, center: [f64; 3], half: [f64; 3]) -
 fn module(network: &ImplicitNetwork, i: usize, domain: &Domain, output: bool) -> Layer {
     let n = network.width();
     let mut input = Layer::ZERO;
-    let d = match network.children(i) {
+    // Every module reads its normalized position x′ = A·(x − c): a leaf as its whole input, a
+    // node after its children's last hidden layers ([b_left, b_right, x′]).
+    let (position, d) = match network.children(i) {
         Some((l, r)) => {
             for (half, child) in [l, r].into_iter().enumerate() {
                 let b = module(network, child, domain, false);
                 input.value[half * n..(half + 1) * n].copy_from_slice(&b.value[..n]);
                 input.slope[half * n..(half + 1) * n].copy_from_slice(&b.slope[..n]);
             }
-            2 * n
+            (2 * n, 2 * n + 3)
         }
-        None => {
-            let Some(norm) = network.normalization(i) else {
-                return Layer::ZERO;
-            };
-            for (k, row) in norm.matrix.iter().enumerate() {
-                let (value, slope) = match domain {
-                    Domain::Segment {
-                        origin,
-                        direction,
-                        t,
-                    } => {
-                        // u(t) = row·(o − c) + t·row·d: affine in t, so exact.
-                        let base: f64 = (0..3).map(|j| row[j] * (origin[j] - norm.center[j])).sum();
-                        let rate: f64 = (0..3).map(|j| row[j] * direction[j]).sum();
-                        let (a, b) = (base + rate * t.lo, base + rate * t.hi);
-                        (Interval::new(a.min(b), a.max(b)), Interval::point(rate))
-                    }
-                    Domain::Box { center, half } => {
-                        let mid: f64 = (0..3).map(|j| row[j] * (center[j] - norm.center[j])).sum();
-                        let radius: f64 = (0..3).map(|j| row[j].abs() * half[j]).sum();
-                        (
-                            Interval::new(mid - radius, mid + radius),
-                            Interval::point(0.0),
-                        )
-                    }
-                };
-                input.value[k] = value;
-                input.slope[k] = slope;
-            }
-            3
-        }
+        None => (0, 3),
     };
+    let Some(norm) = network.normalization(i) else {
+        return Layer::ZERO;
+    };
+    for (k, (value, slope)) in normalized_position(&norm, domain).into_iter().enumerate() {
+        input.value[position + k] = value;
+        input.slope[position + k] = slope;
+    }
     let layout = network.trained_layout(i);
+    debug_assert_eq!(layout.inputs, d);
     let params = network.trained_params(i);
     let a = dense(
         &params[layout.a_weights..layout.a_biases],
@@ -232,6 +214,35 @@ fn module(network: &ImplicitNetwork, i: usize, domain: &Domain, output: bool) ->
         n,
         1,
     )
+}
+
+/// Bounds of the normalized position x′ = A·(x − c) and of its derivative along the ray over
+/// `domain`, coordinate by coordinate: each x′ₖ is affine in the point, so over a segment its
+/// range is exact (the ends) and its slope the constant rowₖ·d, and over a box it is the
+/// center's value ± Σ|Aₖⱼ|·halfⱼ. (Independent bounds per coordinate: conservative where the
+/// next layer mixes them, as every input interval is.)
+fn normalized_position(norm: &Normalization, domain: &Domain) -> [(Interval, Interval); 3] {
+    norm.matrix.map(|row| match domain {
+        Domain::Segment {
+            origin,
+            direction,
+            t,
+        } => {
+            // u(t) = row·(o − c) + t·row·d: affine in t, so exact.
+            let base: f64 = (0..3).map(|j| row[j] * (origin[j] - norm.center[j])).sum();
+            let rate: f64 = (0..3).map(|j| row[j] * direction[j]).sum();
+            let (a, b) = (base + rate * t.lo, base + rate * t.hi);
+            (Interval::new(a.min(b), a.max(b)), Interval::point(rate))
+        }
+        Domain::Box { center, half } => {
+            let mid: f64 = (0..3).map(|j| row[j] * (center[j] - norm.center[j])).sum();
+            let radius: f64 = (0..3).map(|j| row[j].abs() * half[j]).sum();
+            (
+                Interval::new(mid - radius, mid + radius),
+                Interval::point(0.0),
+            )
+        }
+    })
 }
 
 /// One dense layer and its activation, in center–radius form.
@@ -323,6 +334,54 @@ mod tests {
             for s in 0..27 {
                 let p: [f64; 3] = std::array::from_fn(|k| {
                     center[k] + half[k] * f64::from((s / 3_i32.pow(k as u32)) % 3 - 1)
+                });
+                let phi = net.eval(p).0;
+                assert!(bound.lo <= phi && phi <= bound.hi, "{phi} ∉ {bound:?}");
+            }
+        }
+    }
+
+    /// Nodes whose position inputs dominate (their a′ weights on x′ ten times the others):
+    /// the bounds must still hold, along segments and over boxes — they would not if the
+    /// nodes' x′ were left out of the propagation.
+    #[test]
+    fn bounds_enclose_samples_when_node_positions_dominate() {
+        let mut net = random_network(7);
+        let n = net.width();
+        for i in 0..net.module_count() {
+            if net.children(i).is_none() {
+                continue;
+            }
+            let layout = net.trained_layout(i);
+            assert_eq!(layout.inputs, 2 * n + 3);
+            let params = net.trained_params_mut(i);
+            for j in 0..n {
+                for k in 0..3 {
+                    params[layout.a_weights + j * layout.inputs + 2 * n + k] *= 10.0;
+                }
+            }
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        for _ in 0..60 {
+            let origin: [f64; 3] = std::array::from_fn(|_| rng.random_range(-2.0..2.0));
+            let direction: [f64; 3] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+            let t0 = rng.random_range(0.0..2.0);
+            let t = Interval::new(t0, t0 + rng.random_range(0.0..0.3));
+            let (value, slope) = segment_bounds(&net, origin, direction, t);
+            for s in 0..=30 {
+                let tt = t.lo + (t.hi - t.lo) * f64::from(s) / 30.0;
+                let p = [0, 1, 2].map(|k| origin[k] + tt * direction[k]);
+                let (phi, g) = net.eval(p);
+                let dphi: f64 = (0..3).map(|k| g[k] * direction[k]).sum();
+                assert!(value.lo <= phi && phi <= value.hi, "{phi} ∉ {value:?}");
+                assert!(slope.lo <= dphi && dphi <= slope.hi, "{dphi} ∉ {slope:?}");
+            }
+            let half = [0.15, 0.05, 0.1];
+            let bound = box_bounds(&net, origin, half);
+            for s in 0..125 {
+                let p: [f64; 3] = std::array::from_fn(|k| {
+                    let step = (s / 5_i32.pow(k as u32)) % 5 - 2;
+                    origin[k] + half[k] * f64::from(step) / 2.0
                 });
                 let phi = net.eval(p).0;
                 assert!(bound.lo <= phi && phi <= bound.hi, "{phi} ∉ {bound:?}");
