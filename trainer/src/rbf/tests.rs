@@ -766,3 +766,97 @@ fn check_gradient(
         }
     }
 }
+
+#[test]
+fn rbf_field_evaluates_in_parallel_with_exact_gradients() {
+    use crate::render::{DEFAULT_RBF_INFLATE, Field, RbfField};
+
+    let (model, _) = fit(&torus(96, 3), &RbfOptions::default()).unwrap();
+    let field = RbfField::new(&model, DEFAULT_RBF_INFLATE).unwrap();
+    check_gradient(&|p| field.value_gradient(p), &|p| field.value(p), 1.6);
+    // Batches (in parallel) agree bit for bit with single points.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let points: Vec<[f64; 3]> = (0..1000)
+        .map(|_| std::array::from_fn(|_| rng.random_range(-1.6..1.6)))
+        .collect();
+    let mut values = vec![0.0; points.len()];
+    let mut gradients = vec![(0.0, [0.0; 3]); points.len()];
+    field.values(&points, &mut values);
+    field.value_gradients(&points, &mut gradients);
+    for ((p, v), vg) in points.iter().zip(&values).zip(&gradients) {
+        assert_eq!(v.to_bits(), model.field(*p).to_bits());
+        assert_eq!(*vg, model.field_gradient(*p));
+    }
+    // The packed, vectorized sums agree with the plain kernel sum to rounding.
+    for p in &points[..50] {
+        let a = model.linear();
+        let mut plain = model.constant() + a[0] * p[0] + a[1] * p[1] + a[2] * p[2];
+        let mut plain_g = a;
+        for (c, w) in model.centers().iter().zip(model.weights()) {
+            let (phi, g) =
+                multiquadric_gradient([p[0] - c[0], p[1] - c[1], p[2] - c[2]], model.c2());
+            plain += w * phi;
+            for k in 0..3 {
+                plain_g[k] += w * g[k];
+            }
+        }
+        let (v, g) = model.field_gradient(*p);
+        assert!((v - plain).abs() < 1e-10, "{v} vs {plain}");
+        assert!(
+            (0..3).all(|k| (g[k] - plain_g[k]).abs() < 1e-9),
+            "{g:?} vs {plain_g:?}"
+        );
+    }
+    // One region: the centres' bounding box (which holds the off-surface points), grown.
+    let [region] = field.regions() else {
+        panic!("one region")
+    };
+    let (lo, hi) = model.bounds();
+    for k in 0..3 {
+        let half = 0.5 * (hi[k] - lo[k]);
+        let grown = (region.bounds.hi[k] - region.bounds.lo[k]) * 0.5;
+        assert!(
+            (grown - DEFAULT_RBF_INFLATE * half).abs() < 1e-12,
+            "{k}: {grown} vs {half}"
+        );
+    }
+    assert!(RbfField::new(&model, 0.5).is_err());
+}
+
+/// Fits 1 500 points of the bunny and measures the surface against the scan; run with
+/// `cargo test --release -p neurosurf-trainer rbf::tests::bunny_quality -- --ignored --nocapture`.
+#[test]
+#[ignore = "timing and quality on the bunny; run in release"]
+fn bunny_quality() {
+    use crate::quality::{Truth, two_sided};
+    use crate::render::{DEFAULT_RBF_INFLATE, RbfField};
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/stanford-bunny.obj");
+    let mesh = crate::io::read_mesh(&path).unwrap();
+    let truth = Truth::from_mesh(&mesh).unwrap();
+    let points = crate::sample::sample_mesh(&mesh, 1500, 1).unwrap();
+    for kernel in [RbfKernel::Multiquadric, RbfKernel::Biharmonic] {
+        let options = RbfOptions {
+            kernel,
+            ..RbfOptions::default()
+        };
+        let (model, report) = fit(&points, &options).unwrap();
+        println!("bunny 1500 {kernel:?}: {report:?}");
+        let field = RbfField::new(&model, DEFAULT_RBF_INFLATE).unwrap();
+        let start = std::time::Instant::now();
+        let measured = two_sided(&field, &truth, 128, 64).unwrap();
+        println!(
+            "  scan vertices → RBF surface: median {:.4} % of D, p90 {:.4} %, max {:.3} %; \
+             RBF surface → scan: median {:.4} %, max {:.3} %; normals {:.2}°; {} pieces; \
+             measured in {:.1} s\n  {measured:?}",
+            measured.truth_to_model.median_percent,
+            measured.truth_to_model.p90_percent,
+            measured.truth_to_model.max_percent,
+            measured.model_to_truth.median_percent,
+            measured.model_to_truth.max_percent,
+            measured.normal_median_degrees,
+            measured.mesh.components,
+            start.elapsed().as_secs_f64()
+        );
+    }
+}
