@@ -1,8 +1,9 @@
 //! Carcenac's Table 5 on this machine: the torus (R = 1, r = 0.4) from 48…576 control points,
 //! learned by one network module (Levenberg–Marquardt, Table 1 settings) and by the
-//! multiquadric RBF baseline; training times, iterations, and the fidelity of both on 2000
-//! held-out points of the true torus. Then the core's evaluation throughput, single point vs
-//! batch, in f32 and Q16.16.
+//! multiquadric RBF baseline (two-sided off-surface points, lengths relative to the bounding
+//! diagonal: `rbf::RbfOptions::default()`); training times, iterations, and the fidelity of
+//! both on 2000 held-out points of the true torus. Then the core's evaluation throughput,
+//! single point vs batch, in f32 and Q16.16.
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench table5` (add `-- --quick` for one seed).
 //! Training runs on one thread (the module tree of a torus is one leaf); times are medians
@@ -22,7 +23,8 @@ fn main() {
     let seeds: &[u64] = if quick { &[1] } else { &[1, 2, 3, 4, 5] };
 
     println!(
-        "Table 5 — torus R=1 r=0.4, network N=9 (Table 1 settings) vs multiquadric RBF (c²=1e-3)"
+        "Table 5 — torus R=1 r=0.4, network N=9 (Table 1 settings) vs multiquadric RBF \
+         (c = 0.0078·D, c² ≈ 1e-3; off-surface points at ±1 % of D, Hermite-style)"
     );
     println!(
         "median over seeds {seeds:?}; fidelity on {TABLE5_HELD_OUT} held-out surface points (median distance %D / median normal error)"

@@ -1,26 +1,31 @@
-//! `neurosurf mesh`: extract a watertight triangle mesh of an implicit model.
+//! `neurosurf mesh`: extract a watertight triangle mesh of an implicit model or an RBF
+//! baseline.
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use serde::Serialize;
 
 use neurosurf_trainer::io::write_mesh;
-use neurosurf_trainer::render::{CoreField, MeshStats, Region, extract_mesh};
+use neurosurf_trainer::render::{
+    CoreField, ExtractedMesh, Field, MeshStats, RbfField, Region, extract_mesh,
+};
 
-use super::render::load_implicit;
+use super::render::Surface;
 use super::{output, progress};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The implicit model blob.
+    /// The model blob: a modular implicit model (evaluated by the core in f32) or an RBF
+    /// baseline (f64 on the host).
     model: PathBuf,
-    /// Grid cells along the longest side of the leaf boxes (1..=1024).
+    /// Grid cells along the longest side of the search boxes (1..=1024).
     #[arg(long, default_value_t = 128)]
     resolution: usize,
-    /// Growth of the leaf normalization boxes the surface is searched in.
-    #[arg(long, default_value_t = 1.25)]
-    inflate: f64,
+    /// Growth of the boxes the surface is searched in: a network's leaf normalization boxes
+    /// (default 1.25), or an RBF's centres' bounding box (default 1.1), in [1, 4].
+    #[arg(long)]
+    inflate: Option<f64>,
     /// The mesh to write: `.obj`, `.ply` (binary) or `.stl` (binary).
     #[arg(long, short)]
     out: PathBuf,
@@ -37,17 +42,24 @@ struct Summary<'a> {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let (bytes, decoded, box_size) = load_implicit(&args.model)?;
-    if !(args.inflate >= 1.0 && args.inflate <= 4.0) {
-        bail!("--inflate {} is outside [1, 4]", args.inflate);
-    }
-    let regions = Region::of_network(&decoded.network, box_size, args.inflate);
-    let field = CoreField::new(&bytes, regions)?;
+    let surface = Surface::read(&args.model)?;
+    let inflate = surface.inflate(args.inflate)?;
     let bar = progress::work_bar("mesh", "blocks", args.json);
-    let extracted = extract_mesh(&field, args.resolution, &|done, total| {
+    let progress = |done: u64, total: u64| {
         bar.set_length(total);
         bar.set_position(done);
-    })?;
+    };
+    let extracted = match &surface {
+        Surface::Implicit {
+            bytes,
+            decoded,
+            box_size,
+        } => {
+            let regions = Region::of_network(&decoded.network, *box_size, inflate);
+            extract(&CoreField::new(bytes, regions)?, args, &progress)?
+        }
+        Surface::Rbf(model) => extract(&RbfField::new(model, inflate)?, args, &progress)?,
+    };
     bar.finish_and_clear();
     write_mesh(&args.out, &extracted.mesh, Some(&extracted.normals))?;
     let stats = extracted.stats;
@@ -70,4 +82,12 @@ pub fn run(args: &Args) -> Result<()> {
         stats.seconds
     );
     Ok(())
+}
+
+fn extract<F: Field>(
+    field: &F,
+    args: &Args,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<ExtractedMesh> {
+    Ok(extract_mesh(field, args.resolution, progress)?)
 }

@@ -1,4 +1,4 @@
-//! `neurosurf render`: ray-cast an implicit model to a PNG (Carcenac §6).
+//! `neurosurf render`: ray-cast an implicit model or an RBF baseline to a PNG (Carcenac §6).
 
 use std::path::{Path, PathBuf};
 
@@ -7,16 +7,17 @@ use serde::Serialize;
 
 use neurosurf_trainer::evaluate::LoadedModel;
 use neurosurf_trainer::implicit::DecodedImplicit;
+use neurosurf_trainer::rbf::RbfModel;
 use neurosurf_trainer::render::{
-    Camera, CoreField, DEFAULT_BOX_SIZE, Field, Method, NetworkField, Region, RenderOptions,
-    RenderStats, View, bounds_of, render, write_png,
+    Camera, CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, Field, Method,
+    NetworkField, RbfField, Region, RenderOptions, RenderStats, View, bounds_of, render, write_png,
 };
 
 use super::{output, progress};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The implicit model blob.
+    /// The model blob: a modular implicit model or an RBF baseline.
     model: PathBuf,
     /// Image width in pixels.
     #[arg(long, default_value_t = 256)]
@@ -38,13 +39,15 @@ pub struct Args {
     /// them (one ray elsewhere).
     #[arg(long)]
     full_aa: bool,
-    /// Never miss a crossing: interval bounds through the module tree, in f64 (slower).
-    /// Without it, the paper's punctual Newton search runs on the core in f32.
+    /// Never miss a crossing: interval bounds through the module tree, in f64 (slower; not
+    /// for an RBF). Without it, the paper's punctual Newton search runs on the core in f32
+    /// (an RBF: on the host in f64).
     #[arg(long)]
     guaranteed: bool,
-    /// Growth of the leaf normalization boxes the surface is searched in.
-    #[arg(long, default_value_t = 1.25)]
-    inflate: f64,
+    /// Growth of the boxes the surface is searched in: a network's leaf normalization boxes
+    /// (default 1.25), or an RBF's centres' bounding box (default 1.1), in [1, 4].
+    #[arg(long)]
+    inflate: Option<f64>,
     /// The PNG to write.
     #[arg(long, short)]
     out: PathBuf,
@@ -61,22 +64,53 @@ struct Summary<'a> {
     stats: RenderStats,
 }
 
-/// Reads an implicit model: its blob and its `f64` decoding; the normalization box side
-/// from its training summary (default 2).
-pub fn load_implicit(path: &Path) -> Result<(Vec<u8>, DecodedImplicit, f64)> {
-    match LoadedModel::read(path)? {
-        LoadedModel::Implicit { bytes, decoded } => {
-            let box_size = decoded
-                .metadata
-                .as_ref()
-                .and_then(|m| m.summary.as_ref())
-                .map_or(DEFAULT_BOX_SIZE, |s| s.options.box_size);
-            Ok((bytes, *decoded, box_size))
+/// A model `render` and `mesh` draw.
+pub enum Surface {
+    /// A modular implicit model: its blob, its `f64` decoding, and its normalization box side
+    /// (from its training summary; default 2).
+    Implicit {
+        bytes: Vec<u8>,
+        decoded: Box<DecodedImplicit>,
+        box_size: f64,
+    },
+    /// The RBF baseline (evaluated in f64 on the host).
+    Rbf(RbfModel),
+}
+
+impl Surface {
+    /// Reads a model `render` and `mesh` accept.
+    pub fn read(path: &Path) -> Result<Surface> {
+        match LoadedModel::read(path)? {
+            LoadedModel::Implicit { bytes, decoded } => {
+                let box_size = decoded
+                    .metadata
+                    .as_ref()
+                    .and_then(|m| m.summary.as_ref())
+                    .map_or(DEFAULT_BOX_SIZE, |s| s.options.box_size);
+                Ok(Surface::Implicit {
+                    bytes,
+                    decoded,
+                    box_size,
+                })
+            }
+            LoadedModel::Rbf(model) => Ok(Surface::Rbf(model)),
+            _ => bail!(
+                "{} is not an implicit model or an RBF (render and mesh need a field)",
+                path.display()
+            ),
         }
-        _ => bail!(
-            "{} is not an implicit model (render and mesh need one)",
-            path.display()
-        ),
+    }
+
+    /// `--inflate`, or this kind's default, checked to lie in [1, 4].
+    pub fn inflate(&self, inflate: Option<f64>) -> Result<f64> {
+        let inflate = inflate.unwrap_or(match self {
+            Surface::Implicit { .. } => DEFAULT_INFLATE,
+            Surface::Rbf(_) => DEFAULT_RBF_INFLATE,
+        });
+        if !(1.0..=4.0).contains(&inflate) {
+            bail!("--inflate {inflate} is outside [1, 4]");
+        }
+        Ok(inflate)
     }
 }
 
@@ -104,12 +138,9 @@ fn parse_view(text: &str, fov: f64) -> Result<View> {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let (bytes, decoded, box_size) = load_implicit(&args.model)?;
+    let surface = Surface::read(&args.model)?;
     let view = parse_view(&args.view, args.fov)?;
-    if !(args.inflate >= 1.0 && args.inflate <= 4.0) {
-        bail!("--inflate {} is outside [1, 4]", args.inflate);
-    }
-    let regions = Region::of_network(&decoded.network, box_size, args.inflate);
+    let inflate = surface.inflate(args.inflate)?;
     let options = RenderOptions {
         method: if args.guaranteed {
             Method::Guaranteed
@@ -125,15 +156,33 @@ pub fn run(args: &Args) -> Result<()> {
         bar.set_length(total);
         bar.set_position(done);
     };
-    let (rendered, evaluation) = if args.guaranteed {
-        let field = NetworkField::new(&decoded.network, box_size, args.inflate)?;
-        (
-            draw(&field, args, &view, &options, &report)?,
-            "f64 network, intervals",
-        )
-    } else {
-        let field = CoreField::new(&bytes, regions)?;
-        (draw(&field, args, &view, &options, &report)?, "core f32")
+    let (rendered, evaluation) = match &surface {
+        Surface::Implicit {
+            decoded, box_size, ..
+        } if args.guaranteed => {
+            let field = NetworkField::new(&decoded.network, *box_size, inflate)?;
+            (
+                draw(&field, args, &view, &options, &report)?,
+                "f64 network, intervals",
+            )
+        }
+        Surface::Implicit {
+            bytes,
+            decoded,
+            box_size,
+        } => {
+            let regions = Region::of_network(&decoded.network, *box_size, inflate);
+            let field = CoreField::new(bytes, regions)?;
+            (draw(&field, args, &view, &options, &report)?, "core f32")
+        }
+        Surface::Rbf(_) if args.guaranteed => bail!(
+            "--guaranteed needs interval bounds of the field, which the RBF baseline does not \
+             have: render it without --guaranteed"
+        ),
+        Surface::Rbf(model) => {
+            let field = RbfField::new(model, inflate)?;
+            (draw(&field, args, &view, &options, &report)?, "f64 RBF")
+        }
     };
     bar.finish_and_clear();
     write_png(&args.out, &rendered.image)?;

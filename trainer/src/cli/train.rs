@@ -11,7 +11,7 @@ use neurosurf_trainer::implicit::{
     self, BoxScaling, DecodedImplicit, FitRequest, ImplicitOptions, TrainingSummary, TreeSpec,
 };
 use neurosurf_trainer::io::{read_points, write_atomic};
-use neurosurf_trainer::rbf::{self, RbfOptions, RbfReport};
+use neurosurf_trainer::rbf::{self, RbfKernel, RbfOptions, RbfReport};
 
 use super::{output, progress};
 
@@ -20,7 +20,9 @@ pub enum Command {
     /// Carcenac's modular implicit surface: a tree of small MLP modules trained by
     /// Levenberg–Marquardt (defaults: the paper's Table 1).
     Implicit(ImplicitArgs),
-    /// The multiquadric RBF baseline (Carcenac §9): a direct dense solve, host-only model.
+    /// The RBF baseline (Carcenac §9's multiquadric, or the biharmonic): Hermite-style
+    /// off-surface points on both sides, lengths relative to the bounding diagonal, one dense
+    /// solve; host-only model (`render` and `mesh` draw it).
     Rbf(RbfArgs),
 }
 
@@ -113,6 +115,12 @@ enum Scaling {
     PerAxis,
 }
 
+#[derive(Copy, Clone, Debug, ValueEnum)]
+enum Kernel {
+    Multiquadric,
+    Biharmonic,
+}
+
 #[derive(Debug, clap::Args)]
 pub struct RbfArgs {
     /// Control points: PLY with x y z nx ny nz.
@@ -121,9 +129,20 @@ pub struct RbfArgs {
     /// Output blob (host-only model kind `rbf`).
     #[arg(long, short)]
     out: PathBuf,
-    /// Multiquadric shape parameter c².
-    #[arg(long, default_value_t = 1e-3)]
-    c2: f64,
+    /// The radial function: Carcenac's multiquadric √(r² + c²), or the biharmonic r.
+    #[arg(long, value_enum, default_value_t = Kernel::Multiquadric)]
+    kernel: Kernel,
+    /// The multiquadric's c as a fraction of the points' bounding diagonal D (the default
+    /// gives c² = 10⁻³ on the Table 5 torus, Carcenac's value).
+    #[arg(long = "c-relative", default_value_t = rbf::C_RELATIVE, value_name = "C/D")]
+    c_relative: f64,
+    /// Offset of the off-surface points as a fraction of D (halved per point until the point's
+    /// nearest control point is its own).
+    #[arg(long = "epsilon-relative", default_value_t = rbf::EPSILON_RELATIVE, value_name = "ε/D")]
+    epsilon_relative: f64,
+    /// Slope s of the field across the surface (f = ∓s·ε at the off-surface points).
+    #[arg(long, default_value_t = 5.0)]
+    slope: f64,
     /// Print a JSON summary instead of text.
     #[arg(long)]
     json: bool,
@@ -257,8 +276,13 @@ struct RbfSummary<'a> {
 fn rbf(args: &RbfArgs) -> Result<()> {
     let points = read_points(&args.points)?.validated()?;
     let options = RbfOptions {
-        c2: args.c2,
-        ..RbfOptions::default()
+        kernel: match args.kernel {
+            Kernel::Multiquadric => RbfKernel::Multiquadric,
+            Kernel::Biharmonic => RbfKernel::Biharmonic,
+        },
+        c_relative: args.c_relative,
+        epsilon_relative: args.epsilon_relative,
+        slope: args.slope,
     };
     let (model, report) = rbf::fit(&points, &options)
         .with_context(|| format!("cannot fit an RBF to {}", args.points.display()))?;
@@ -273,12 +297,25 @@ fn rbf(args: &RbfArgs) -> Result<()> {
         return output::json(&summary);
     }
     println!(
-        "fitted an RBF on {} points ({} unknowns) in {:.3} s; condition estimate {:.2e}, max residual {:.1e}",
+        "fitted a {} RBF on {} points ({} unknowns) in {:.3} s ({:.3} s factoring); condition \
+         estimate {:.2e}, max residual {:.1e}",
+        report.kernel.name(),
         report.points,
         report.unknowns,
         report.seconds,
+        report.factorization_seconds,
         report.condition_estimate,
         report.max_residual
+    );
+    println!(
+        "  diagonal D {:.4e}, c² {:.3e}, ε {:.3e} ({} of {} off-surface offsets halved, smallest \
+         {:.3e})",
+        report.diagonal,
+        report.c2,
+        report.epsilon,
+        report.halved,
+        2 * report.points,
+        report.min_epsilon
     );
     println!("wrote {} ({} bytes)", args.out.display(), bytes.len());
     Ok(())

@@ -57,7 +57,7 @@ fn table5(out: &mut String, rows: &[Table5Row]) {
         out,
         "<h2>The network against an RBF network (Table 5)</h2>\n<p>The torus R = 1, r = 0.4 \
          learned from n control points by one network module (Table 1's settings) and by the \
-         multiquadric RBF interpolant; seed {seeds}, one thread. The paper: a C program on a \
+         multiquadric RBF interpolant (two-sided off-surface points); seed {seeds}, one thread. The paper: a C program on a \
          1.7 GHz Pentium IV (in parentheses). Fidelity: median distance in % of the diameter \
          D = {TABLE5_DIAMETER} / median normal error on {TABLE5_HELD_OUT} held-out points of \
          the true torus (the paper gives none).</p>\n<table><tr><th>points</th>\

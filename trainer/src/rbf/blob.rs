@@ -6,7 +6,7 @@
 //! | field | type | content |
 //! |---|---|---|
 //! | `centers` | `u32` | number of centres m |
-//! | `parameters` | bytes | 4m + 5 little-endian `f64`: c², a₀, a₁, a₂, b, the centres (x, y, z each), the weights |
+//! | `parameters` | bytes | 4m + 5 little-endian `f64`: c² (0: biharmonic), a₀, a₁, a₂, b, the centres (x, y, z each), the weights |
 //! | `metadata` | bytes | opaque; empty (reserved for the trainer) |
 //!
 //! Values are stored bit-exactly, so a round trip reproduces the model exactly. Parameter
@@ -88,7 +88,7 @@ impl RbfModel {
     /// ([`BlobError::MalformedPayload`]), a parameter byte count other than 8·(4m + 5)
     /// ([`BlobError::ShapeMismatch`]) and non-finite values
     /// ([`BlobError::NonFiniteParameter`]); [`Error::Format`] for no centres, more than
-    /// [`MAX_CENTERS`], or c² ≤ 0.
+    /// [`MAX_CENTERS`], or c² < 0 (c² = 0 is the biharmonic kernel).
     pub fn from_blob(bytes: &[u8], path: &Path) -> Result<Self> {
         let rejected = |source| Error::Blob {
             path: path.to_path_buf(),
@@ -137,22 +137,22 @@ impl RbfModel {
             values.push(value);
         }
         let c2 = values[0];
-        if c2 <= 0.0 {
+        if c2 < 0.0 {
             return Err(Error::format(
                 path,
-                format!("the RBF's multiquadric c² must be positive, the blob has {c2}"),
+                format!("the RBF's multiquadric c² must be at least 0, the blob has {c2}"),
             ));
         }
         let (centers, weights) = values[5..].split_at(3 * m);
-        Ok(RbfModel {
-            centers: centers
+        Ok(RbfModel::from_parts(
+            centers
                 .chunks_exact(3)
                 .map(|c| [c[0], c[1], c[2]])
                 .collect(),
-            weights: weights.to_vec(),
-            linear: [values[1], values[2], values[3]],
-            constant: values[4],
+            weights.to_vec(),
+            [values[1], values[2], values[3]],
+            values[4],
             c2,
-        })
+        ))
     }
 }

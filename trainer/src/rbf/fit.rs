@@ -1,9 +1,10 @@
-//! Fitting: the interpolation constraints of an oriented point set, one dense solve, and
-//! the checks and measurements reported with the model.
+//! Fitting: the Hermite-style constraints of an oriented point set, one dense solve in the
+//! data's unit-diagonal frame, and the checks and measurements reported with the model.
 
 use std::time::Instant;
 
-use nalgebra::DMatrix;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -12,15 +13,16 @@ use crate::points::PointSet;
 use super::condition::symmetric_inverse_norm1;
 use super::kernel::multiquadric;
 use super::model::RbfModel;
-use super::options::{MAX_POINTS, MIN_POINTS, RbfOptions};
+use super::options::{MAX_HALVINGS, MAX_POINTS, MIN_POINTS, RbfKernel, RbfOptions};
 use super::solve::SaddleSolver;
 
-/// Two centres closer than this fraction of the centres' bounding-box diagonal are
+/// Two centres closer than this fraction of the control points' bounding diagonal are
 /// rejected as duplicates before the solve.
 pub const DUPLICATE_TOLERANCE: f64 = 1e-9;
 
-/// A fit whose largest constraint residual exceeds this fraction of the off-surface target
-/// ε·s is rejected as numerically singular. Well-posed fits reach 10⁻¹³–10⁻¹¹ of it.
+/// A fit whose largest constraint residual exceeds this fraction of the smallest off-surface
+/// target s·min εᵢ is rejected as numerically singular. Well-posed fits stay 10⁴–10⁶ times
+/// below the limit (the 1 500-point bunny: 7·10⁻¹³ against 3·10⁻⁹).
 pub const RESIDUAL_TOLERANCE: f64 = 1e-6;
 
 /// What a fit measured.
@@ -28,47 +30,71 @@ pub const RESIDUAL_TOLERANCE: f64 = 1e-6;
 pub struct RbfReport {
     /// Control points n.
     pub points: usize,
-    /// Unknowns of the linear system, 2n + 4 (one weight per centre, four for a·x + b).
+    /// Unknowns of the linear system, 3n + 4 (one weight per centre, four for a·x + b).
     pub unknowns: usize,
-    /// Wall-clock seconds of the whole fit: assembly, factorization, solve, condition
-    /// estimate and residual check.
+    /// The radial function.
+    pub kernel: RbfKernel,
+    /// The control points' bounding diagonal D, the unit of every relative setting.
+    pub diagonal: f64,
+    /// The multiquadric c² in the data's units ((c/D · D)²; 0 for the biharmonic kernel).
+    pub c2: f64,
+    /// The starting offset ε₀ of the off-surface points, in the data's units.
+    pub epsilon: f64,
+    /// Off-surface points (of 2n) whose offset had to be halved at least once, because
+    /// another control point was nearer than their own.
+    pub halved: usize,
+    /// The smallest offset used, in the data's units (ε₀ when nothing was halved).
+    pub min_epsilon: f64,
+    /// Wall-clock seconds of the whole fit: offsets, assembly, factorization, solve,
+    /// condition estimate and residual check.
     pub seconds: f64,
-    /// Estimated 1-norm condition number κ₁(M) = ‖M‖₁·‖M⁻¹‖₁ of the (2n + 4)² saddle-point
-    /// matrix as assembled (polynomial block in centroid-relative coordinates): ‖M‖₁ exact,
-    /// ‖M⁻¹‖₁ by Hager–Higham from the factorization — a lower bound, usually within a
-    /// factor of 3. Expect ~10⁸ for a few hundred points on a unit-size shape; about
-    /// κ₁·10⁻¹⁶ relative error in the weights (the residuals below stay far smaller).
+    /// Of which the Cholesky factorization (on every thread of the current rayon pool).
+    pub factorization_seconds: f64,
+    /// Estimated 1-norm condition number κ₁(M) = ‖M‖₁·‖M⁻¹‖₁ of the (3n + 4)² saddle-point
+    /// matrix as assembled and factored (centres in the unit-diagonal frame, polynomial block
+    /// centroid-relative): ‖M‖₁ exact, ‖M⁻¹‖₁ by Hager–Higham from the factorization — a lower
+    /// bound, usually within a factor of 3. About κ₁·10⁻¹⁶ relative error in the weights (the
+    /// residuals below stay far smaller).
     pub condition_estimate: f64,
-    /// Largest |f(cᵢ) − dᵢ| over the 2n interpolation constraints (0 on the control points,
-    /// −ε·s on the off-surface points), evaluated with the final model. The polynomial
-    /// orthogonality conditions Σwᵢ = Σwᵢcᵢ = 0 hold by construction of the solve.
+    /// Largest |f(cᵢ) − dᵢ| over the 3n interpolation constraints (0 on the control points,
+    /// ∓s·εᵢ on the off-surface points), evaluated with the final model in the data's units.
+    /// The polynomial orthogonality conditions Σwᵢ = Σwᵢcᵢ = 0 hold by construction of the
+    /// solve.
     pub max_residual: f64,
 }
 
-/// Fits Carcenac's multiquadric RBF baseline to oriented control points.
+/// Fits the RBF baseline (by default Carcenac's multiquadric) to oriented control points.
 ///
-/// Centres are the n control points xᵢ (constraint f = 0) and n off-surface points
-/// xᵢ + ε·nᵢ (constraint f = −ε·s), so f > 0 inside, f < 0 outside and ∇f ≈ −s·n on the
-/// surface, as for the implicit network. With the side conditions Σwᵢ = 0, Σwᵢcᵢ = 0 the
-/// (2n + 4)-unknown system has a unique solution for distinct, non-coplanar centres; it is
-/// solved directly (see the solver in `solve.rs`: null-space method with one Cholesky
-/// factorization, m³/3 flops for m = 2n). Normals are rescaled to unit length. Coplanar
-/// control points are fine: their off-surface points leave the plane.
+/// Centres are the n control points xᵢ (constraint f = 0) and, Hermite-style on both sides
+/// (Carr et al. 2001), n outside points xᵢ + εᵢ⁺nᵢ (f = −s·εᵢ⁺) and n inside points
+/// xᵢ − εᵢ⁻nᵢ (f = +s·εᵢ⁻), so f > 0 inside, f < 0 outside and ∇f ≈ −s·n on the surface, as for
+/// the implicit network. Each offset starts at ε₀ = `epsilon_relative`·D (D: the control
+/// points' bounding diagonal) and is halved, at most [`MAX_HALVINGS`] times, until the offset
+/// point's nearest control point is its own (a k-d tree query per try). With the side
+/// conditions Σwᵢ = 0, Σwᵢcᵢ = 0 the (3n + 4)-unknown system has a unique solution for
+/// distinct, non-coplanar centres. Normals are rescaled to unit length.
 ///
-/// Cost: 576 points (1156 unknowns) take about 0.15 s in release (a single core; the
-/// Cholesky factorization is 85 % of it); time grows as n³, memory as 32·n² bytes.
+/// The system is assembled and solved in the unit-diagonal frame x̂ = (x − o)/D (o: the
+/// bounding box's centre), with c/D = `c_relative`, and mapped back exactly
+/// (f(x) = D·f̂(x̂)): every length is relative to D, so scaled or moved data give the same
+/// surface, scaled or moved, and the same conditioning. The solve is the null-space method
+/// of `solve.rs`: one Cholesky factorization of order 3n − 4 (9n³ flops) by faer, on every
+/// thread of the current rayon pool.
 ///
-/// Nearly coincident points are accepted as long as the interpolation still holds: on the
-/// 96-point torus, two points 10⁻⁷ apart still fit (κ₁ ≈ 10¹⁶, residual 5·10⁻⁸); at 10⁻⁸ the
-/// residual check rejects the fit. The condition estimate is reported, never used to reject.
+/// Cost (see [`MAX_POINTS`]): 1 500 points (4 504 unknowns) take 1–2 s in release on this
+/// project's 2-core machine; time grows as n³ and memory as 72·n² bytes (one 3n×3n matrix).
+///
+/// Nearly coincident points are accepted as long as the interpolation still holds; the
+/// residual check rejects the fit otherwise. The condition estimate is reported, never used to
+/// reject.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for invalid options, fewer than [`MIN_POINTS`] or more than
 /// [`MAX_POINTS`] points, positions and normals of different lengths, non-finite or
-/// zero-length inputs, two centres within [`DUPLICATE_TOLERANCE`] × the bounding-box
-/// diagonal of each other, all
-/// centres coplanar, and a numerically singular system (failed factorization, non-finite
-/// solution, or a residual above [`RESIDUAL_TOLERANCE`]·ε·s).
+/// zero-length inputs, points spanning no volume, two centres within
+/// [`DUPLICATE_TOLERANCE`]·D of each other, all centres coplanar, and a numerically singular
+/// system (failed factorization, non-finite solution, or a residual above
+/// [`RESIDUAL_TOLERANCE`]·s·min εᵢ).
 pub fn fit(points: &PointSet, options: &RbfOptions) -> Result<(RbfModel, RbfReport)> {
     let start = Instant::now();
     options.check()?;
@@ -82,16 +108,35 @@ pub fn fit(points: &PointSet, options: &RbfOptions) -> Result<(RbfModel, RbfRepo
         return Err(Error::invalid(format!(
             "the RBF fit takes at most {MAX_POINTS} control points, got {n}: its dense \
              system of {} unknowns would need {:.1} GB and minutes to factor",
-            2 * n + 4,
-            (2 * n * 2 * n * 8) as f64 / 1e9
+            3 * n + 4,
+            (9 * n * n * 8) as f64 / 1e9
         )));
     }
-    let (centers, targets) = constraints(points, options)?;
-    check_distinct(&centers, n)?;
+    let normals = unit_normals(points)?;
+    let positions = &points.positions;
+    let (center, diagonal) = frame(positions)?;
+    check_distinct(positions, diagonal, n)?;
+    let epsilon = options.epsilon_relative * diagonal;
+    let offsets = Offsets::new(positions, &normals, epsilon)?;
+    let slope = options.slope;
+    let mut centers = positions.clone();
+    let mut targets = vec![0.0; n];
+    for (side, sign) in [(&offsets.outside, 1.0), (&offsets.inside, -1.0)] {
+        for ((p, normal), &e) in positions.iter().zip(&normals).zip(side) {
+            centers.push([0, 1, 2].map(|k| p[k] + sign * e * normal[k]));
+            targets.push(-sign * slope * e);
+        }
+    }
+    check_distinct(&centers, diagonal, n)?;
 
+    // The unit-diagonal frame.
     let m = centers.len();
-    let centroid = centroid(&centers);
-    let rows: Vec<[f64; 4]> = centers
+    let unit: Vec<[f64; 3]> = centers
+        .iter()
+        .map(|c| [0, 1, 2].map(|k| (c[k] - center[k]) / diagonal))
+        .collect();
+    let centroid = centroid(&unit);
+    let rows: Vec<[f64; 4]> = unit
         .iter()
         .map(|c| {
             [
@@ -102,33 +147,49 @@ pub fn fit(points: &PointSet, options: &RbfOptions) -> Result<(RbfModel, RbfRepo
             ]
         })
         .collect();
-    let c2 = options.c2;
-    let kernel = DMatrix::from_fn(m, m, |i, j| {
-        let (a, b) = (centers[i], centers[j]);
-        multiquadric([a[0] - b[0], a[1] - b[1], a[2] - b[2]], c2)
-    });
+    let shape = options.shape();
+    let c2_unit = shape * shape;
+    let mut kernel = vec![0.0; m * m];
+    kernel
+        .par_chunks_mut(m)
+        .enumerate()
+        .for_each(|(j, column)| {
+            let b = unit[j];
+            for (v, a) in column.iter_mut().zip(&unit) {
+                *v = multiquadric([a[0] - b[0], a[1] - b[1], a[2] - b[2]], c2_unit);
+            }
+        });
+    let factor_start = Instant::now();
     let solver = SaddleSolver::new(kernel, &rows)?;
-    let (weights, poly) = solver.solve(&targets, [0.0; 4]);
+    let factorization_seconds = factor_start.elapsed().as_secs_f64();
+    let unit_targets: Vec<f64> = targets.iter().map(|t| t / diagonal).collect();
+    let (weights, poly) = solver.solve(&unit_targets, [0.0; 4]);
     if weights.iter().chain(&poly).any(|v| !v.is_finite()) {
         return Err(singular("its solution is not finite"));
     }
+    // f(x) = D·f̂((x − o)/D) = Σ ŵᵢ √(|x − cᵢ|² + (cD)²) + â·(x − o − D·ḡ) + D·p̂₀.
     let linear = [poly[0], poly[1], poly[2]];
+    let origin: [f64; 3] = [0, 1, 2].map(|k| center[k] + diagonal * centroid[k]);
     let constant =
-        poly[3] - linear[0] * centroid[0] - linear[1] * centroid[1] - linear[2] * centroid[2];
-    let model = RbfModel::new(centers, weights, linear, constant, c2)?;
+        diagonal * poly[3] - linear[0] * origin[0] - linear[1] * origin[1] - linear[2] * origin[2];
+    let c = shape * diagonal;
+    let model = RbfModel::new(centers, weights, linear, constant, c * c)?;
 
     let condition_estimate =
         solver.norm1() * symmetric_inverse_norm1(m + 4, |x| solver.solve_stacked(x));
-    let max_residual = model
+    let residuals: Vec<f64> = model
         .centers()
-        .iter()
+        .par_iter()
         .zip(&targets)
         .map(|(&c, &t)| (model.field(c) - t).abs())
-        .fold(
-            0.0,
-            |worst, r| if r > worst || r.is_nan() { r } else { worst },
-        );
-    let limit = RESIDUAL_TOLERANCE * options.epsilon * options.slope;
+        .collect();
+    let max_residual = residuals.iter().fold(
+        0.0,
+        |worst, &r| {
+            if r > worst || r.is_nan() { r } else { worst }
+        },
+    );
+    let limit = RESIDUAL_TOLERANCE * slope * offsets.min;
     if max_residual.is_nan() || max_residual > limit {
         return Err(singular(&format!(
             "its largest constraint residual is {max_residual:.3e} (limit {limit:.1e})"
@@ -137,7 +198,14 @@ pub fn fit(points: &PointSet, options: &RbfOptions) -> Result<(RbfModel, RbfRepo
     let report = RbfReport {
         points: n,
         unknowns: m + 4,
+        kernel: options.kernel,
+        diagonal,
+        c2: model.c2(),
+        epsilon,
+        halved: offsets.halved,
+        min_epsilon: offsets.min,
         seconds: start.elapsed().as_secs_f64(),
+        factorization_seconds,
         condition_estimate,
         max_residual,
     };
@@ -151,8 +219,8 @@ fn singular(what: &str) -> Error {
     ))
 }
 
-/// The 2n centres (control points, then off-surface points) and their target values.
-fn constraints(points: &PointSet, options: &RbfOptions) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
+/// The normals scaled to unit length, after checking positions and normals.
+fn unit_normals(points: &PointSet) -> Result<Vec<[f64; 3]>> {
     let n = points.len();
     if points.normals.len() != n {
         return Err(Error::invalid(format!(
@@ -160,55 +228,120 @@ fn constraints(points: &PointSet, options: &RbfOptions) -> Result<(Vec<[f64; 3]>
             points.normals.len()
         )));
     }
-    let mut centers = Vec::with_capacity(2 * n);
-    let mut offsets = Vec::with_capacity(n);
-    for (i, (p, normal)) in points.positions.iter().zip(&points.normals).enumerate() {
-        if p.iter().any(|v| !v.is_finite()) {
-            return Err(Error::invalid(format!(
-                "control point {i} has a non-finite coordinate {p:?}"
-            )));
-        }
-        let len = normal.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !(len.is_finite() && len > 1e-12) {
-            return Err(Error::invalid(format!(
-                "control point {i} has an unusable normal {normal:?}"
-            )));
-        }
-        let step = options.epsilon / len;
-        centers.push(*p);
-        offsets.push([
-            p[0] + step * normal[0],
-            p[1] + step * normal[1],
-            p[2] + step * normal[2],
-        ]);
-    }
-    centers.extend(offsets);
-    let mut targets = vec![0.0; n];
-    targets.resize(2 * n, -options.epsilon * options.slope);
-    Ok((centers, targets))
+    points
+        .positions
+        .iter()
+        .zip(&points.normals)
+        .enumerate()
+        .map(|(i, (p, normal))| {
+            if p.iter().any(|v| !v.is_finite()) {
+                return Err(Error::invalid(format!(
+                    "control point {i} has a non-finite coordinate {p:?}"
+                )));
+            }
+            let len = normal.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if !(len.is_finite() && len > 1e-12) {
+                return Err(Error::invalid(format!(
+                    "control point {i} has an unusable normal {normal:?}"
+                )));
+            }
+            Ok(normal.map(|v| v / len))
+        })
+        .collect()
 }
 
-/// Rejects centres closer than [`DUPLICATE_TOLERANCE`] × the bounding-box diagonal
-/// (sort-and-sweep along x: O(m log m) for spread-out points).
-fn check_distinct(centers: &[[f64; 3]], n: usize) -> Result<()> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for c in centers {
+/// The centre and diagonal of the points' bounding box.
+fn frame(positions: &[[f64; 3]]) -> Result<([f64; 3], f64)> {
+    let mut lo = positions[0];
+    let mut hi = lo;
+    for p in positions {
         for k in 0..3 {
-            lo[k] = lo[k].min(c[k]);
-            hi[k] = hi[k].max(c[k]);
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
         }
     }
     let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+    let magnitude = (0..3)
+        .map(|k| lo[k].abs().max(hi[k].abs()))
+        .fold(0.0, f64::max);
+    if !(diagonal.is_finite() && diagonal > 1e-12 * magnitude && diagonal > 0.0) {
+        return Err(Error::invalid(format!(
+            "the control points span no volume: their bounding box is {lo:?} … {hi:?}"
+        )));
+    }
+    Ok(([0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k])), diagonal))
+}
+
+/// The offsets εᵢ⁺ (outside) and εᵢ⁻ (inside) of every control point.
+struct Offsets {
+    outside: Vec<f64>,
+    inside: Vec<f64>,
+    /// How many were halved at least once.
+    halved: usize,
+    /// The smallest.
+    min: f64,
+}
+
+impl Offsets {
+    /// Starts every offset at `epsilon` and halves it until the offset point's nearest
+    /// control point is its own (ties count as its own).
+    fn new(positions: &[[f64; 3]], normals: &[[f64; 3]], epsilon: f64) -> Result<Offsets> {
+        let tree = ImmutableKdTree::new_from_slice(positions)
+            .map_err(|e| Error::invalid(format!("k-d tree construction failed: {e}")))?;
+        let offset = |i: usize, sign: f64| -> Result<(f64, bool)> {
+            let (p, normal) = (positions[i], normals[i]);
+            let mut e = epsilon;
+            for halvings in 0..=MAX_HALVINGS {
+                let q = [0, 1, 2].map(|k| p[k] + sign * e * normal[k]);
+                let nearest = tree
+                    .query(&q)
+                    .nearest_one::<SquaredEuclidean<f64>>()
+                    .execute();
+                let own: f64 = (0..3).map(|k| (q[k] - p[k]) * (q[k] - p[k])).sum();
+                if nearest.item as usize == i || own <= nearest.distance {
+                    return Ok((e, halvings > 0));
+                }
+                e *= 0.5;
+            }
+            Err(Error::invalid(format!(
+                "the {} off-surface point of control point {i} is still nearer another \
+                 control point after {MAX_HALVINGS} halvings of its offset",
+                if sign > 0.0 { "outside" } else { "inside" }
+            )))
+        };
+        let sides: Vec<[(f64, bool); 2]> = (0..positions.len())
+            .into_par_iter()
+            .map(|i| Ok([offset(i, 1.0)?, offset(i, -1.0)?]))
+            .collect::<Result<_>>()?;
+        let halved = sides.iter().flatten().filter(|(_, h)| *h).count();
+        let min = sides
+            .iter()
+            .flatten()
+            .map(|(e, _)| *e)
+            .fold(f64::INFINITY, f64::min);
+        Ok(Offsets {
+            outside: sides.iter().map(|s| s[0].0).collect(),
+            inside: sides.iter().map(|s| s[1].0).collect(),
+            halved,
+            min,
+        })
+    }
+}
+
+/// Rejects centres closer than [`DUPLICATE_TOLERANCE`] × `diagonal` (sort-and-sweep along x:
+/// O(m log m) for spread-out points). The first `n` centres are the control points, then
+/// come the outside and the inside off-surface points.
+fn check_distinct(centers: &[[f64; 3]], diagonal: f64, n: usize) -> Result<()> {
     let tolerance = DUPLICATE_TOLERANCE * diagonal;
     let mut order: Vec<usize> = (0..centers.len()).collect();
     order.sort_by(|&a, &b| centers[a][0].total_cmp(&centers[b][0]));
-    let name = |i: usize| {
-        if i < n {
-            format!("control point {i}")
-        } else {
-            format!("the off-surface point of control point {}", i - n)
-        }
+    let name = |i: usize| match i / n {
+        0 => format!("control point {i}"),
+        1 => format!("the outside off-surface point of control point {}", i - n),
+        _ => format!(
+            "the inside off-surface point of control point {}",
+            i - 2 * n
+        ),
     };
     for (k, &i) in order.iter().enumerate() {
         for &j in &order[k + 1..] {

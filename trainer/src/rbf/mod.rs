@@ -1,6 +1,14 @@
-//! The multiquadric RBF baseline (Carcenac §9): a host-only implicit surface
+//! The RBF baseline (Carcenac §9): a host-only implicit surface
 //! f(x) = Σ wᵢ √(|x − cᵢ|² + c²) + a·x + b interpolating an oriented point set, fitted by one
 //! dense linear solve, for comparison with the neural implicit model.
+//!
+//! A fair peer, as a user would set one up: Hermite-style off-surface points on both sides of
+//! every control point (at ±ε along the normal, ε halved until the point's nearest control
+//! point is its own, Carr et al. 2001), every length relative to the data's bounding diagonal
+//! D (so units and position do not matter), and one dense Cholesky factorization by faer on
+//! every core. The kernel is Carcenac's multiquadric by default (c = 0.0078·D, which is his
+//! c² = 10⁻³ on the Table 5 torus), or the biharmonic φ(r) = r ([`RbfKernel::Biharmonic`]).
+//! `render::RbfField` renders and meshes a model.
 //!
 //! ```
 //! use neurosurf_trainer::PointSet;
@@ -30,7 +38,9 @@ pub use blob::RBF_SCALAR;
 pub use fit::{DUPLICATE_TOLERANCE, RESIDUAL_TOLERANCE, RbfReport, fit};
 pub use kernel::{multiquadric, multiquadric_gradient};
 pub use model::{MAX_CENTERS, RbfModel};
-pub use options::{MAX_POINTS, MIN_POINTS, RbfOptions};
+pub use options::{
+    C_RELATIVE, EPSILON_RELATIVE, MAX_HALVINGS, MAX_POINTS, MIN_POINTS, RbfKernel, RbfOptions,
+};
 
 #[cfg(test)]
 mod tests;

@@ -10,13 +10,24 @@
 //! M is symmetric indefinite. Instead of LU with partial pivoting on M (2m³/3 flops, no use
 //! of the structure) this factors P = Q [R; 0] with four Householder reflectors and writes
 //! w = Q u. The trailing block B₂₂ of B = QᵀAQ is Q₂ᵀAQ₂, A restricted to the null space of
-//! Pᵀ, where the multiquadric is *conditionally negative definite* (Micchelli 1986): for
-//! distinct centres −B₂₂ is symmetric positive definite. So one Cholesky factorization of
-//! −B₂₂ (m³/3 flops, half the LU's, backward stable without pivoting) solves M, and its
-//! failure is a reliable "numerically singular" signal (coincident centres). The reflectors
-//! cost O(m²).
+//! Pᵀ, where the multiquadric (and its c = 0 limit, the biharmonic r) is *conditionally
+//! negative definite* (Micchelli 1986): for distinct centres −B₂₂ is symmetric positive
+//! definite. So one Cholesky factorization of −B₂₂ (m³/3 flops, half the LU's, backward
+//! stable without pivoting) solves M, and its failure is a reliable "numerically singular"
+//! signal (coincident centres).
+//!
+//! Everything happens in one m×m column-major buffer: the kernel matrix is assembled into it,
+//! the reflectors are applied to it in place (O(m²) each, columns in parallel), and faer's
+//! blocked Cholesky factors its trailing block in place on every core of the current rayon
+//! pool. Peak memory is 8m² bytes.
 
-use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
+use faer::{MatMut, MatRef, Par};
+use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 
@@ -34,36 +45,64 @@ pub(super) struct SaddleSolver {
     r: [[f64; 4]; 4],
     /// The first four rows of B = QᵀAQ, row-major (4 × m).
     top: Vec<f64>,
-    /// Cholesky factor of −B₂₂.
-    cholesky: Cholesky<f64, Dyn>,
+    /// The m×m buffer, column-major; the lower triangle of its trailing (m − 4)² block is
+    /// the Cholesky factor L of −B₂₂.
+    data: Vec<f64>,
     /// ‖M‖₁ (maximum absolute column sum), as assembled.
     norm1: f64,
+    par: Par,
+}
+
+/// faer's parallelism for the current rayon pool (sequential in a one-thread pool).
+fn parallelism() -> Par {
+    match rayon::current_num_threads() {
+        0 | 1 => Par::Seq,
+        n => Par::rayon(n),
+    }
 }
 
 impl SaddleSolver {
-    /// Factors M from the kernel matrix `a` (symmetric, consumed) and the polynomial rows
-    /// `p` (one `[x, y, z, 1]` per centre).
+    /// Factors M from the kernel matrix `a` (m×m column-major, symmetric, consumed) and the
+    /// polynomial rows `p` (one `[x, y, z, 1]` per centre).
     ///
     /// # Errors
     /// [`Error::InvalidInput`] when the centres are coplanar (P rank-deficient) or −B₂₂ is
     /// not numerically positive definite (coincident or nearly coincident centres).
-    pub(super) fn new(mut a: DMatrix<f64>, p: &[[f64; 4]]) -> Result<Self> {
+    pub(super) fn new(mut data: Vec<f64>, p: &[[f64; 4]]) -> Result<Self> {
         let m = p.len();
-        debug_assert!(a.nrows() == m && a.ncols() == m && m > 4);
-        let norm1 = saddle_norm1(&a, p);
+        assert!(m > 4 && data.len() == m * m, "an m×m kernel matrix, m > 4");
+        let norm1 = saddle_norm1(&data, p);
         let (reflectors, r) = householder_qr(p)?;
         for reflector in &reflectors {
-            reflect_both_sides(&mut a, reflector);
+            reflect_both_sides(&mut data, reflector);
         }
         let mut top = vec![0.0; 4 * m];
-        for k in 0..4 {
-            for j in 0..m {
-                top[k * m + j] = a[(k, j)];
+        for j in 0..m {
+            for k in 0..4 {
+                top[k * m + j] = data[j * m + k];
             }
         }
-        let mut reduced = a.remove_rows(0, 4).remove_columns(0, 4);
-        reduced.neg_mut();
-        let cholesky = Cholesky::new(reduced).ok_or_else(|| {
+        // −B₂₂, lower triangle only (all the factorization reads).
+        data.par_chunks_mut(m)
+            .enumerate()
+            .skip(4)
+            .for_each(|(j, column)| {
+                for v in &mut column[j..] {
+                    *v = -*v;
+                }
+            });
+        let par = parallelism();
+        let n = m - 4;
+        let mut memory =
+            MemBuffer::new(cholesky_in_place_scratch::<f64>(n, par, Default::default()));
+        cholesky_in_place(
+            MatMut::from_column_major_slice_with_stride_mut(&mut data[4 * m + 4..], n, n, m),
+            Default::default(),
+            par,
+            MemStack::new(&mut memory),
+            Default::default(),
+        )
+        .map_err(|_| {
             Error::invalid(
                 "the RBF system is numerically singular (its reduced kernel matrix is not \
                  definite): some control points or off-surface points nearly coincide",
@@ -74,14 +113,21 @@ impl SaddleSolver {
             reflectors,
             r,
             top,
-            cholesky,
+            data,
             norm1,
+            par,
         })
     }
 
     /// ‖M‖₁ of the assembled matrix.
     pub(super) fn norm1(&self) -> f64 {
         self.norm1
+    }
+
+    /// The Cholesky factor L of −B₂₂ (lower triangle; the strict upper one is not L's).
+    fn factor(&self) -> MatRef<'_, f64> {
+        let (m, n) = (self.m, self.m - 4);
+        MatRef::from_column_major_slice_with_stride(&self.data[4 * m + 4..], n, n, m)
     }
 
     /// Solves M [w; p] = [d; e]: returns w (length m) and p.
@@ -102,18 +148,21 @@ impl SaddleSolver {
             }
             u1[k] = s / r[k][k];
         }
-        // −B₂₂ u₂ = −(g₂ − B₂₁ u₁).
-        let mut rhs = DVector::from_fn(m - 4, |i, _| {
+        // −B₂₂ u₂ = −(g₂ − B₂₁ u₁), with −B₂₂ = L Lᵀ.
+        let mut u: Vec<f64> = u1.to_vec();
+        u.extend((0..m - 4).map(|i| {
             let mut s = -g[4 + i];
             for k in 0..4 {
                 s += self.top[k * m + 4 + i] * u1[k];
             }
             s
-        });
-        self.cholesky.solve_mut(&mut rhs);
-        let mut u = Vec::with_capacity(m);
-        u.extend_from_slice(&u1);
-        u.extend(rhs.iter());
+        }));
+        {
+            let mut rhs = MatMut::from_column_major_slice_mut(&mut u[4..], m - 4, 1);
+            let factor = self.factor();
+            solve_lower_triangular_in_place(factor, rhs.as_mut(), self.par);
+            solve_upper_triangular_in_place(factor.transpose(), rhs, self.par);
+        }
         // R p = g₁ − B₁₁ u₁ − B₁₂ u₂ (back substitution).
         let mut t = [0.0; 4];
         for k in 0..4 {
@@ -163,18 +212,19 @@ impl Reflector {
     }
 }
 
-/// ‖M‖₁ for M = [A P; Pᵀ 0] (A symmetric, so column sums are row sums).
-fn saddle_norm1(a: &DMatrix<f64>, p: &[[f64; 4]]) -> f64 {
-    let mut norm: f64 = 0.0;
-    for (j, row) in p.iter().enumerate() {
-        let column: f64 = a.column(j).iter().map(|v| v.abs()).sum::<f64>()
-            + row.iter().map(|v| v.abs()).sum::<f64>();
-        norm = norm.max(column);
-    }
-    for k in 0..4 {
-        norm = norm.max(p.iter().map(|row| row[k].abs()).sum());
-    }
-    norm
+/// ‖M‖₁ for M = [A P; Pᵀ 0] (A symmetric, so column sums are row sums), columns in parallel.
+fn saddle_norm1(a: &[f64], p: &[[f64; 4]]) -> f64 {
+    let m = p.len();
+    let kernel = a
+        .par_chunks(m)
+        .zip(p.par_iter())
+        .map(|(column, row)| {
+            column.iter().map(|v| v.abs()).sum::<f64>() + row.iter().map(|v| v.abs()).sum::<f64>()
+        })
+        .reduce(|| 0.0, f64::max);
+    (0..4)
+        .map(|k| p.iter().map(|row| row[k].abs()).sum::<f64>())
+        .fold(kernel, f64::max)
 }
 
 /// Householder QR of the m×4 matrix with rows `p`: the reflectors and R.
@@ -212,31 +262,26 @@ fn householder_qr(p: &[[f64; 4]]) -> Result<(Vec<Reflector>, [[f64; 4]; 4])> {
     Ok((reflectors, r))
 }
 
-/// A ← H A H for symmetric A and H = I − τvvᵀ, as the symmetric rank-2 update
-/// A − v qᵀ − q vᵀ with q = τAv − (τ²/2)(vᵀAv) v.
-fn reflect_both_sides(a: &mut DMatrix<f64>, reflector: &Reflector) {
+/// A ← H A H for symmetric A (m×m, column-major) and H = I − τvvᵀ, as the symmetric rank-2
+/// update A − v qᵀ − q vᵀ with q = τAv − (τ²/2)(vᵀAv) v; columns in parallel.
+fn reflect_both_sides(a: &mut [f64], reflector: &Reflector) {
     let (v, tau) = (reflector.v.as_slice(), reflector.tau);
     let m = v.len();
-    let mut q = vec![0.0; m];
-    for (j, &vj) in v.iter().enumerate() {
-        if vj != 0.0 {
-            for (qi, aij) in q.iter_mut().zip(a.column(j).iter()) {
-                *qi += tau * vj * aij;
-            }
-        }
-    }
+    // (Av)ᵢ = Σⱼ Aᵢⱼvⱼ = (column i)·v, A being symmetric.
+    let mut q: Vec<f64> = a
+        .par_chunks(m)
+        .map(|column| tau * column.iter().zip(v).map(|(x, y)| x * y).sum::<f64>())
+        .collect();
     let half = 0.5 * tau * v.iter().zip(&q).map(|(x, y)| x * y).sum::<f64>();
     for (qi, vi) in q.iter_mut().zip(v) {
         *qi -= half * vi;
     }
-    let data = a.as_mut_slice();
-    for j in 0..m {
+    a.par_chunks_mut(m).enumerate().for_each(|(j, column)| {
         let (vj, qj) = (v[j], q[j]);
-        let column = &mut data[j * m..(j + 1) * m];
-        for i in 0..m {
-            column[i] -= v[i] * qj + q[i] * vj;
+        for ((x, vi), qi) in column.iter_mut().zip(v).zip(&q) {
+            *x -= vi * qj + qi * vj;
         }
-    }
+    });
 }
 
 fn norm2(x: &[f64]) -> f64 {

@@ -94,20 +94,40 @@ fn sphere_constraints_are_interpolated() {
     let options = RbfOptions::default();
     let (model, report) = fit(&points, &options).unwrap();
     assert_eq!(report.points, 150);
-    assert_eq!(report.unknowns, 304);
-    assert_eq!(model.parameter_count(), 304);
-    assert_eq!(model.centers().len(), 300);
+    assert_eq!(report.unknowns, 454);
+    assert_eq!(model.parameter_count(), 454);
+    assert_eq!(model.centers().len(), 450);
+    assert_eq!(model.kernel(), RbfKernel::Multiquadric);
+    // Every length is a fraction of the bounding diagonal.
+    let diagonal = report.diagonal;
+    assert!(
+        (diagonal - 0.8 * 12.0_f64.sqrt()).abs() < 0.02,
+        "{report:?}"
+    );
+    assert!((report.epsilon - EPSILON_RELATIVE * diagonal).abs() < 1e-15);
+    assert!((report.c2 - (C_RELATIVE * diagonal).powi(2)).abs() < 1e-15);
+    assert_eq!((report.halved, report.min_epsilon), (0, report.epsilon));
     assert!(report.max_residual < 1e-10, "{report:?}");
     assert!(report.condition_estimate > 1.0 && report.condition_estimate.is_finite());
-    let target = -options.epsilon * options.slope;
-    for (p, n) in points.positions.iter().zip(&points.normals) {
-        assert!(model.field(*p).abs() < 1e-8);
-        let off = model.field(offset(*p, *n, options.epsilon));
-        assert!((off - target).abs() < 1e-8, "{off} vs {target}");
-        // The surface normal points outward.
+    let (epsilon, s) = (report.epsilon, options.slope);
+    for (i, (p, n)) in points.positions.iter().zip(&points.normals).enumerate() {
+        assert!(model.field(*p).abs() < 1e-10);
+        // Two-sided, Hermite-style: −s·ε outside, +s·ε inside.
+        let outside = offset(*p, *n, epsilon);
+        let inside = offset(*p, *n, -epsilon);
+        for (centre, expected) in [(150 + i, outside), (300 + i, inside)] {
+            let c = model.centers()[centre];
+            assert!((0..3).all(|k| (c[k] - expected[k]).abs() < 1e-15), "{c:?}");
+        }
+        assert!((model.field(outside) + s * epsilon).abs() < 1e-10);
+        assert!((model.field(inside) - s * epsilon).abs() < 1e-10);
+        // The surface normal points outward, and the slope is about s.
+        let (_, g) = model.field_gradient(*p);
         let normal = model.normal(*p).unwrap();
         let cos: f64 = (0..3).map(|k| normal[k] * n[k]).sum();
         assert!(cos > 0.99, "{cos}");
+        let slope = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        assert!((slope - s).abs() < 0.1 * s, "{slope}");
     }
     // Polynomial side conditions hold.
     let scale: f64 = model.weights().iter().map(|w| w.abs()).sum();
@@ -126,6 +146,16 @@ fn sphere_constraints_are_interpolated() {
     assert!(model.field([0.0; 3]) > 0.0);
     assert!(model.field([2.0, 0.3, -0.1]) < 0.0);
     println!("sphere 150: {report:?}");
+}
+
+#[test]
+fn default_c_is_carcenacs_on_the_table5_torus() {
+    // The torus R = 1, r = 0.4 spans [−1.4, 1.4]² × [−0.4, 0.4]: D² = 16.32.
+    let c = C_RELATIVE * 16.32_f64.sqrt();
+    assert!((c * c - 1e-3).abs() < 1e-17, "{}", c * c);
+    // A sample of it has a slightly shorter diagonal, so c² is within a few percent of 10⁻³.
+    let (_, report) = fit(&torus(96, 3), &RbfOptions::default()).unwrap();
+    assert!(report.c2 < 1e-3 && report.c2 > 0.95e-3, "{report:?}");
 }
 
 #[test]
@@ -203,11 +233,6 @@ fn rejects_bad_input() {
         "control point 3 and control point 7 coincide"
     ));
 
-    // A control point sitting on another's off-surface point.
-    let mut collide = sphere(20, 1.0);
-    collide.positions[5] = offset(collide.positions[2], collide.normals[2], options.epsilon);
-    assert!(is_invalid(fit(&collide, &options), "coincide"));
-
     let mut nan = sphere(20, 1.0);
     nan.positions[4][1] = f64::NAN;
     assert!(is_invalid(fit(&nan, &options), "control point 4"));
@@ -237,11 +262,11 @@ fn rejects_bad_input() {
 
     for bad in [
         RbfOptions {
-            c2: 0.0,
+            c_relative: 0.0,
             ..options.clone()
         },
         RbfOptions {
-            epsilon: f64::NAN,
+            epsilon_relative: f64::NAN,
             ..options.clone()
         },
         RbfOptions {
@@ -254,6 +279,32 @@ fn rejects_bad_input() {
             "must be finite and positive"
         ));
     }
+    for (bad, needle) in [
+        (
+            RbfOptions {
+                epsilon_relative: 0.5,
+                ..options.clone()
+            },
+            "below 0.5",
+        ),
+        (
+            RbfOptions {
+                c_relative: 2.0,
+                ..options.clone()
+            },
+            "at most 1",
+        ),
+    ] {
+        assert!(is_invalid(fit(&sphere(20, 1.0), &bad), needle));
+    }
+
+    // All points in one spot: no volume, no diagonal to measure lengths by.
+    let spot = PointSet {
+        positions: vec![[1.0, 2.0, 3.0]; 5],
+        normals: vec![[0.0, 0.0, 1.0]; 5],
+        features: None,
+    };
+    assert!(is_invalid(fit(&spot, &options), "span no volume"));
 }
 
 #[test]
@@ -376,7 +427,11 @@ fn blob_rejects_bad_bytes() {
         BlobError::NonFiniteParameter { index: 6 }
     ));
     values[6] = 0.0;
+    // c² = 0 is the biharmonic kernel; negative is refused.
     values[0] = 0.0;
+    let biharmonic = RbfModel::from_blob(&build(1, &values, ModelKind::Rbf), path).unwrap();
+    assert_eq!(biharmonic.kernel(), RbfKernel::Biharmonic);
+    values[0] = -1e-3;
     assert!(matches!(
         RbfModel::from_blob(&build(1, &values, ModelKind::Rbf), path),
         Err(Error::Format { .. })
@@ -409,7 +464,7 @@ fn model_new_validates() {
     assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], 0.0, 1e-3).is_ok());
     assert!(RbfModel::new(vec![], vec![], [0.0; 3], 0.0, 1e-3).is_err());
     assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0, 2.0], [0.0; 3], 0.0, 1e-3).is_err());
-    assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], 0.0, 0.0).is_err());
+    assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], 0.0, -1e-3).is_err());
     assert!(RbfModel::new(vec![[f64::NAN; 3]], vec![1.0], [0.0; 3], 0.0, 1e-3).is_err());
     assert!(RbfModel::new(vec![[0.0; 3]], vec![1.0], [0.0; 3], f64::NAN, 1e-3).is_err());
     // φ(0) = c, so one unit weight at the origin gives f = √c² there.
@@ -417,6 +472,16 @@ fn model_new_validates() {
     assert_eq!(model.field([0.0; 3]), 0.5);
     assert_eq!(model.field_gradient([0.0; 3]).1, [0.0; 3]);
     assert_eq!(model.normal([0.0; 3]), None);
+    // c² = 0: the biharmonic |x − c|, without a gradient at its centre (taken as 0).
+    let model = RbfModel::new(vec![[1.0, 0.0, 0.0]], vec![2.0], [0.0; 3], 0.5, 0.0).unwrap();
+    assert_eq!(model.kernel(), RbfKernel::Biharmonic);
+    assert_eq!(model.field([1.0, 3.0, 4.0]), 10.5);
+    assert_eq!(model.field_gradient([1.0, 0.0, 0.0]), (0.5, [0.0; 3]));
+    let (_, g) = model.field_gradient([1.0, 3.0, 4.0]);
+    assert!(
+        (g[1] - 1.2).abs() < 1e-15 && (g[2] - 1.6).abs() < 1e-15,
+        "{g:?}"
+    );
 }
 
 #[test]
@@ -443,7 +508,8 @@ fn saddle_solver_matches_lu_and_condition_estimate_is_close() {
         (false, true) => rows[j][i - m],
         (false, false) => 0.0,
     });
-    let solver = SaddleSolver::new(DMatrix::from_fn(m, m, kernel), &rows).unwrap();
+    let column_major = (0..m * m).map(|k| kernel(k % m, k / m)).collect();
+    let solver = SaddleSolver::new(column_major, &rows).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     let rhs: Vec<f64> = (0..m + 4).map(|_| rng.random_range(-1.0..1.0)).collect();
     let ours = solver.solve_stacked(&rhs);
@@ -463,4 +529,334 @@ fn saddle_solver_matches_lu_and_condition_estimate_is_close() {
     let estimate = symmetric_inverse_norm1(m + 4, |x| solver.solve_stacked(x));
     println!("‖M⁻¹‖₁ exact {exact:.4e}, estimate {estimate:.4e}");
     assert!(estimate <= exact * (1.0 + 1e-6) && estimate >= exact / 3.0);
+}
+
+/// The nearest control point (of the first `n` centres) to `q`, by brute force.
+fn nearest_control_point(model: &RbfModel, n: usize, q: [f64; 3]) -> (usize, f64) {
+    model.centers()[..n]
+        .iter()
+        .map(|c| (0..3).map(|k| (q[k] - c[k]).powi(2)).sum::<f64>())
+        .enumerate()
+        .fold(
+            (0, f64::INFINITY),
+            |best, (i, d)| if d < best.1 { (i, d) } else { best },
+        )
+}
+
+/// Checks Carr et al.'s rule on every off-surface point of a fitted model: its nearest control
+/// point is its own, it lies on its control point's normal line at εᵢ ≤ ε₀, and the field
+/// there is ∓s·εᵢ. Returns the offsets (outside, inside).
+fn check_offsets(model: &RbfModel, points: &PointSet, report: &RbfReport) -> Vec<[f64; 2]> {
+    let n = points.len();
+    let s = RbfOptions::default().slope;
+    (0..n)
+        .map(|i| {
+            let p = points.positions[i];
+            [1, 2].map(|side| {
+                let q = model.centers()[side * n + i];
+                let e = (0..3).map(|k| (q[k] - p[k]).powi(2)).sum::<f64>().sqrt();
+                let (nearest, d2) = nearest_control_point(model, n, q);
+                let own: f64 = (0..3).map(|k| (q[k] - p[k]).powi(2)).sum();
+                assert!(
+                    nearest == i || own <= d2,
+                    "point {i} side {side}: nearest {nearest}"
+                );
+                assert!(e <= report.epsilon * (1.0 + 1e-12) && e >= report.min_epsilon * 0.999);
+                let target = if side == 1 { -s * e } else { s * e };
+                assert!((model.field(q) - target).abs() < 1e-9 * s * report.diagonal);
+                e
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn offsets_are_halved_until_their_nearest_control_point_is_their_own() {
+    // A control point sitting exactly on another's outside off-surface point: that offset
+    // must shrink (once is enough: at ε₀/2 the own point is nearer).
+    let options = RbfOptions::default();
+    let mut collide = sphere(20, 1.0);
+    let (_, plain) = fit(&collide, &options).unwrap();
+    assert_eq!(plain.halved, 0);
+    collide.positions[5] = offset(collide.positions[2], collide.normals[2], plain.epsilon);
+    let (model, report) = fit(&collide, &options).unwrap();
+    let offsets = check_offsets(&model, &collide, &report);
+    assert!(report.halved >= 1, "{report:?}");
+    assert!(
+        (offsets[2][0] - 0.5 * report.epsilon).abs() < 1e-12,
+        "{:?}",
+        offsets[2]
+    );
+    assert!(
+        (offsets[2][1] - report.epsilon).abs() < 1e-15,
+        "{:?}",
+        offsets[2]
+    );
+    assert!(report.max_residual < 1e-10, "{report:?}");
+
+    // A thin slab: two parallel 7×7 sheets 0.4 % of the diagonal apart, normals facing away.
+    // Every inside offset (1 % of D) would reach past the other sheet; it is halved three
+    // times (to 0.125 % of D: nearer its own point than the other sheet's, 0.4 % − 0.125 %
+    // away; at 0.25 % it was not), the outside ones never.
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for (z, nz) in [(0.0, -1.0), (0.02, 1.0)] {
+        for i in 0..49 {
+            positions.push([(i % 7) as f64 * 0.6, (i / 7) as f64 * 0.6, z]);
+            normals.push([0.0, 0.0, nz]);
+        }
+    }
+    let slab = PointSet {
+        positions,
+        normals,
+        features: None,
+    };
+    let (model, report) = fit(&slab, &options).unwrap();
+    let offsets = check_offsets(&model, &slab, &report);
+    assert_eq!(report.halved, 98, "{report:?}");
+    for [outside, inside] in offsets {
+        assert!((outside - report.epsilon).abs() < 1e-15, "{outside}");
+        assert!(
+            (inside - 0.125 * report.epsilon).abs() < 1e-12 * report.diagonal,
+            "{inside}"
+        );
+    }
+    // Inside the slab, between two control points, the field is positive; outside, negative.
+    assert!(model.field([1.2, 1.8, 0.01]) > 0.0);
+    assert!(model.field([1.2, 1.8, -0.01]) < 0.0 && model.field([1.2, 1.8, 0.03]) < 0.0);
+}
+
+/// `points` scaled by `scale` about the origin, then moved by `shift`.
+fn transformed(points: &PointSet, scale: f64, shift: [f64; 3]) -> PointSet {
+    PointSet {
+        positions: points
+            .positions
+            .iter()
+            .map(|p| [0, 1, 2].map(|k| scale * p[k] + shift[k]))
+            .collect(),
+        normals: points.normals.clone(),
+        features: None,
+    }
+}
+
+#[test]
+fn scaled_and_moved_points_give_the_same_surface() {
+    // f_T(T x) = λ·f(x) for T x = λx + t: the same zero set, mapped, with the same slope.
+    let points = torus(96, 7);
+    for kernel in [RbfKernel::Multiquadric, RbfKernel::Biharmonic] {
+        let options = RbfOptions {
+            kernel,
+            ..RbfOptions::default()
+        };
+        let (model, report) = fit(&points, &options).unwrap();
+        let unit = options.slope * report.diagonal;
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let probes: Vec<[f64; 3]> = (0..300)
+            .map(|_| std::array::from_fn(|k| rng.random_range(-1.5..1.5) * [1.0, 1.0, 0.4][k]))
+            .collect();
+        for (scale, shift) in [
+            (0.01, [0.0; 3]),
+            (100.0, [0.0; 3]),
+            (1.0, [1000.0, -1000.0, 500.0]),
+            (0.01, [1000.0, -1000.0, 500.0]),
+            (100.0, [1000.0, -1000.0, 500.0]),
+        ] {
+            let moved = transformed(&points, scale, shift);
+            let (other, r) = fit(&moved, &options).unwrap();
+            assert!(
+                (r.diagonal / report.diagonal - scale).abs() < 1e-9 * scale,
+                "{r:?}"
+            );
+            assert_eq!(r.halved, report.halved);
+            assert!(
+                (r.c2 / report.c2.max(1e-300) - scale * scale).abs() < 1e-9 * scale * scale
+                    || r.c2 == 0.0
+            );
+            // Conditioning does not depend on units or position.
+            let kappa = r.condition_estimate / report.condition_estimate;
+            assert!((0.5..2.0).contains(&kappa), "{kappa}: {r:?} vs {report:?}");
+            let mut worst: f64 = 0.0;
+            for p in &probes {
+                let q = [0, 1, 2].map(|k| scale * p[k] + shift[k]);
+                let (f, g) = model.field_gradient(*p);
+                let (fo, go) = other.field_gradient(q);
+                worst = worst.max((fo / scale - f).abs() / unit);
+                for k in 0..3 {
+                    assert!(
+                        (go[k] - g[k]).abs() < 1e-6 * options.slope,
+                        "{g:?} vs {go:?}"
+                    );
+                }
+            }
+            // Field differences (relative to s·D) far below the fit's own error.
+            assert!(worst < 1e-8, "{kernel:?} ×{scale} +{shift:?}: {worst:e}");
+            println!("{kernel:?} ×{scale} +{shift:?}: largest difference {worst:.1e} s·D");
+        }
+    }
+}
+
+/// The Stanford bunny (a scan in metres, diagonal ≈ 0.25) of `data/`.
+fn bunny(n: usize, seed: u64) -> PointSet {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/stanford-bunny.obj");
+    let mesh = crate::io::read_mesh(&path).expect("the bunny ships in data/");
+    crate::sample::sample_mesh(&mesh, n, seed).unwrap()
+}
+
+#[test]
+fn the_bunny_in_metres_fits() {
+    // 1 000 points of the bunny: the absolute c² = 10⁻³ and ε = 0.01 of the one-sided fit
+    // made this "numerically singular" (residual 3.7·10⁻⁷, limit 5·10⁻⁸); relative lengths
+    // fit it cleanly.
+    let points = bunny(1000, 1);
+    let (model, report) = fit(&points, &RbfOptions::default()).unwrap();
+    println!("bunny 1000: {report:?}");
+    assert!(report.diagonal > 0.2 && report.diagonal < 0.3, "{report:?}");
+    assert!(report.max_residual < 1e-10 * report.diagonal, "{report:?}");
+    // Held-out points of the scan lie close to the zero set (median under 0.2 % of D).
+    let held_out = bunny(2000, 77);
+    let f =
+        crate::fidelity::Fidelity::measure(&held_out, report.diagonal, |p| model.field_gradient(p))
+            .unwrap();
+    assert!(f.median_distance_percent < 0.2, "{f:?}");
+    assert!(f.median_angle_degrees < 10.0, "{f:?}");
+}
+
+#[test]
+fn biharmonic_interpolates_and_has_exact_gradients() {
+    let options = RbfOptions {
+        kernel: RbfKernel::Biharmonic,
+        ..RbfOptions::default()
+    };
+    let points = torus(160, 2);
+    let (model, report) = fit(&points, &options).unwrap();
+    assert_eq!(
+        (model.kernel(), report.kernel, report.c2),
+        (RbfKernel::Biharmonic, RbfKernel::Biharmonic, 0.0)
+    );
+    assert!(report.max_residual < 1e-10, "{report:?}");
+    let (distance, angle) = fidelity(&model, &torus(2000, 99));
+    println!("biharmonic torus 160: {distance:.3} % of D, {angle:.2}°, {report:?}");
+    assert!(distance < 0.1 && angle < 1.5, "{distance} {angle}");
+    check_gradient(&|p| model.field_gradient(p), &|p| model.field(p), 1.6);
+}
+
+/// Central differences of `value` against `gradient` at random points of [−r, r]³.
+fn check_gradient(
+    gradient: &dyn Fn([f64; 3]) -> (f64, [f64; 3]),
+    value: &dyn Fn([f64; 3]) -> f64,
+    r: f64,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let h = 1e-5;
+    for _ in 0..50 {
+        let p: [f64; 3] = std::array::from_fn(|_| rng.random_range(-r..r));
+        let (v, g) = gradient(p);
+        assert_eq!(v.to_bits(), value(p).to_bits());
+        for k in 0..3 {
+            let (mut plus, mut minus) = (p, p);
+            plus[k] += h;
+            minus[k] -= h;
+            let numeric = (value(plus) - value(minus)) / (2.0 * h);
+            let tolerance = 1e-6 * (1.0 + g[k].abs());
+            assert!(
+                (numeric - g[k]).abs() < tolerance,
+                "∂{k} at {p:?}: {numeric} vs {}",
+                g[k]
+            );
+        }
+    }
+}
+
+#[test]
+fn rbf_field_evaluates_in_parallel_with_exact_gradients() {
+    use crate::render::{DEFAULT_RBF_INFLATE, Field, RbfField};
+
+    let (model, _) = fit(&torus(96, 3), &RbfOptions::default()).unwrap();
+    let field = RbfField::new(&model, DEFAULT_RBF_INFLATE).unwrap();
+    check_gradient(&|p| field.value_gradient(p), &|p| field.value(p), 1.6);
+    // Batches (in parallel) agree bit for bit with single points.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let points: Vec<[f64; 3]> = (0..1000)
+        .map(|_| std::array::from_fn(|_| rng.random_range(-1.6..1.6)))
+        .collect();
+    let mut values = vec![0.0; points.len()];
+    let mut gradients = vec![(0.0, [0.0; 3]); points.len()];
+    field.values(&points, &mut values);
+    field.value_gradients(&points, &mut gradients);
+    for ((p, v), vg) in points.iter().zip(&values).zip(&gradients) {
+        assert_eq!(v.to_bits(), model.field(*p).to_bits());
+        assert_eq!(*vg, model.field_gradient(*p));
+    }
+    // The packed, vectorized sums agree with the plain kernel sum to rounding.
+    for p in &points[..50] {
+        let a = model.linear();
+        let mut plain = model.constant() + a[0] * p[0] + a[1] * p[1] + a[2] * p[2];
+        let mut plain_g = a;
+        for (c, w) in model.centers().iter().zip(model.weights()) {
+            let (phi, g) =
+                multiquadric_gradient([p[0] - c[0], p[1] - c[1], p[2] - c[2]], model.c2());
+            plain += w * phi;
+            for k in 0..3 {
+                plain_g[k] += w * g[k];
+            }
+        }
+        let (v, g) = model.field_gradient(*p);
+        assert!((v - plain).abs() < 1e-10, "{v} vs {plain}");
+        assert!(
+            (0..3).all(|k| (g[k] - plain_g[k]).abs() < 1e-9),
+            "{g:?} vs {plain_g:?}"
+        );
+    }
+    // One region: the centres' bounding box (which holds the off-surface points), grown.
+    let [region] = field.regions() else {
+        panic!("one region")
+    };
+    let (lo, hi) = model.bounds();
+    for k in 0..3 {
+        let half = 0.5 * (hi[k] - lo[k]);
+        let grown = (region.bounds.hi[k] - region.bounds.lo[k]) * 0.5;
+        assert!(
+            (grown - DEFAULT_RBF_INFLATE * half).abs() < 1e-12,
+            "{k}: {grown} vs {half}"
+        );
+    }
+    assert!(RbfField::new(&model, 0.5).is_err());
+}
+
+/// Fits 1 500 points of the bunny and measures the surface against the scan; run with
+/// `cargo test --release -p neurosurf-trainer rbf::tests::bunny_quality -- --ignored --nocapture`.
+#[test]
+#[ignore = "timing and quality on the bunny; run in release"]
+fn bunny_quality() {
+    use crate::quality::{Truth, two_sided};
+    use crate::render::{DEFAULT_RBF_INFLATE, RbfField};
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/stanford-bunny.obj");
+    let mesh = crate::io::read_mesh(&path).unwrap();
+    let truth = Truth::from_mesh(&mesh).unwrap();
+    let points = crate::sample::sample_mesh(&mesh, 1500, 1).unwrap();
+    for kernel in [RbfKernel::Multiquadric, RbfKernel::Biharmonic] {
+        let options = RbfOptions {
+            kernel,
+            ..RbfOptions::default()
+        };
+        let (model, report) = fit(&points, &options).unwrap();
+        println!("bunny 1500 {kernel:?}: {report:?}");
+        let field = RbfField::new(&model, DEFAULT_RBF_INFLATE).unwrap();
+        let start = std::time::Instant::now();
+        let measured = two_sided(&field, &truth, 128, 64).unwrap();
+        println!(
+            "  scan vertices → RBF surface: median {:.4} % of D, p90 {:.4} %, max {:.3} %; \
+             RBF surface → scan: median {:.4} %, max {:.3} %; normals {:.2}°; {} pieces; \
+             measured in {:.1} s\n  {measured:?}",
+            measured.truth_to_model.median_percent,
+            measured.truth_to_model.p90_percent,
+            measured.truth_to_model.max_percent,
+            measured.model_to_truth.median_percent,
+            measured.model_to_truth.max_percent,
+            measured.normal_median_degrees,
+            measured.mesh.components,
+            start.elapsed().as_secs_f64()
+        );
+    }
 }

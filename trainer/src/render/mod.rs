@@ -2,7 +2,8 @@
 //!
 //! - [`Field`]: what is rendered — the core in `f32` ([`CoreField`]: what a microcontroller
 //!   computes, and the fastest on the host), the `f64` network with interval bounds
-//!   ([`NetworkField`]), or an analytic sphere ([`SphereField`]);
+//!   ([`NetworkField`]), the RBF baseline in `f64` ([`RbfField`]), or an analytic sphere
+//!   ([`SphereField`]);
 //! - [`Region`]: the leaf modules' inflated normalization boxes, where the surface is assumed
 //!   to lie (§6, Fig. 5);
 //! - [`Camera`] and [`View`]: a pinhole camera and an orbit around the scene;
@@ -30,7 +31,10 @@ mod shade;
 
 pub use camera::{Camera, MAX_SIDE, View};
 pub use compare::{MAX_DENSE_SAMPLES, MethodComparison, compare_methods, dense_hit};
-pub use field::{CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, Field, NetworkField, SphereField};
+pub use field::{
+    CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, Field, NetworkField,
+    RbfField, SphereField,
+};
 pub use interval::Interval;
 pub use mesh::{BLOCK, ExtractedMesh, MAX_RESOLUTION, MeshGrid, MeshStats, extract_mesh};
 pub use octree::{MAX_DEPTH, Octree, PROBE_GRID, PROBE_REACH};
