@@ -10,7 +10,7 @@ use std::time::Instant;
 use neurosurf_core::scalar::ScalarKind;
 use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions};
 use neurosurf_trainer::io::{Mesh, data_file, read_mesh};
-use neurosurf_trainer::quality::{TwoSided, Truth, two_sided};
+use neurosurf_trainer::quality::{Truth, TwoSided, two_sided};
 use neurosurf_trainer::render::{CoreField, Field, Region, extract_mesh};
 use neurosurf_trainer::sample::sample_mesh;
 
@@ -86,8 +86,18 @@ struct Case {
 fn cases(filter: &[String]) -> Vec<Case> {
     let obj = |name: &str| read_mesh(&data_file(name).expect("data")).expect("mesh");
     let all: Vec<(&'static str, Box<dyn Fn() -> Mesh>, usize, usize)> = vec![
-        ("bunny-400", Box::new(move || obj("stanford-bunny.obj")), 400, 8),
-        ("bunny-1500", Box::new(move || obj("stanford-bunny.obj")), 1500, 16),
+        (
+            "bunny-400",
+            Box::new(move || obj("stanford-bunny.obj")),
+            400,
+            8,
+        ),
+        (
+            "bunny-1500",
+            Box::new(move || obj("stanford-bunny.obj")),
+            1500,
+            16,
+        ),
         ("spot-1500", Box::new(move || obj("spot.obj")), 1500, 16),
         ("double-torus", Box::new(double_torus), 400, 8),
         ("rounded-cube", Box::new(rounded_cube), 200, 8),
@@ -122,7 +132,12 @@ fn row(what: &str, seconds: f64, m: &TwoSided) {
 /// Slices through the middle of the grown box along each axis, as a PNG: white where model and
 /// winding number agree on inside, dark where they agree on outside, red where the model is
 /// inside and the points say outside, blue the reverse; pixels near the surface are dimmed.
-fn slices(field: &dyn Fn([f64; 3]) -> f64, points: &neurosurf_trainer::PointSet, truth: &Truth, path: &str) {
+fn slices(
+    field: &dyn Fn([f64; 3]) -> f64,
+    points: &neurosurf_trainer::PointSet,
+    truth: &Truth,
+    path: &str,
+) {
     let model: Vec<[f64; 3]> = points.positions.clone();
     let oracle = implicit::Oracle::new(&model, &points.normals).expect("oracle");
     let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
@@ -147,7 +162,11 @@ fn slices(field: &dyn Fn([f64; 3]) -> f64, points: &neurosurf_trainer::PointSet,
                 if near {
                     c = c.map(|x| x / 2 + 40);
                 }
-                img.put_pixel(axis as u32 * n as u32 + i as u32, j as u32, image::Rgb(c.map(|x| x as u8)));
+                img.put_pixel(
+                    axis as u32 * n as u32 + i as u32,
+                    j as u32,
+                    image::Rgb(c.map(|x| x as u8)),
+                );
             }
         }
     }
@@ -165,7 +184,11 @@ fn mesh_winding(mesh: &Mesh, q: [f64; 3]) -> f64 {
         });
         let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         let dot = |u: [f64; 3], v: [f64; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-        let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let cross = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
         let (la, lb, lc) = (n(a), n(b), n(c));
         let det = dot(cross, c);
         let den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
@@ -193,39 +216,66 @@ fn check_oracle(mesh: &Mesh, points: &neurosurf_trainer::PointSet, truth: &Truth
         if (exact > 0.5) != oracle.inside(q) {
             wrong += 1;
             if examples.len() < 5 {
-                examples.push((exact, oracle.winding(q), truth.distance(q) / truth.diagonal()));
+                examples.push((
+                    exact,
+                    oracle.winding(q),
+                    truth.distance(q) / truth.diagonal(),
+                ));
             }
         }
     }
-    eprintln!("  oracle: {wrong} of {checked} far points disagree with the mesh; e.g. {examples:?}");
+    eprintln!(
+        "  oracle: {wrong} of {checked} far points disagree with the mesh; e.g. {examples:?}"
+    );
 }
 
 /// Prints where the stray grid finds sign changes between far neighbours.
-fn locate_strays(field: &dyn Fn([f64; 3]) -> f64, points: &neurosurf_trainer::PointSet, truth: &Truth) {
+fn locate_strays(
+    field: &dyn Fn([f64; 3]) -> f64,
+    points: &neurosurf_trainer::PointSet,
+    truth: &Truth,
+) {
     let oracle = implicit::Oracle::new(&points.positions, &points.normals).expect("oracle");
     let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
     let n = 48;
-    let at = |i: [usize; 3]| [0, 1, 2].map(|k| b.lo[k] + (b.hi[k] - b.lo[k]) * i[k] as f64 / (n - 1) as f64);
+    let at = |i: [usize; 3]| {
+        [0, 1, 2].map(|k| b.lo[k] + (b.hi[k] - b.lo[k]) * i[k] as f64 / (n - 1) as f64)
+    };
     let far = 0.05 * truth.diagonal();
     let mut shown = 0;
-    for z in 0..n { for y in 0..n { for x in 0..n {
-        let p = at([x, y, z]);
-        if truth.distance(p) <= far { continue; }
-        for d in 0..3 {
-            let mut j = [x, y, z];
-            j[d] += 1;
-            if j[d] >= n { continue; }
-            let q = at(j);
-            if truth.distance(q) <= far { continue; }
-            let (a, c) = (field(p), field(q));
-            if (a > 0.0) != (c > 0.0) && shown < 12 {
-                shown += 1;
-                let rel = [0, 1, 2].map(|k| ((p[k] - b.lo[k]) / (b.hi[k] - b.lo[k]) * 100.0).round());
-                eprintln!("  stray at {rel:?}% of the box: Φ {a:.3} / {c:.3}, winding {:.2} / {:.2}, distance {:.1} % diag",
-                    oracle.winding(p), oracle.winding(q), 100.0 * truth.distance(p) / truth.diagonal());
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = at([x, y, z]);
+                if truth.distance(p) <= far {
+                    continue;
+                }
+                for d in 0..3 {
+                    let mut j = [x, y, z];
+                    j[d] += 1;
+                    if j[d] >= n {
+                        continue;
+                    }
+                    let q = at(j);
+                    if truth.distance(q) <= far {
+                        continue;
+                    }
+                    let (a, c) = (field(p), field(q));
+                    if (a > 0.0) != (c > 0.0) && shown < 12 {
+                        shown += 1;
+                        let rel = [0, 1, 2]
+                            .map(|k| ((p[k] - b.lo[k]) / (b.hi[k] - b.lo[k]) * 100.0).round());
+                        eprintln!(
+                            "  stray at {rel:?}% of the box: Φ {a:.3} / {c:.3}, winding {:.2} / {:.2}, distance {:.1} % diag",
+                            oracle.winding(p),
+                            oracle.winding(q),
+                            100.0 * truth.distance(p) / truth.diagonal()
+                        );
+                    }
+                }
             }
         }
-    }}}
+    }
 }
 
 /// Lists the pieces of the model's mesh over the grown box: size, where, how far.
@@ -236,38 +286,83 @@ fn pieces(field: &dyn Field, truth: &Truth) {
         center: b.center(),
         matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
     };
-    struct W<'a> { f: &'a dyn Field, r: Vec<Region> }
+    struct W<'a> {
+        f: &'a dyn Field,
+        r: Vec<Region>,
+    }
     impl Field for W<'_> {
-        fn value(&self, p: [f64; 3]) -> f64 { self.f.value(p) }
-        fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) { self.f.value_gradient(p) }
-        fn regions(&self) -> &[Region] { &self.r }
-        fn values(&self, p: &[[f64; 3]], o: &mut [f64]) { self.f.values(p, o) }
+        fn value(&self, p: [f64; 3]) -> f64 {
+            self.f.value(p)
+        }
+        fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+            self.f.value_gradient(p)
+        }
+        fn regions(&self) -> &[Region] {
+            &self.r
+        }
+        fn values(&self, p: &[[f64; 3]], o: &mut [f64]) {
+            self.f.values(p, o)
+        }
     }
     let mut regions = vec![Region::new(normalization, 2.0, 1.0).expect("region")];
     regions.extend(field.regions().iter().copied());
-    let w = W { f: field, r: regions };
+    let w = W {
+        f: field,
+        r: regions,
+    };
     let mesh = extract_mesh(&w, 96, &|_, _| {}).expect("mesh").mesh;
     let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
-    fn find(p: &mut [usize], mut v: usize) -> usize { while p[v] != v { p[v] = p[p[v]]; v = p[v]; } v }
+    fn find(p: &mut [usize], mut v: usize) -> usize {
+        while p[v] != v {
+            p[v] = p[p[v]];
+            v = p[v];
+        }
+        v
+    }
     for t in &mesh.triangles {
         let a = find(&mut parent, t[0] as usize);
-        for &v in &t[1..] { let c = find(&mut parent, v as usize); if a != c { parent[c] = a; } }
+        for &v in &t[1..] {
+            let c = find(&mut parent, v as usize);
+            if a != c {
+                parent[c] = a;
+            }
+        }
     }
     let mut groups: std::collections::HashMap<usize, Vec<usize>> = Default::default();
-    for v in 0..mesh.positions.len() { let r = find(&mut parent, v); groups.entry(r).or_default().push(v); }
+    for v in 0..mesh.positions.len() {
+        let r = find(&mut parent, v);
+        groups.entry(r).or_default().push(v);
+    }
     let mut list: Vec<Vec<usize>> = groups.into_values().collect();
     list.sort_by_key(|g| std::cmp::Reverse(g.len()));
     for g in list.iter().skip(1).take(8) {
-        let c = g.iter().fold([0.0; 3], |a, &v| { let p = mesh.positions[v]; [a[0] + p[0], a[1] + p[1], a[2] + p[2]] }).map(|x| x / g.len() as f64);
+        let c = g
+            .iter()
+            .fold([0.0; 3], |a, &v| {
+                let p = mesh.positions[v];
+                [a[0] + p[0], a[1] + p[1], a[2] + p[2]]
+            })
+            .map(|x| x / g.len() as f64);
         let rel = [0, 1, 2].map(|k| ((c[k] - b.lo[k]) / (b.hi[k] - b.lo[k]) * 100.0).round());
-        let dmax = g.iter().map(|&v| truth.distance(mesh.positions[v])).fold(0.0, f64::max);
-        eprintln!("  piece of {} vertices at {rel:?}% of the box, farthest {:.2} % diag from the truth", g.len(), 100.0 * dmax / truth.diagonal());
+        let dmax = g
+            .iter()
+            .map(|&v| truth.distance(mesh.positions[v]))
+            .fold(0.0, f64::max);
+        eprintln!(
+            "  piece of {} vertices at {rel:?}% of the box, farthest {:.2} % diag from the truth",
+            g.len(),
+            100.0 * dmax / truth.diagonal()
+        );
     }
 }
 
 /// For every module: how far its subtree's zero set is from the true surface where that
 /// module's features are nearest (first-order |Φ|/|∇Φ|, % of the diagonal), and its normals.
-fn diagnose(network: &implicit::ImplicitNetwork, points: &neurosurf_trainer::PointSet, truth: &Truth) {
+fn diagnose(
+    network: &implicit::ImplicitNetwork,
+    points: &neurosurf_trainer::PointSet,
+    truth: &Truth,
+) {
     let labels = points.features.as_ref().expect("labels");
     let tree: kiddo::ImmutableKdTree<f64, 3> =
         kiddo::ImmutableKdTree::new_from_slice(&points.positions).expect("tree");
@@ -275,7 +370,10 @@ fn diagnose(network: &implicit::ImplicitNetwork, points: &neurosurf_trainer::Poi
         .positions()
         .iter()
         .map(|p| {
-            let n = tree.query(p).nearest_one::<kiddo::SquaredEuclidean<f64>>().execute();
+            let n = tree
+                .query(p)
+                .nearest_one::<kiddo::SquaredEuclidean<f64>>()
+                .execute();
             labels[n.item as usize]
         })
         .collect();
@@ -295,7 +393,12 @@ fn diagnose(network: &implicit::ImplicitNetwork, points: &neurosurf_trainer::Poi
             let (phi, g) = sub.eval(*p);
             let len = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
             d.push(phi.abs() / len);
-            a.push((-(g[0] * n[0] + g[1] * n[1] + g[2] * n[2]) / len).clamp(-1.0, 1.0).acos().to_degrees());
+            a.push(
+                (-(g[0] * n[0] + g[1] * n[1] + g[2] * n[2]) / len)
+                    .clamp(-1.0, 1.0)
+                    .acos()
+                    .to_degrees(),
+            );
         }
         d.sort_by(f64::total_cmp);
         a.sort_by(f64::total_cmp);
@@ -358,6 +461,7 @@ fn main() {
                     "sign_points" => options.sign_points = v,
                     "clearance" => options.clearance = v,
                     "sign_margin" => options.sign_margin = v,
+                    "sign_weight" => options.sign_weight = v,
                     "lambda" => options.lm.lambda = v,
                     "gamma" => options.gamma = v,
                     "width" => options.width = v as usize,
@@ -375,7 +479,14 @@ fn main() {
             );
             let trace = std::env::var_os("TRACE").is_some();
             let trained = implicit::fit(points.clone(), &request, &options, &|p| {
-                if let (true, implicit::Progress::Iteration { module, iteration, error }) = (trace, p)
+                if let (
+                    true,
+                    implicit::Progress::Iteration {
+                        module,
+                        iteration,
+                        error,
+                    },
+                ) = (trace, p)
                     && iteration % 10 == 0
                 {
                     eprintln!("    trace module {module} it {iteration} E {error:.3e}");
@@ -389,7 +500,8 @@ fn main() {
                 check_oracle(&case.mesh, &points, &truth);
             }
             if std::env::var_os("PIECES").is_some() {
-                let f = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25).expect("field");
+                let f = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25)
+                    .expect("field");
                 pieces(&f, &truth);
             }
             if std::env::var_os("STRAYS").is_some() {
@@ -398,7 +510,12 @@ fn main() {
             }
             if let Some(dir) = value("--slices") {
                 let net = &trained.network;
-                slices(&|p| net.eval(p).0, &points, &truth, &format!("{dir}/{}-{seed}-slices.png", case.name));
+                slices(
+                    &|p| net.eval(p).0,
+                    &points,
+                    &truth,
+                    &format!("{dir}/{}-{seed}-slices.png", case.name),
+                );
             }
             let seconds = start.elapsed().as_secs_f64();
             let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
@@ -408,7 +525,8 @@ fn main() {
             }
             let regions = Region::of_network(&trained.network, 2.0, 1.25);
             let _ = CoreField::new;
-            let field = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25).expect("field");
+            let field = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25)
+                .expect("field");
             let _ = regions;
             let m = two_sided(&field, &truth, 96, 48).expect("measure");
             let s = &trained.summary;
@@ -433,7 +551,11 @@ fn main() {
                     case.name,
                     s.modules.len(),
                     s.iterations(),
-                    if s.converged() { "converged" } else { "not converged" }
+                    if s.converged() {
+                        "converged"
+                    } else {
+                        "not converged"
+                    }
                 ),
                 seconds,
                 &m,

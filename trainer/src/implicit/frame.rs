@@ -52,7 +52,9 @@ impl Frame {
             }
         }
         let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
-        let magnitude = (0..3).map(|k| lo[k].abs().max(hi[k].abs())).fold(0.0, f64::max);
+        let magnitude = (0..3)
+            .map(|k| lo[k].abs().max(hi[k].abs()))
+            .fold(0.0, f64::max);
         if !(diagonal > 1e-9 * magnitude && diagonal > 0.0 && diagonal.is_finite()) {
             return Err(Error::invalid(format!(
                 "the points span no volume: their bounding box is {lo:?} … {hi:?}; give points \

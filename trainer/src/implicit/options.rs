@@ -37,8 +37,12 @@ pub struct ImplicitOptions {
     /// How far a sign point keeps from every control point, as a fraction of the bounding
     /// diagonal (0.02).
     pub clearance: f64,
-    /// |Φ| a sign point asks for on its side of the surface (0.1).
+    /// |Φ| a sign point at distance d from the control points asks for on its side of the
+    /// surface, as a fraction of s·d (0.25; at most 0.5).
     pub sign_margin: f64,
+    /// Weight of a sign point at the clearance distance (0.1); it grows linearly with the
+    /// distance, up to 1.
+    pub sign_weight: f64,
 }
 
 impl Default for ImplicitOptions {
@@ -56,7 +60,8 @@ impl Default for ImplicitOptions {
             offset: 0.01,
             sign_points: 2.0,
             clearance: 0.02,
-            sign_margin: 0.1,
+            sign_margin: 0.25,
+            sign_weight: 0.1,
         }
     }
 }

@@ -44,7 +44,10 @@ impl Oracle {
         let gaps: Vec<f64> = positions
             .iter()
             .map(|p| {
-                let found = tree.query(p).nearest_n::<SquaredEuclidean<f64>>(k).execute();
+                let found = tree
+                    .query(p)
+                    .nearest_n::<SquaredEuclidean<f64>>(k)
+                    .execute();
                 found.last().map_or(0.0, |n| n.distance.sqrt())
             })
             .collect();
@@ -130,7 +133,10 @@ mod tests {
         ] {
             let w = oracle.winding(q);
             assert_eq!(oracle.inside(q), inside, "{q:?}: w = {w}");
-            assert!((w - f64::from(u8::from(inside))).abs() < 0.2, "{q:?}: w = {w}");
+            assert!(
+                (w - f64::from(u8::from(inside))).abs() < 0.2,
+                "{q:?}: w = {w}"
+            );
         }
     }
 }

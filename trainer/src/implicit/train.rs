@@ -166,7 +166,11 @@ pub fn train(
     let frame = Frame::of(&points.positions)?;
     let previous = previous.map(|p| in_frame(p, |n| frame.normalization_to_model(n)));
     let model = PointSet {
-        positions: points.positions.iter().map(|&p| frame.to_model(p)).collect(),
+        positions: points
+            .positions
+            .iter()
+            .map(|&p| frame.to_model(p))
+            .collect(),
         normals: points.normals.clone(),
         features: points.features.clone(),
     };
@@ -244,45 +248,23 @@ pub fn train(
                     .iter()
                     .filter_map(|&leaf| network.normalization(leaf))
                     .collect();
-                let whole = i == network.root() || std::env::var_os("NODES_WHOLE").is_some();
-                let regions = setting.regions(&boxes, whole);
+                let regions = setting.regions(&boxes, true);
                 let positions: Vec<[f64; 3]> = features
                     .iter()
                     .flat_map(|&f| members[f as usize].iter().map(|&p| model.positions[p]))
                     .collect();
-                let norm = Normalization::fit(&positions, options.box_size, options.box_scaling, "node")
-                    .unwrap_or(boxes[0]);
+                let norm =
+                    Normalization::fit(&positions, options.box_size, options.box_scaling, "node")
+                        .unwrap_or(boxes[0]);
                 let mut node_net = network.clone();
                 node_net.set_normalization(i, &norm);
-                let mut data =
-                    setting.module_data(&node_net, i, &features, &members, &regions, i);
+                let data = setting.module_data(&node_net, i, &features, &members, &regions, i);
                 let initial = match &previous {
                     Some(previous) => previous.trained_params(i).to_vec(),
                     None => random_params(&layout, options.init_range, options.seed, i),
                 };
-                let (mut params, mut report) =
+                let (params, report) =
                     fit_module(i, &data, initial, options, None, init.is_some(), progress);
-                if i == network.root() {
-                    let rounds = std::env::var("ROUNDS").ok().and_then(|v| v.parse().ok()).unwrap_or(REFINE_ROUNDS);
-                    for round in 0..rounds {
-                        node_net.trained_params_mut(i).copy_from_slice(&params);
-                        let added = setting.add_violations(&node_net, i, &regions, &mut data, round);
-                        if std::env::var_os("VERBOSE").is_some() {
-                            eprintln!("  root round {round}: {added} violations");
-                        }
-                        if added == 0 {
-                            break;
-                        }
-                        let (p, r) =
-                            fit_module(i, &data, params, options, None, true, progress);
-                        params = p;
-                        report.lm.iterations += r.lm.iterations;
-                        report.lm.error = r.lm.error;
-                        report.lm.stop = r.lm.stop;
-                        report.seconds += r.seconds;
-                        report.points = r.points;
-                    }
-                }
                 (i, norm, params, report)
             })
             .collect();
@@ -310,13 +292,14 @@ pub fn train(
     Ok(Trained { network, summary })
 }
 
-/// Rounds of adding the sign points a trained root still gets wrong and training on.
-const REFINE_ROUNDS: usize = 3;
-/// Candidate points drawn per round, per control point.
-const REFINE_CANDIDATES: usize = 12;
+/// The largest |Φ| a sign point asks for, in the model frame where the slope is s.
+const MAX_SIGN_MARGIN: f64 = 0.5;
 
 /// A copy of `network` with every leaf normalization mapped by `map`.
-fn in_frame(network: &ImplicitNetwork, map: impl Fn(&Normalization) -> Normalization) -> ImplicitNetwork {
+fn in_frame(
+    network: &ImplicitNetwork,
+    map: impl Fn(&Normalization) -> Normalization,
+) -> ImplicitNetwork {
     let mut out = network.clone();
     for i in 0..out.module_count() {
         if let Some(n) = network.normalization(i) {
@@ -376,70 +359,28 @@ impl<'a> Setting<'a> {
     /// them, and for the root the whole grown bounding box too.
     fn regions(&self, boxes: &[Normalization], root: bool) -> Vec<SampleBox> {
         let half = 0.5 * self.options.box_size * crate::render::DEFAULT_INFLATE;
-        let mut out: Vec<SampleBox> = boxes.iter().filter_map(|n| SampleBox::new(n, half)).collect();
+        let mut out: Vec<SampleBox> = boxes
+            .iter()
+            .filter_map(|n| SampleBox::new(n, half))
+            .collect();
         if root {
             out.push(self.grown);
         }
         out
     }
 
-    /// |Φ| a sign point asks for: the sign margin times s·d at distance d from the control
-    /// points (Φ grows away from the surface as a distance does), at most 1.
-    fn sign_weight(&self) -> f64 {
-        std::env::var("SIGN_WEIGHT").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0)
-    }
-
+    /// How much a sign point at distance d from the control points weighs: the sign weight
+    /// times d / clearance, at most 1. Points just outside the clearance, where the winding
+    /// number is least certain and the field still bends, weigh least.
     fn distance_weight(&self, s: &SignPoint) -> f64 {
         let clearance = self.options.clearance * MODEL_DIAGONAL;
-        let power: f64 = std::env::var("WEIGHT_POWER").ok().and_then(|v| v.parse().ok()).unwrap_or(2.0);
-        (self.sign_weight() * (s.distance / clearance).powf(power)).min(1.0)
+        (self.options.sign_weight * s.distance / clearance).min(1.0)
     }
 
+    /// |Φ| a sign point asks for: the sign margin times s·d at distance d (Φ grows away from
+    /// the surface as a scaled distance does), at most [`MAX_SIGN_MARGIN`].
     fn margin(&self, s: &SignPoint) -> f64 {
-        if std::env::var_os("MARGIN_CONST").is_some() {
-            return self.options.sign_margin;
-        }
-        let cap: f64 = std::env::var("MARGIN_CAP").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0);
-        (self.options.sign_margin * self.options.slope * s.distance).min(cap)
-    }
-
-    /// Draws fresh sign points in `regions`, keeps those where module `i` of `network` has Φ
-    /// on the wrong side of half the margin, and adds them to `data`; returns how many.
-    fn add_violations(
-        &self,
-        network: &ImplicitNetwork,
-        i: usize,
-        regions: &[SampleBox],
-        data: &mut ModuleData,
-        round: usize,
-    ) -> usize {
-        let mut rng = ChaCha8Rng::seed_from_u64(self.options.seed ^ 0x7e51_0a11);
-        rng.set_stream((i * REFINE_ROUNDS + round) as u64);
-        let wanted = REFINE_CANDIDATES * self.points.len();
-        let clearance = self.options.clearance * MODEL_DIAGONAL;
-        let candidates = sign_points(&self.oracle, regions, wanted, clearance, &|_| true, &mut rng);
-        let wrong: Vec<(SignPoint, f64)> = candidates
-            .par_iter()
-            .filter_map(|s| {
-                let phi = network.eval_module(i, s.position).0;
-                let sign = if s.inside { 1.0 } else { -1.0 };
-                (sign * phi < 0.5 * self.margin(s)).then_some((*s, sign))
-            })
-            .collect();
-        let mut values = [0.0; MAX_INPUTS];
-        let mut tangents = [[0.0; MAX_INPUTS]; 3];
-        for (s, sign) in &wrong {
-            let input = network.module_input(i, s.position, &mut values, &mut tangents);
-            data.push_value(
-                input.values,
-                ValueGoal {
-                    value: sign * self.margin(s),
-                    weight: std::env::var("VIOLATION_WEIGHT").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0),
-                    hinge: *sign,
-                },
-            );
-        }
-        wrong.len()
+        (self.options.sign_margin * self.options.slope * s.distance).min(MAX_SIGN_MARGIN)
     }
 
     /// The training data of module `i` of `network` (its children trained): the control
@@ -479,19 +420,19 @@ impl<'a> Setting<'a> {
             }
         }
         let root = i == network.root() && network.module_count() > 1;
-        let ratio = if root { 4.0 * self.options.sign_points } else { self.options.sign_points };
+        let ratio = if root {
+            4.0 * self.options.sign_points
+        } else {
+            self.options.sign_points
+        };
         let wanted = (ratio * count as f64).round() as usize;
         if wanted > 0 {
             let mut rng = ChaCha8Rng::seed_from_u64(self.options.seed ^ 0x5167_4e50);
             rng.set_stream(stream as u64);
             let owned = |j: usize| features.contains(&self.labels[j]);
             let clearance = self.options.clearance * MODEL_DIAGONAL;
-            let mut signs: Vec<SignPoint> =
+            let signs: Vec<SignPoint> =
                 sign_points(&self.oracle, regions, wanted, clearance, &owned, &mut rng);
-            let band: f64 = std::env::var("BAND").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0);
-            if band > 0.0 && !root {
-                signs.retain(|s| s.distance <= band * clearance);
-            }
             for s in signs {
                 let sign = if s.inside { 1.0 } else { -1.0 };
                 let goal = ValueGoal {
