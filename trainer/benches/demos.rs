@@ -111,7 +111,11 @@ fn main() {
             ),
         );
     }
-    let converged = animation.frames.iter().filter(|f| f.converged).count();
+    let converged = animation
+        .frames
+        .iter()
+        .filter(|f| f.outcome == neurosurf_trainer::implicit::Outcome::Converged)
+        .count();
     println!(
         "\nanimation: {frames} frames in {wall:.2} s; {converged} of {} incremental frames \
          converged; warm frames need {:.1}× fewer iterations and {:.1}× less time than the \

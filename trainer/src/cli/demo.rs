@@ -83,8 +83,8 @@ pub fn run(args: &Args) -> Result<()> {
                 deviation
             );
         }
-        if !m.converged {
-            println!("       (not every module reached the threshold)");
+        if m.outcome != neurosurf_trainer::implicit::Outcome::Converged {
+            println!("       (training {})", m.outcome);
         }
     }
     for demo in &report.parametric {
@@ -137,38 +137,38 @@ pub fn run(args: &Args) -> Result<()> {
 fn print_tour(tour: &Tour) {
     let b = &tour.body;
     println!(
-        "\nbody: {} control points, {} features, {} modules, {} iterations, {:.3} s, converged: {}; \
+        "\nbody: {} control points, {} features, {} modules, {} iterations, {:.3} s, {}; \
          median distance {:.4} %D, median angle {:.2}°",
         b.control_points,
         b.features.len(),
         b.modules.len(),
         b.iterations,
         b.seconds,
-        b.converged,
+        b.outcome,
         b.fidelity.median_distance_percent,
         b.fidelity.median_angle_degrees
     );
     let a = &tour.animation;
     println!(
         "animation: {} frames, warm-started: {:.3} s per frame (min {:.3}, max {:.3}), \
-         {:.0} iterations per frame against {} cold, converged: {}",
+         {:.0} iterations per frame against {} cold, {}",
         a.frames,
         a.seconds.average,
         a.seconds.min,
         a.seconds.max,
         a.iterations.average,
         a.cold_iterations,
-        a.converged
+        a.outcome
     );
     if let Some(w) = &tour.woody {
         println!(
             "woody.obj cookie: {} control points, {} automatic features, {} iterations, {:.3} s, \
-             converged: {}; median distance {:.4} %D, median angle {:.2}°",
+             {}; median distance {:.4} %D, median angle {:.2}°",
             w.control_points,
             w.features,
             w.iterations,
             w.seconds,
-            w.converged,
+            w.outcome,
             w.fidelity.median_distance_percent,
             w.fidelity.median_angle_degrees
         );

@@ -232,11 +232,7 @@ pub fn run(args: &Args) -> Result<()> {
             "  training     {} iterations, {:.3} s, {}",
             t.iterations(),
             t.seconds,
-            if t.converged() {
-                "converged"
-            } else {
-                "NOT converged"
-            }
+            t.outcome()
         );
         for m in &t.modules {
             println!(

@@ -162,6 +162,8 @@ struct ImplicitSummary<'a> {
     scalar: &'static str,
     parameters: usize,
     converged: bool,
+    /// How the training ended: converged, stalled at E_s = …, or cut by the iteration cap.
+    outcome: String,
     iterations: usize,
     /// Iterations the warm start saved against the cold start of its chain.
     iterations_saved: Option<i64>,
@@ -213,6 +215,7 @@ fn implicit(args: &ImplicitArgs) -> Result<()> {
         scalar: args.scalar.kind().name(),
         parameters: trained.network.params().len(),
         converged: summary.converged(),
+        outcome: summary.outcome().to_string(),
         iterations: summary.iterations(),
         iterations_saved: saved,
         training: summary,
@@ -243,10 +246,11 @@ fn implicit(args: &ImplicitArgs) -> Result<()> {
             m.lm.stop
         );
     }
-    if !report.converged {
+    println!("training {}", summary.outcome());
+    if !summary.outcome().settled() {
         eprintln!(
-            "warning: not every module reached the threshold {:.1e}",
-            options.lm.threshold
+            "warning: a module ran into the iteration cap ({}); raise --max-iterations",
+            options.lm.max_iterations
         );
     }
     println!(

@@ -35,7 +35,9 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::evaluate::{LoadedModel, Precision};
 use crate::fidelity::{Fidelity, diameter};
-use crate::implicit::{self, FitRequest, ImplicitOptions, Progress, TrainingSummary, TreeSpec};
+use crate::implicit::{
+    self, FitRequest, ImplicitOptions, Outcome, Progress, TrainingSummary, TreeSpec,
+};
 use crate::io::{PlyEncoding, write_atomic, write_points_ply};
 use crate::sample::{Shape, sample_shape};
 use neurosurf_core::scalar::ScalarKind;
@@ -56,8 +58,8 @@ pub struct DemoModel {
     pub iterations: usize,
     /// Training wall time, seconds.
     pub seconds: f64,
-    /// Whether every module reached the threshold.
-    pub converged: bool,
+    /// How the training ended: converged, stalled at E_s = …, or cut by the iteration cap.
+    pub outcome: Outcome,
     /// Blob files written, with their sizes in bytes.
     pub blobs: Vec<(PathBuf, usize)>,
     /// Fidelity on held-out true-surface points, per precision.
@@ -160,7 +162,7 @@ pub fn run(
             tree: summary.tree.clone(),
             iterations: summary.iterations(),
             seconds: summary.seconds,
-            converged: summary.converged(),
+            outcome: summary.outcome(),
             blobs,
             fidelity,
             max_field_deviation: deviation,

@@ -125,8 +125,7 @@ pub fn html(report: &DemoReport) -> String {
             "<h2>Animation (Table 4, Fig. 10)</h2>\n<p>{} frames raising and flexing both \
              arms and the right leg; frame 0 is learned cold, every later frame starts from \
              the previous frame's weights. Incremental frames took {} on average ({} to {}), \
-             {:.0} LM iterations on average against {} for the cold start; every module \
-             converged: {}. The last frame's median distance to its true body: {:.3} % of \
+             {:.0} LM iterations on average against {} for the cold start; training {}. The last frame's median distance to its true body: {:.3} % of \
              the diameter, median normal error {:.2}°.</p>\n",
             a.frames,
             seconds(a.seconds.average),
@@ -134,7 +133,7 @@ pub fn html(report: &DemoReport) -> String {
             seconds(a.seconds.max),
             a.iterations.average,
             a.cold_iterations,
-            if a.converged { "yes" } else { "no" },
+            a.outcome,
             a.last_fidelity.median_distance_percent,
             a.last_fidelity.median_angle_degrees
         );
@@ -168,7 +167,7 @@ pub fn html(report: &DemoReport) -> String {
         let _ = write!(
             o,
             "<h2>The body (Table 3, Fig. 8–9)</h2>\n<p>{} control points in {} features \
-             ({}), tree <code>{}</code>: {} LM iterations in {}, every module converged: {}. \
+             ({}), tree <code>{}</code>: {} LM iterations in {}, training {}. \
              On {} held-out points of the true body: median distance {:.3} % of the diameter \
              D = {:.2}, RMS {:.3} %, median normal error {:.2}°.</p>\n<table><tr>\
              <th>module</th><th class=l>learns</th><th>points</th><th>iterations</th>\
@@ -179,7 +178,7 @@ pub fn html(report: &DemoReport) -> String {
             esc(&b.tree),
             b.iterations,
             seconds(b.seconds),
-            if b.converged { "yes" } else { "no" },
+            b.outcome,
             b.fidelity.points,
             b.fidelity.median_distance_percent,
             b.fidelity.diameter,
@@ -207,7 +206,7 @@ pub fn html(report: &DemoReport) -> String {
                  into a slab 1.6 thick and stood up, {} control points split automatically into \
                  {} features (principal-axis bisection, then capacity-constrained k-means), \
                  balanced tree <code>{}</code>: {} iterations in {} (at most {} per module: the \
-                 slab's sharp edges keep E<sub>s</sub> above 10<sup>−5</sup>; converged: {}). \
+                 slab's sharp edges keep E<sub>s</sub> above 10<sup>−5</sup>; training {}). \
                  Median distance to the slab {:.3} % of D, RMS {:.2} %, median normal error \
                  {:.2}°.</p>",
                 w.control_points,
@@ -216,7 +215,7 @@ pub fn html(report: &DemoReport) -> String {
                 w.iterations,
                 seconds(w.seconds),
                 super::WOODY_ITERATIONS,
-                if w.converged { "yes" } else { "no" },
+                w.outcome,
                 w.fidelity.median_distance_percent,
                 w.fidelity.rms_distance_percent,
                 w.fidelity.median_angle_degrees

@@ -14,7 +14,7 @@ use super::table5::{Table5Row, table5};
 use super::woody::{WoodyDemo, woody};
 use crate::error::Result;
 use crate::fidelity::Fidelity;
-use crate::implicit::{ImplicitOptions, Progress, Trained};
+use crate::implicit::{ImplicitOptions, Outcome, Progress, Trained};
 use crate::points::PointSet;
 use crate::sample::{BODY_FEATURES, BODY_TREE, Pose};
 
@@ -71,8 +71,8 @@ pub struct BodyDemo {
     pub seconds: f64,
     /// LM iterations over all modules.
     pub iterations: usize,
-    /// Whether every module reached the threshold.
-    pub converged: bool,
+    /// How the training ended: converged, stalled at E_s = …, or cut by the iteration cap.
+    pub outcome: Outcome,
     /// Against the true body on held-out points.
     pub fidelity: Fidelity,
     /// Per module (Fig. 9).
@@ -90,8 +90,8 @@ pub struct AnimationDemo {
     pub iterations: Spread,
     /// The cold-trained rest pose's iterations, for comparison.
     pub cold_iterations: usize,
-    /// Whether every module of every frame reached the threshold.
-    pub converged: bool,
+    /// How the frames' trainings ended, the worst of them.
+    pub outcome: Outcome,
     /// The last frame against its true body.
     pub last_fidelity: Fidelity,
     /// Every incremental frame.
@@ -172,7 +172,7 @@ pub fn tour(
         tree: BODY_TREE.to_string(),
         seconds: body.summary.seconds,
         iterations: body.summary.iterations(),
-        converged: body.summary.converged(),
+        outcome: body.summary.outcome(),
         fidelity: body_fidelity(&body.network, &Pose::REST, seed)?,
         modules: modules(&body),
     };
@@ -191,7 +191,11 @@ pub fn tour(
         seconds: animation.seconds(),
         iterations: animation.iterations(),
         cold_iterations: body_demo.iterations,
-        converged: animation.frames.iter().all(|f| f.converged),
+        outcome: animation
+            .frames
+            .iter()
+            .map(|f| f.outcome)
+            .fold(Outcome::Converged, Outcome::worst),
         last_fidelity: body_fidelity(&last_network, &last_pose, seed)?,
         per_frame: animation.frames.clone(),
     };

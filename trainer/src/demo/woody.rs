@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::fidelity::{Fidelity, diameter};
-use crate::implicit::{self, FitRequest, ImplicitOptions, Progress, Trained};
+use crate::implicit::{self, FitRequest, ImplicitOptions, Outcome, Progress, Trained};
 use crate::io::{Mesh, data_file, read_mesh};
 use crate::points::PointSet;
 use crate::sample::{BODY_FEATURES, sample_mesh};
@@ -47,8 +47,8 @@ pub struct WoodyDemo {
     pub seconds: f64,
     /// LM iterations over all modules.
     pub iterations: usize,
-    /// Whether every module reached the threshold.
-    pub converged: bool,
+    /// How the training ended: converged, stalled at E_s = …, or cut by the iteration cap.
+    pub outcome: Outcome,
     /// Against held-out points of the slab.
     pub fidelity: Fidelity,
 }
@@ -166,7 +166,7 @@ pub fn woody(
         tree: trained.summary.tree.clone(),
         seconds: trained.summary.seconds,
         iterations: trained.summary.iterations(),
-        converged: trained.summary.converged(),
+        outcome: trained.summary.outcome(),
         fidelity,
     };
     Ok((demo, trained, points))

@@ -14,6 +14,25 @@ use crate::error::{Error, Result};
 /// (R = 1, r = 0.4) has a diagonal of 4.04.
 pub const MODEL_DIAGONAL: f64 = 4.0;
 
+/// The smallest spread across the points' best-fitting plane, relative to their bounding
+/// diagonal, that still encloses a volume.
+const MIN_THICKNESS: f64 = 1e-4;
+
+/// The standard deviation of `positions` along their direction of least spread.
+fn thickness(positions: &[[f64; 3]]) -> f64 {
+    let n = positions.len() as f64;
+    let mean = [0, 1, 2].map(|k| positions.iter().map(|p| p[k]).sum::<f64>() / n);
+    let covariance = nalgebra::Matrix3::from_fn(|r, c| {
+        positions
+            .iter()
+            .map(|p| (p[r] - mean[r]) * (p[c] - mean[c]))
+            .sum::<f64>()
+            / n
+    });
+    let least = covariance.symmetric_eigenvalues().min();
+    least.max(0.0).sqrt()
+}
+
 /// World ↔ model frame: x_model = (x − center) / scale.
 #[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
@@ -61,6 +80,14 @@ impl Frame {
                  spread over a surface"
             )));
         }
+        let thickness = thickness(positions);
+        if !(thickness > MIN_THICKNESS * diagonal) {
+            return Err(Error::invalid(format!(
+                "the points lie in a plane (their spread across it is {thickness:.3e}, the \
+                 bounding diagonal {diagonal:.3e}); an implicit surface encloses a volume: give \
+                 points sampled over a closed surface"
+            )));
+        }
         Ok(Frame {
             center: [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k])),
             scale: diagonal / MODEL_DIAGONAL,
@@ -101,7 +128,13 @@ mod tests {
 
     #[test]
     fn the_frame_centres_and_scales_the_bounding_box() {
-        let frame = Frame::of(&[[1000.0, -1000.0, 500.0], [1002.0, -998.0, 501.0]]).unwrap();
+        let corners = [
+            [1000.0, -1000.0, 500.0],
+            [1002.0, -998.0, 501.0],
+            [1002.0, -1000.0, 500.0],
+            [1000.0, -1000.0, 501.0],
+        ];
+        let frame = Frame::of(&corners).unwrap();
         assert_eq!(frame.center, [1001.0, -999.0, 500.5]);
         assert!((frame.scale - 3.0 / MODEL_DIAGONAL).abs() < 1e-12);
         let x = [1001.5, -999.25, 500.75];
@@ -132,5 +165,21 @@ mod tests {
         assert!(Frame::of(&[]).is_err());
         assert!(Frame::of(&[[1.0, 2.0, 3.0]; 5]).is_err());
         assert!(Frame::of(&[[f64::NAN, 0.0, 0.0], [1.0, 1.0, 1.0]]).is_err());
+    }
+
+    #[test]
+    fn points_in_a_plane_are_refused_by_name() {
+        // A tilted plane: no bounding-box extent is zero, but the points enclose nothing.
+        let plane: Vec<[f64; 3]> = (0..100)
+            .map(|i| {
+                let (u, v) = ((i % 10) as f64, (i / 10) as f64);
+                [u, v, 0.3 * u - 0.2 * v + 5.0]
+            })
+            .collect();
+        let message = Frame::of(&plane).unwrap_err().to_string();
+        assert!(message.contains("lie in a plane"), "{message}");
+        let mut slab = plane.clone();
+        slab.push([4.0, 4.0, 9.0]);
+        assert!(Frame::of(&slab).is_ok());
     }
 }

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use super::constraints::{OffSurface, SampleBox, SignPoint, off_surface, sign_points};
 use super::frame::{Frame, MODEL_DIAGONAL};
 use super::jacobian::{MAX_INPUTS, TrainedLayout};
-use super::lm::{LmReport, levenberg_marquardt};
+use super::lm::{LmReport, StopReason, levenberg_marquardt};
 use super::network::ImplicitNetwork;
 use super::normalize::Normalization;
 use super::options::ImplicitOptions;
@@ -73,9 +73,73 @@ impl TrainingSummary {
 
     /// Whether every module reached the error threshold.
     pub fn converged(&self) -> bool {
+        self.outcome() == Outcome::Converged
+    }
+
+    /// How the training ended, over all modules: the worst module's stop.
+    pub fn outcome(&self) -> Outcome {
         self.modules
             .iter()
-            .all(|m| m.lm.stop == super::lm::StopReason::Converged)
+            .map(|m| Outcome::of(&m.lm))
+            .fold(Outcome::Converged, Outcome::worst)
+    }
+}
+
+/// How a training ended.
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "stop", rename_all = "snake_case")]
+pub enum Outcome {
+    /// Every module reached the error threshold.
+    Converged,
+    /// Some module's E_s stopped falling above the threshold (the largest such E_s). Normal
+    /// on real shapes: the off-surface and sign constraints are not all satisfiable exactly.
+    Stalled {
+        /// E_s where it stalled.
+        error: f64,
+    },
+    /// Some module ran into the iteration cap while E_s still fell (the largest such E_s).
+    IterationCap {
+        /// E_s at the cap.
+        error: f64,
+    },
+}
+
+impl Outcome {
+    /// The outcome of one module's run.
+    pub fn of(lm: &LmReport) -> Outcome {
+        match lm.stop {
+            StopReason::Converged => Outcome::Converged,
+            StopReason::Stalled | StopReason::Stagnated => Outcome::Stalled { error: lm.error },
+            StopReason::IterationLimit => Outcome::IterationCap { error: lm.error },
+        }
+    }
+
+    /// The worse of two outcomes: the cap over a stall over convergence, then the larger E_s.
+    pub fn worst(self, other: Outcome) -> Outcome {
+        let rank = |o: &Outcome| match o {
+            Outcome::Converged => (0, 0.0),
+            Outcome::Stalled { error } => (1, *error),
+            Outcome::IterationCap { error } => (2, *error),
+        };
+        let (a, b) = (rank(&self), rank(&other));
+        if (b.0, b.1) > (a.0, a.1) { other } else { self }
+    }
+
+    /// Whether the training finished by itself: converged or stalled, not cut by the cap.
+    pub fn settled(&self) -> bool {
+        !matches!(self, Outcome::IterationCap { .. })
+    }
+}
+
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Outcome::Converged => write!(f, "converged"),
+            Outcome::Stalled { error } => write!(f, "stalled at E_s = {error:.2e}"),
+            Outcome::IterationCap { error } => {
+                write!(f, "stopped at the iteration cap with E_s = {error:.2e}")
+            }
+        }
     }
 }
 
