@@ -1,9 +1,15 @@
-//! Implicit models on real shapes: the scanned bunny (400 and 1 500 points), spot, a double
-//! torus and a rounded cube, each trained by the network and by the built-in RBF, measured both
-//! ways against the true surface (see `neurosurf_trainer::quality`).
+//! Implicit models on real shapes: the scanned bunny (400 and 1 500 points), spot, fandisk, the
+//! woody slab, a double torus and rounded cubes, each trained by the network and by the
+//! built-in RBF on the same points, measured both ways against the true surface (see
+//! `neurosurf_trainer::quality`); the network is measured as a user runs it, its blob in the
+//! core in f32.
 //!
-//! Run: `cargo bench -p neurosurf-trainer --bench implicit_shapes` (`-- --case bunny-400` for
-//! one case, `-- --seeds 1,2,3` for other seeds, `-- --no-rbf` to skip the RBF).
+//! Run: `cargo bench -p neurosurf-trainer --bench implicit_shapes`, with after `--`:
+//! `--case bunny-400,spot-1500` for some cases, `--seeds 1,2,3` for other seeds, `--no-rbf` to
+//! skip the RBF, `--diagonal 0.01` to scale every shape first (units), `--set key=value,…` to
+//! change a training option, `--save DIR` for the blobs, `--slices DIR` for pictures of three
+//! slices (red: model inside where the points say outside, blue the reverse), `--body 50` for
+//! the demo's body and its animation frame by frame instead.
 
 use std::time::Instant;
 
@@ -11,7 +17,10 @@ use neurosurf_core::scalar::ScalarKind;
 use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions};
 use neurosurf_trainer::io::{Mesh, data_file, read_mesh};
 use neurosurf_trainer::quality::{Truth, TwoSided, two_sided};
-use neurosurf_trainer::render::{CoreField, Field, Region, extract_mesh};
+use neurosurf_trainer::rbf::{self, RbfOptions};
+use neurosurf_trainer::render::{
+    CoreField, DEFAULT_RBF_INFLATE, Field, RbfField, Region, extract_mesh,
+};
 use neurosurf_trainer::sample::sample_mesh;
 
 /// An analytic signed distance (negative inside) as a field for the mesher: Φ = −d.
@@ -85,7 +94,8 @@ struct Case {
 
 fn cases(filter: &[String]) -> Vec<Case> {
     let obj = |name: &str| read_mesh(&data_file(name).expect("data")).expect("mesh");
-    let all: Vec<(&'static str, Box<dyn Fn() -> Mesh>, usize, usize)> = vec![
+    type MakeMesh = Box<dyn Fn() -> Mesh>;
+    let all: Vec<(&'static str, MakeMesh, usize, usize)> = vec![
         (
             "bunny-400",
             Box::new(move || obj("stanford-bunny.obj")),
@@ -102,7 +112,12 @@ fn cases(filter: &[String]) -> Vec<Case> {
         ("double-torus", Box::new(double_torus), 400, 8),
         ("rounded-cube", Box::new(rounded_cube), 200, 8),
         ("rounded-cube-800", Box::new(rounded_cube), 800, 8),
-        ("woody-400", Box::new(move || obj("woody.obj")), 400, 8),
+        (
+            "woody-slab-800",
+            Box::new(|| neurosurf_trainer::demo::woody_mesh().expect("woody")),
+            800,
+            8,
+        ),
         ("fandisk-800", Box::new(move || obj("fandisk.obj")), 800, 8),
     ];
     all.into_iter()
@@ -116,9 +131,19 @@ fn cases(filter: &[String]) -> Vec<Case> {
         .collect()
 }
 
-fn row(what: &str, seconds: f64, m: &TwoSided) {
+/// One table row; `rbf` is the RBF's (time, truth → model median) on the same points, for
+/// the ratio columns.
+fn row(what: &str, seconds: f64, m: &TwoSided, rbf: Option<(f64, f64)>) {
+    let ratios = match rbf {
+        Some((t, d)) => format!(
+            "{:.2}× | {:.2}×",
+            seconds / t,
+            m.truth_to_model.median_percent / d
+        ),
+        None => "– | –".to_string(),
+    };
     println!(
-        "| {what} | {seconds:.2} s | {:.4} % | {:.4} % | {:.3} % | {:.2}° | {} | {} | {:.2} % |",
+        "| {what} | {seconds:.2} s | {:.4} % | {:.4} % | {:.3} % | {:.2}° | {} | {} | {:.2} % | {ratios} |",
         m.truth_to_model.median_percent,
         m.model_to_truth.median_percent,
         m.model_to_truth.p90_percent,
@@ -162,254 +187,71 @@ fn slices(
                 if near {
                     c = c.map(|x| x / 2 + 40);
                 }
-                img.put_pixel(
-                    axis as u32 * n as u32 + i as u32,
-                    j as u32,
-                    image::Rgb(c.map(|x| x as u8)),
-                );
+                img.put_pixel(axis as u32 * n + i, j, image::Rgb(c.map(|x| x as u8)));
             }
         }
     }
     img.save(path).expect("png");
 }
 
-/// The exact winding number of a closed (or nearly closed) triangle mesh at q (Van Oosterom
-/// and Strackee's solid angle per triangle).
-fn mesh_winding(mesh: &Mesh, q: [f64; 3]) -> f64 {
-    let mut sum = 0.0;
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|v| {
-            let p = mesh.positions[v as usize];
-            [p[0] - q[0], p[1] - q[1], p[2] - q[2]]
-        });
-        let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        let dot = |u: [f64; 3], v: [f64; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-        let cross = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let (la, lb, lc) = (n(a), n(b), n(c));
-        let det = dot(cross, c);
-        let den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-        sum += 2.0 * det.atan2(den);
-    }
-    sum / (4.0 * std::f64::consts::PI)
-}
-
-/// How often the points' winding number disagrees with the mesh's on far random points.
-fn check_oracle(mesh: &Mesh, points: &neurosurf_trainer::PointSet, truth: &Truth) {
-    use rand::{Rng, SeedableRng};
-    let oracle = implicit::Oracle::new(&points.positions, &points.normals).expect("oracle");
-    let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
-    let mut checked = 0;
-    let mut wrong = 0;
-    let mut examples = Vec::new();
-    while checked < 1500 {
-        let q = [0, 1, 2].map(|k| rng.random_range(b.lo[k]..b.hi[k]));
-        if truth.distance(q) < 0.02 * truth.diagonal() {
-            continue;
-        }
-        checked += 1;
-        let exact = mesh_winding(mesh, q);
-        if (exact > 0.5) != oracle.inside(q) {
-            wrong += 1;
-            if examples.len() < 5 {
-                examples.push((
-                    exact,
-                    oracle.winding(q),
-                    truth.distance(q) / truth.diagonal(),
-                ));
+/// The demo's body, cold in the rest pose, then `frames − 1` animation frames each warm from
+/// the previous one, every frame measured against its true body (meshed from its signed
+/// distance).
+fn body_animation(frames: usize) {
+    use neurosurf_trainer::demo::{body_points, train_body};
+    use neurosurf_trainer::sample::{Body, Pose};
+    let options = ImplicitOptions::default();
+    let mut previous: Option<(implicit::ImplicitNetwork, Vec<usize>)> = None;
+    for frame in 0..frames.max(1) {
+        let pose = if frame == 0 {
+            Pose::REST
+        } else {
+            Pose::animation(frame, frames)
+        };
+        let points = body_points(&pose, 1).expect("body points");
+        let start = Instant::now();
+        let init = previous.as_ref().map(|(n, c)| (n, c.as_slice()));
+        let trained = train_body(&points, &options, init, &|_| {}).expect("training");
+        let seconds = start.elapsed().as_secs_f64();
+        let body = Body::new(&pose);
+        let (mut lo, mut hi) = (points.positions[0], points.positions[0]);
+        for p in &points.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
             }
         }
-    }
-    eprintln!(
-        "  oracle: {wrong} of {checked} far points disagree with the mesh; e.g. {examples:?}"
-    );
-}
-
-/// Prints where the stray grid finds sign changes between far neighbours.
-fn locate_strays(
-    field: &dyn Fn([f64; 3]) -> f64,
-    points: &neurosurf_trainer::PointSet,
-    truth: &Truth,
-) {
-    let oracle = implicit::Oracle::new(&points.positions, &points.normals).expect("oracle");
-    let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
-    let n = 48;
-    let at = |i: [usize; 3]| {
-        [0, 1, 2].map(|k| b.lo[k] + (b.hi[k] - b.lo[k]) * i[k] as f64 / (n - 1) as f64)
-    };
-    let far = 0.05 * truth.diagonal();
-    let mut shown = 0;
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let p = at([x, y, z]);
-                if truth.distance(p) <= far {
-                    continue;
-                }
-                for d in 0..3 {
-                    let mut j = [x, y, z];
-                    j[d] += 1;
-                    if j[d] >= n {
-                        continue;
-                    }
-                    let q = at(j);
-                    if truth.distance(q) <= far {
-                        continue;
-                    }
-                    let (a, c) = (field(p), field(q));
-                    if (a > 0.0) != (c > 0.0) && shown < 12 {
-                        shown += 1;
-                        let rel = [0, 1, 2]
-                            .map(|k| ((p[k] - b.lo[k]) / (b.hi[k] - b.lo[k]) * 100.0).round());
-                        eprintln!(
-                            "  stray at {rel:?}% of the box: Φ {a:.3} / {c:.3}, winding {:.2} / {:.2}, distance {:.1} % diag",
-                            oracle.winding(p),
-                            oracle.winding(q),
-                            100.0 * truth.distance(p) / truth.diagonal()
-                        );
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// Lists the pieces of the model's mesh over the grown box: size, where, how far.
-fn pieces(field: &dyn Field, truth: &Truth) {
-    let b = neurosurf_trainer::quality::grown_bounds(truth, 0.1);
-    let half = b.half();
-    let normalization = implicit::Normalization {
-        center: b.center(),
-        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
-    };
-    struct W<'a> {
-        f: &'a dyn Field,
-        r: Vec<Region>,
-    }
-    impl Field for W<'_> {
-        fn value(&self, p: [f64; 3]) -> f64 {
-            self.f.value(p)
-        }
-        fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
-            self.f.value_gradient(p)
-        }
-        fn regions(&self) -> &[Region] {
-            &self.r
-        }
-        fn values(&self, p: &[[f64; 3]], o: &mut [f64]) {
-            self.f.values(p, o)
-        }
-    }
-    let mut regions = vec![Region::new(normalization, 2.0, 1.0).expect("region")];
-    regions.extend(field.regions().iter().copied());
-    let w = W {
-        f: field,
-        r: regions,
-    };
-    let mesh = extract_mesh(&w, 96, &|_, _| {}).expect("mesh").mesh;
-    let mut parent: Vec<usize> = (0..mesh.positions.len()).collect();
-    fn find(p: &mut [usize], mut v: usize) -> usize {
-        while p[v] != v {
-            p[v] = p[p[v]];
-            v = p[v];
-        }
-        v
-    }
-    for t in &mesh.triangles {
-        let a = find(&mut parent, t[0] as usize);
-        for &v in &t[1..] {
-            let c = find(&mut parent, v as usize);
-            if a != c {
-                parent[c] = a;
-            }
-        }
-    }
-    let mut groups: std::collections::HashMap<usize, Vec<usize>> = Default::default();
-    for v in 0..mesh.positions.len() {
-        let r = find(&mut parent, v);
-        groups.entry(r).or_default().push(v);
-    }
-    let mut list: Vec<Vec<usize>> = groups.into_values().collect();
-    list.sort_by_key(|g| std::cmp::Reverse(g.len()));
-    for g in list.iter().skip(1).take(8) {
-        let c = g
-            .iter()
-            .fold([0.0; 3], |a, &v| {
-                let p = mesh.positions[v];
-                [a[0] + p[0], a[1] + p[1], a[2] + p[2]]
-            })
-            .map(|x| x / g.len() as f64);
-        let rel = [0, 1, 2].map(|k| ((c[k] - b.lo[k]) / (b.hi[k] - b.lo[k]) * 100.0).round());
-        let dmax = g
-            .iter()
-            .map(|&v| truth.distance(mesh.positions[v]))
-            .fold(0.0, f64::max);
-        eprintln!(
-            "  piece of {} vertices at {rel:?}% of the box, farthest {:.2} % diag from the truth",
-            g.len(),
-            100.0 * dmax / truth.diagonal()
+        let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
+        let half = [0, 1, 2].map(|k| 0.6 * (hi[k] - lo[k]));
+        let mesh = analytic_mesh(
+            |p| body.signed_distance([0, 1, 2].map(|k| p[k] + centre[k])),
+            half,
         );
-    }
-}
-
-/// For every module: how far its subtree's zero set is from the true surface where that
-/// module's features are nearest (first-order |Φ|/|∇Φ|, % of the diagonal), and its normals.
-fn diagnose(
-    network: &implicit::ImplicitNetwork,
-    points: &neurosurf_trainer::PointSet,
-    truth: &Truth,
-) {
-    let labels = points.features.as_ref().expect("labels");
-    let tree: kiddo::ImmutableKdTree<f64, 3> =
-        kiddo::ImmutableKdTree::new_from_slice(&points.positions).expect("tree");
-    let owner: Vec<u32> = truth
-        .positions()
-        .iter()
-        .map(|p| {
-            let n = tree
-                .query(p)
-                .nearest_one::<kiddo::SquaredEuclidean<f64>>()
-                .execute();
-            labels[n.item as usize]
-        })
-        .collect();
-    for i in 0..network.module_count() {
-        let sub = network.subtree(i).expect("subtree");
-        let features: Vec<u32> = network
-            .subtree_leaves(i)
-            .iter()
-            .map(|&l| network.leaf_features()[l].unwrap_or(0))
-            .collect();
-        let mut d = Vec::new();
-        let mut a = Vec::new();
-        for ((p, n), o) in truth.positions().iter().zip(truth.normals()).zip(&owner) {
-            if !features.contains(o) {
-                continue;
-            }
-            let (phi, g) = sub.eval(*p);
-            let len = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-            d.push(phi.abs() / len);
-            a.push(
-                (-(g[0] * n[0] + g[1] * n[1] + g[2] * n[2]) / len)
-                    .clamp(-1.0, 1.0)
-                    .acos()
-                    .to_degrees(),
-            );
+        let mut mesh = mesh;
+        for p in &mut mesh.positions {
+            *p = [0, 1, 2].map(|k| p[k] + centre[k]);
         }
-        d.sort_by(f64::total_cmp);
-        a.sort_by(f64::total_cmp);
-        eprintln!(
-            "  module {i:2} ({} features): {} truth samples, median {:.4} %, p90 {:.3} %, normal median {:.2}°",
-            features.len(),
-            d.len(),
-            100.0 * d[d.len() / 2] / truth.diagonal(),
-            100.0 * d[d.len() * 9 / 10] / truth.diagonal(),
-            a[a.len() / 2]
+        let truth = Truth::from_mesh(&mesh).expect("truth");
+        let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
+        let regions = Region::of_network(&trained.network, 2.0, 1.25);
+        let field = CoreField::new(&blob, regions).expect("the core loads the blob");
+        let m = two_sided(&field, &truth, 96, 48).expect("measure");
+        let s = &trained.summary;
+        row(
+            &format!(
+                "body frame {frame} ({} it, {})",
+                s.iterations(),
+                s.outcome()
+            ),
+            seconds,
+            &m,
+            None,
         );
+        let cold = match &previous {
+            Some((_, c)) => c.clone(),
+            None => s.cold_iterations.clone(),
+        };
+        previous = Some((trained.network, cold));
     }
 }
 
@@ -431,9 +273,13 @@ fn main() {
     // Scale every case to this bounding diagonal (as given when absent).
     let to_diagonal: Option<f64> = value("--diagonal").map(|v| v.parse().expect("diagonal"));
     println!(
-        "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices |"
+        "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices | time ÷ RBF | truth → model ÷ RBF |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    if let Some(frames) = value("--body") {
+        body_animation(frames.parse().expect("--body FRAMES"));
+        return;
+    }
     for mut case in cases(&filter) {
         if let Some(target) = to_diagonal {
             let d = neurosurf_trainer::caoen::bounding_diagonal(&case.mesh);
@@ -444,6 +290,15 @@ fn main() {
         let truth = Truth::from_mesh(&case.mesh).expect("truth");
         for &seed in &seeds {
             let points = sample_mesh(&case.mesh, case.points, seed).expect("sample");
+            // The built-in RBF on the same points, first, so the network's row can give ratios.
+            let rbf_row = rbf.then(|| {
+                let start = Instant::now();
+                let (model, _) = rbf::fit(&points, &RbfOptions::default()).expect("rbf");
+                let seconds = start.elapsed().as_secs_f64();
+                let field = RbfField::new(&model, DEFAULT_RBF_INFLATE).expect("rbf field");
+                let m = two_sided(&field, &truth, 96, 48).expect("measure");
+                (seconds, m)
+            });
             let start = Instant::now();
             let request = FitRequest {
                 features: Some(case.features),
@@ -477,37 +332,8 @@ fn main() {
                 implicit::decompose(&points.positions, case.features, options.min_points)
                     .expect("features"),
             );
-            let trace = std::env::var_os("TRACE").is_some();
-            let trained = implicit::fit(points.clone(), &request, &options, &|p| {
-                if let (
-                    true,
-                    implicit::Progress::Iteration {
-                        module,
-                        iteration,
-                        error,
-                    },
-                ) = (trace, p)
-                    && iteration % 10 == 0
-                {
-                    eprintln!("    trace module {module} it {iteration} E {error:.3e}");
-                }
-            })
-            .expect("training");
-            if std::env::var_os("VERBOSE").is_some() {
-                diagnose(&trained.network, &points, &truth);
-            }
-            if std::env::var_os("ORACLE").is_some() {
-                check_oracle(&case.mesh, &points, &truth);
-            }
-            if std::env::var_os("PIECES").is_some() {
-                let f = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25)
-                    .expect("field");
-                pieces(&f, &truth);
-            }
-            if std::env::var_os("STRAYS").is_some() {
-                let net = &trained.network;
-                locate_strays(&|p| net.eval(p).0, &points, &truth);
-            }
+            let trained =
+                implicit::fit(points.clone(), &request, &options, &|_| {}).expect("training");
             if let Some(dir) = value("--slices") {
                 let net = &trained.network;
                 slices(
@@ -523,45 +349,27 @@ fn main() {
                 let path = format!("{dir}/{}-{seed}.nsb", case.name);
                 std::fs::write(&path, &blob).expect("save");
             }
+            // Measured as a user runs it: the blob in the core, in f32.
             let regions = Region::of_network(&trained.network, 2.0, 1.25);
-            let _ = CoreField::new;
-            let field = neurosurf_trainer::render::NetworkField::new(&trained.network, 2.0, 1.25)
-                .expect("field");
-            let _ = regions;
+            let field = CoreField::new(&blob, regions).expect("the core loads the blob");
             let m = two_sided(&field, &truth, 96, 48).expect("measure");
             let s = &trained.summary;
-            if std::env::var_os("VERBOSE").is_some() {
-                for m in &s.modules {
-                    eprintln!(
-                        "  module {:2} {} {:5} rows {:5} it E {:.2e} -> {:.2e} {:?} {:.2}s",
-                        m.module,
-                        if m.node { "node" } else { "leaf" },
-                        m.points,
-                        m.lm.iterations,
-                        m.lm.initial_error,
-                        m.lm.error,
-                        m.lm.stop,
-                        m.seconds
-                    );
-                }
-            }
             row(
                 &format!(
                     "{} seed {seed} network ({} modules, {} it, {})",
                     case.name,
                     s.modules.len(),
                     s.iterations(),
-                    if s.converged() {
-                        "converged"
-                    } else {
-                        "not converged"
-                    }
+                    s.outcome()
                 ),
                 seconds,
                 &m,
+                rbf_row
+                    .as_ref()
+                    .map(|(t, r)| (*t, r.truth_to_model.median_percent)),
             );
-            if rbf {
-                let _ = &points;
+            if let Some((t, r)) = &rbf_row {
+                row(&format!("{} seed {seed} RBF", case.name), *t, r, None);
             }
         }
     }

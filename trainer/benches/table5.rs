@@ -50,10 +50,10 @@ fn main() {
             row.rbf_distance_percent,
             row.rbf_angle_degrees,
             1000.0 * row.network_seconds / row.iterations.max(1.0),
-            if row.converged {
-                ""
+            if row.outcome == neurosurf_trainer::implicit::Outcome::Converged {
+                String::new()
             } else {
-                " (not all converged)"
+                format!(" ({})", row.outcome)
             },
         );
     }

@@ -40,7 +40,12 @@ fn sample_train_eval_info_round_trip() {
         "--json",
     ]);
     let json: serde_json::Value = serde_json::from_str(&summary).unwrap();
-    assert_eq!(json["converged"], true, "{summary}");
+    assert!(json["outcome"].is_string(), "{summary}");
+    assert_eq!(
+        json["converged"],
+        json["outcome"] == "converged",
+        "{summary}"
+    );
     assert!(json["iterations"].as_u64().unwrap() > 0);
 
     let queries = path(dir.path(), "q.txt");
@@ -159,6 +164,27 @@ fn automatic_features_split_an_unlabelled_shape() {
     ]);
     let json: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(json["training"]["tree"], "(0,1)");
+    assert!(json["outcome"].is_string(), "{json}");
+
+    // More features than the core holds: refused before any training, naming the way out;
+    // the blob already written is kept.
+    let before = fs::read(&model).unwrap();
+    let err = fails(&[
+        "train",
+        "implicit",
+        "--points",
+        s(&points),
+        "--features",
+        "24",
+        "--out",
+        s(&model),
+    ]);
+    assert!(err.contains("the core holds at most"), "{err}");
+    assert!(
+        err.contains("--features") && err.contains("--width"),
+        "{err}"
+    );
+    assert_eq!(fs::read(&model).unwrap(), before);
 }
 
 #[test]
@@ -227,23 +253,13 @@ fn bad_inputs_get_clear_errors_and_leave_outputs_alone() {
     // Fewer points than a module can fit.
     let err = train(&ply("few.ply", "0 0 0 0 0 1\n1 0 0 1 0 0\n0 1 0 0 1 0\n"));
     assert!(err.contains("at least"), "{err}");
-    // A planar feature has no per-axis PCA box (the paper's literal normalization); the
-    // default isotropic box handles it, so ask for per-axis scaling.
+    // Points in a plane enclose no volume: no implicit surface to learn.
     let flat = ply(
         "flat.ply",
         "0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n1 1 0 0 0 1\n0.5 0.2 0 0 0 1\n0.1 0.9 0 0 0 1\n",
     );
-    let err = fails(&[
-        "train",
-        "implicit",
-        "--points",
-        s(&flat),
-        "--box-scaling",
-        "per-axis",
-        "--out",
-        s(&model),
-    ]);
-    assert!(err.contains("planar"), "{err}");
+    let err = train(&flat);
+    assert!(err.contains("lie in a plane"), "{err}");
     // Collinear points have no box at all.
     let err = train(&ply(
         "line.ply",

@@ -51,14 +51,14 @@ fn the_demo_writes_every_model_and_reports_their_accuracy() {
     the_report_page_shows_existing_pictures(&out, &report);
 }
 
-/// The §6–7 tour: 316 points in 17 features, 33 modules all converged, close to the true
-/// body; the warm-started frames converge in fewer iterations than the cold start.
+/// The §6–7 tour: 316 points in 17 features, 33 modules, none cut by the iteration cap, close
+/// to the true body; the warm-started frames settle in fewer iterations than the cold start.
 fn the_tour_learned_the_body_and_its_animation(tour: &serde_json::Value) {
     let body = &tour["body"];
     assert_eq!(body["control_points"], 316, "{body}");
     assert_eq!(body["features"].as_array().unwrap().len(), 17);
     assert_eq!(body["modules"].as_array().unwrap().len(), 33);
-    assert_eq!(body["converged"], true, "{body}");
+    assert_ne!(body["outcome"]["stop"], "iteration_cap", "{body}");
     let fidelity = &body["fidelity"];
     assert!(
         fidelity["median_distance_percent"].as_f64().unwrap() < 0.1,
@@ -69,7 +69,7 @@ fn the_tour_learned_the_body_and_its_animation(tour: &serde_json::Value) {
         "{fidelity}"
     );
     let animation = &tour["animation"];
-    assert_eq!(animation["converged"], true, "{animation}");
+    assert_ne!(animation["outcome"]["stop"], "iteration_cap", "{animation}");
     assert_eq!(animation["per_frame"].as_array().unwrap().len(), 5);
     let warm = animation["iterations"]["average"].as_f64().unwrap();
     let cold = animation["cold_iterations"].as_f64().unwrap();
@@ -109,7 +109,7 @@ fn the_tour_measured_table_5(rows: &serde_json::Value) {
     assert_eq!(points, [48, 96, 160]);
     for row in rows {
         assert_eq!(row["paper"]["points"], row["points"], "{row}");
-        assert_eq!(row["converged"], true, "{row}");
+        assert_ne!(row["outcome"]["stop"], "iteration_cap", "{row}");
         assert!(row["iterations"].as_f64().unwrap() >= 1.0, "{row}");
         for key in ["network_seconds", "rbf_seconds"] {
             assert!(row[key].as_f64().unwrap() > 0.0, "{key}: {row}");

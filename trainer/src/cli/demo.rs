@@ -219,7 +219,11 @@ fn print_tour(tour: &Tour) {
             r.network_angle_degrees,
             r.rbf_distance_percent,
             r.rbf_angle_degrees,
-            if r.converged { "" } else { "  (not converged)" }
+            if r.outcome == neurosurf_trainer::implicit::Outcome::Converged {
+                String::new()
+            } else {
+                format!("  ({})", r.outcome)
+            }
         );
     }
 }

@@ -7,6 +7,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 use neurosurf_trainer::io::write_mesh;
+use neurosurf_trainer::quality::components;
 use neurosurf_trainer::render::{
     CoreField, ExtractedMesh, Field, MeshStats, RbfField, Region, extract_mesh,
 };
@@ -37,6 +38,8 @@ pub struct Args {
 #[derive(Serialize)]
 struct Summary<'a> {
     out: &'a Path,
+    /// Connected pieces of the mesh (triangles sharing vertices).
+    components: usize,
     #[serde(flatten)]
     stats: MeshStats,
 }
@@ -63,18 +66,22 @@ pub fn run(args: &Args) -> Result<()> {
     bar.finish_and_clear();
     write_mesh(&args.out, &extracted.mesh, Some(&extracted.normals))?;
     let stats = extracted.stats;
+    let components = components(&extracted.mesh);
     if args.json {
         return output::json(&Summary {
             out: &args.out,
+            components,
             stats,
         });
     }
     println!(
-        "wrote {} ({} vertices, {} triangles, watertight; grid {} cells, {} of {} blocks \
-         searched, {} evaluations, {:.3} s)",
+        "wrote {} ({} vertices, {} triangles, {} component{}, watertight; grid {} cells, {} \
+         of {} blocks searched, {} evaluations, {:.3} s)",
         args.out.display(),
         stats.vertices,
         stats.triangles,
+        components,
+        if components == 1 { "" } else { "s" },
         stats.resolution,
         stats.blocks_searched,
         stats.blocks,

@@ -11,7 +11,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::fidelity::{Fidelity, median};
-use crate::implicit::{self, FitRequest, ImplicitOptions, StopReason};
+use crate::implicit::{self, FitRequest, ImplicitOptions, Outcome};
 use crate::points::PointSet;
 use crate::rbf::{self, RbfOptions};
 use crate::sample::{Shape, sample_shape};
@@ -90,8 +90,8 @@ pub struct Table5Row {
     pub rbf_distance_percent: f64,
     /// RBF: median normal error, degrees.
     pub rbf_angle_degrees: f64,
-    /// Whether the network reached the threshold for every seed.
-    pub converged: bool,
+    /// How the network's trainings ended, the worst over the seeds.
+    pub outcome: Outcome,
     /// The paper's row for this point count, if it has one.
     pub paper: Option<PaperTable5Row>,
 }
@@ -144,7 +144,7 @@ pub fn table5_row(points: usize, seeds: &[u64], held_out: &PointSet) -> Result<T
     let mut iterations = Vec::new();
     let mut times = [Vec::new(), Vec::new()];
     let mut fidelity: [[Vec<f64>; 2]; 2] = Default::default();
-    let mut converged = true;
+    let mut outcome = Outcome::Converged;
     let mut record = |which: usize, f: Option<Fidelity>| -> Result<()> {
         let f = f.ok_or_else(|| Error::invalid("no held-out point to measure Table 5 on"))?;
         fidelity[which][0].push(f.median_distance_percent);
@@ -161,7 +161,7 @@ pub fn table5_row(points: usize, seeds: &[u64], held_out: &PointSet) -> Result<T
         let trained = implicit::fit(sample.clone(), &FitRequest::default(), &options, &|_| {})?;
         times[0].push(start.elapsed().as_secs_f64());
         let modules = &trained.summary.modules;
-        converged &= modules.iter().all(|m| m.lm.stop == StopReason::Converged);
+        outcome = outcome.worst(trained.summary.outcome());
         iterations.push(modules.iter().map(|m| m.lm.iterations as f64).sum());
         record(
             0,
@@ -188,7 +188,7 @@ pub fn table5_row(points: usize, seeds: &[u64], held_out: &PointSet) -> Result<T
         network_angle_degrees: median(net_a),
         rbf_distance_percent: median(rbf_d),
         rbf_angle_degrees: median(rbf_a),
-        converged,
+        outcome,
         paper: PAPER_TABLE5.iter().find(|r| r.points == points).copied(),
     })
 }
@@ -203,7 +203,7 @@ mod tests {
         let row = &rows[0];
         assert_eq!(row.points, 48);
         assert_eq!(row.paper, Some(PAPER_TABLE5[0]));
-        assert!(row.converged, "{row:?}");
+        assert!(row.outcome.settled(), "{row:?}");
         assert!(row.iterations >= 1.0, "{row:?}");
         assert!(
             row.network_seconds > 0.0 && row.rbf_seconds > 0.0,

@@ -120,7 +120,7 @@ pub fn sign_points(
 ) -> Vec<SignPoint> {
     let total: f64 = boxes.iter().map(|b| b.volume).sum();
     let mut out = Vec::with_capacity(count);
-    if boxes.is_empty() || !(total > 0.0) {
+    if boxes.is_empty() || total.is_nan() || total <= 0.0 {
         return out;
     }
     for _ in 0..20 * count {

@@ -18,8 +18,9 @@ pub const MODEL_DIAGONAL: f64 = 4.0;
 /// diagonal, that still encloses a volume.
 const MIN_THICKNESS: f64 = 1e-4;
 
-/// The standard deviation of `positions` along their direction of least spread.
-fn thickness(positions: &[[f64; 3]]) -> f64 {
+/// The standard deviations of `positions` along their two directions of least spread,
+/// smallest first.
+fn spreads(positions: &[[f64; 3]]) -> [f64; 2] {
     let n = positions.len() as f64;
     let mean = [0, 1, 2].map(|k| positions.iter().map(|p| p[k]).sum::<f64>() / n);
     let covariance = nalgebra::Matrix3::from_fn(|r, c| {
@@ -29,8 +30,9 @@ fn thickness(positions: &[[f64; 3]]) -> f64 {
             .sum::<f64>()
             / n
     });
-    let least = covariance.symmetric_eigenvalues().min();
-    least.max(0.0).sqrt()
+    let mut values: Vec<f64> = covariance.symmetric_eigenvalues().iter().copied().collect();
+    values.sort_by(f64::total_cmp);
+    [values[0], values[1]].map(|v| v.max(0.0).sqrt())
 }
 
 /// World ↔ model frame: x_model = (x − center) / scale.
@@ -80,8 +82,15 @@ impl Frame {
                  spread over a surface"
             )));
         }
-        let thickness = thickness(positions);
-        if !(thickness > MIN_THICKNESS * diagonal) {
+        let [thickness, width] = spreads(positions);
+        if width <= MIN_THICKNESS * diagonal {
+            return Err(Error::invalid(format!(
+                "the points are collinear (their spread across the line is {width:.3e}, the \
+                 bounding diagonal {diagonal:.3e}); an implicit surface encloses a volume: give \
+                 points sampled over a closed surface"
+            )));
+        }
+        if thickness <= MIN_THICKNESS * diagonal {
             return Err(Error::invalid(format!(
                 "the points lie in a plane (their spread across it is {thickness:.3e}, the \
                  bounding diagonal {diagonal:.3e}); an implicit surface encloses a volume: give \

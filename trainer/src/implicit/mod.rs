@@ -4,6 +4,7 @@
 
 mod activation;
 mod blob;
+mod capacity;
 mod constraints;
 mod features;
 mod frame;
@@ -21,6 +22,7 @@ mod value_rows;
 
 pub use activation::{Activation, activation};
 pub use blob::{DecodedImplicit, ImplicitMetadata, frame, from_blob, to_blob};
+pub use capacity::{check_capacity, fits, model_size};
 pub use features::decompose;
 pub use frame::{Frame, MODEL_DIAGONAL};
 pub use jacobian::{

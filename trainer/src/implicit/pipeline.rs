@@ -2,6 +2,7 @@
 //! the tree (given, inherited from the initial model, or balanced), and training.
 
 use super::blob::DecodedImplicit;
+use super::capacity::check_capacity;
 use super::features::decompose;
 use super::options::ImplicitOptions;
 use super::train::{Progress, Trained, train};
@@ -35,6 +36,9 @@ pub fn fit(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<Trained> {
     let mut points = points.validated()?;
+    if let (Some(k), None) = (request.features, &request.init) {
+        check_capacity(k, options.width)?;
+    }
     if points.features.is_none() {
         let labels = match request.features {
             Some(k) if k > 1 => decompose(&points.positions, k, options.min_points)?,

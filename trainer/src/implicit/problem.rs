@@ -8,6 +8,8 @@ use super::jacobian::{
 use super::lm::{LeastSquares, NormalEquations, cpu_has_fma};
 use super::value_rows::{ValueTape, forward_value_lanes, value_row_lanes};
 
+/// Receives a group of active value rows: `(rows, residuals, point indices)`.
+type RowSink<'a> = dyn FnMut(&[f64], &[f64], &[usize]) + 'a;
 /// A module's training data: per control point, the module's inputs with their tangents
 /// (derivatives with respect to world x), and the target gradient −s·n.
 ///
@@ -238,7 +240,7 @@ impl<'a> ModuleProblem<'a> {
         first_point: usize,
         residuals: &mut [f64],
         stride: usize,
-        emit: &mut dyn FnMut(&[f64], &[f64], &[usize]),
+        emit: &mut RowSink<'_>,
     ) {
         let p = self.layout.len;
         let mut inputs = [[0.0; LANES]; MAX_INPUTS];

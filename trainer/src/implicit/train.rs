@@ -10,6 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::capacity::check_capacity;
 use super::constraints::{OffSurface, SampleBox, SignPoint, off_surface, sign_points};
 use super::frame::{Frame, MODEL_DIAGONAL};
 use super::jacobian::{MAX_INPUTS, TrainedLayout};
@@ -217,6 +218,12 @@ pub fn train(
         }
     }
     tree.check_features(feature_count)?;
+    let leaves = tree
+        .post_order()
+        .iter()
+        .filter(|&&k| k == ModuleKind::Leaf)
+        .count();
+    check_capacity(leaves, options.width)?;
     let mut network = ImplicitNetwork::new(options.width, tree)?;
     let previous = match init {
         Some((previous, _)) => {
