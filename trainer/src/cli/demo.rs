@@ -138,7 +138,7 @@ fn print_tour(tour: &Tour) {
     let b = &tour.body;
     println!(
         "\nbody: {} control points, {} features, {} modules, {} iterations, {:.3} s, {}; \
-         median distance {:.4} %D, median angle {:.2}°",
+         median distance {:.4} %D, median angle {:.2}°\n  both ways: {}",
         b.control_points,
         b.features.len(),
         b.modules.len(),
@@ -146,31 +146,34 @@ fn print_tour(tour: &Tour) {
         b.seconds,
         b.outcome,
         b.fidelity.median_distance_percent,
-        b.fidelity.median_angle_degrees
+        b.fidelity.median_angle_degrees,
+        b.two_sided
     );
     let a = &tour.animation;
     println!(
         "animation: {} frames, warm-started: {:.3} s per frame (min {:.3}, max {:.3}), \
-         {:.0} iterations per frame against {} cold, {}",
+         {:.0} iterations per frame against {} cold, {}\n  last frame both ways: {}",
         a.frames,
         a.seconds.average,
         a.seconds.min,
         a.seconds.max,
         a.iterations.average,
         a.cold_iterations,
-        a.outcome
+        a.outcome,
+        a.last_two_sided
     );
     if let Some(w) = &tour.woody {
         println!(
             "woody.obj cookie: {} control points, {} automatic features, {} iterations, {:.3} s, \
-             {}; median distance {:.4} %D, median angle {:.2}°",
+             {}; median distance {:.4} %D, median angle {:.2}°\n  both ways: {}",
             w.control_points,
             w.features,
             w.iterations,
             w.seconds,
             w.outcome,
             w.fidelity.median_distance_percent,
-            w.fidelity.median_angle_degrees
+            w.fidelity.median_angle_degrees,
+            w.two_sided
         );
     }
     println!(

@@ -7,6 +7,10 @@ use crate::error::Result;
 use crate::fidelity::{Fidelity, diameter};
 use crate::implicit::{ImplicitNetwork, ImplicitOptions, Progress, Trained, TreeSpec, train};
 use crate::points::PointSet;
+use crate::quality::{
+    MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, grown_bounds, two_sided,
+};
+use crate::render::{DEFAULT_BOX_SIZE, DEFAULT_INFLATE, NetworkField};
 use crate::sample::{BODY_POINTS, BODY_TREE, Body, Pose, scaled_counts};
 
 /// Held-out points the body is measured on (spread over the features like the control points).
@@ -58,6 +62,25 @@ pub fn body_fidelity(network: &ImplicitNetwork, pose: &Pose, seed: u64) -> Resul
     Fidelity::measure(&held_out, d, |p| network.eval(p))
         .ok_or_else(|| crate::Error::invalid("the body model has a vanishing gradient"))
 }
+
+/// The body model against the true surface in `pose`, both ways (see
+/// [`two_sided`](crate::quality::two_sided)): the truth is the body's signed distance meshed
+/// at [`BODY_TRUTH_RESOLUTION`].
+///
+/// # Errors
+/// None expected on the built-in poses.
+pub fn body_two_sided(network: &ImplicitNetwork, pose: &Pose) -> Result<TwoSided> {
+    let body = Body::new(pose);
+    let sample = body.sample(&scaled_counts(BODY_HELD_OUT), HELD_OUT_SEED)?;
+    let grown = grown_bounds(&Truth::from_points(&sample)?, 0.2);
+    let truth =
+        Truth::from_signed_distance(|p| body.signed_distance(p), grown, BODY_TRUTH_RESOLUTION)?;
+    let field = NetworkField::new(network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE)?;
+    two_sided(&field, &truth, MEASURE_RESOLUTION, STRAY_RESOLUTION)
+}
+
+/// Cells along the body's height when its true surface is meshed for [`body_two_sided`].
+pub const BODY_TRUTH_RESOLUTION: usize = 160;
 
 /// One module's training in the body (the paper's Fig. 9).
 #[derive(Clone, Debug, Serialize)]

@@ -16,7 +16,8 @@ mod woody;
 
 pub use animation::{Animation, FrameReport, PAPER_FRAMES, Spread, animate};
 pub use body::{
-    BODY_HELD_OUT, BodyModule, body_fidelity, body_points, body_tree, modules, train_body,
+    BODY_HELD_OUT, BODY_TRUTH_RESOLUTION, BodyModule, body_fidelity, body_points, body_tree,
+    body_two_sided, modules, train_body,
 };
 pub use parametric::{ParametricDemo, cao_en, curve};
 pub use pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};

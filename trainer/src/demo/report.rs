@@ -125,8 +125,9 @@ pub fn html(report: &DemoReport) -> String {
             "<h2>Animation (Table 4, Fig. 10)</h2>\n<p>{} frames raising and flexing both \
              arms and the right leg; frame 0 is learned cold, every later frame starts from \
              the previous frame's weights. Incremental frames took {} on average ({} to {}), \
-             {:.0} LM iterations on average against {} for the cold start; training {}. The last frame's median distance to its true body: {:.3} % of \
-             the diameter, median normal error {:.2}°.</p>\n",
+             {:.0} LM iterations on average against {} for the cold start; training {}. The \
+             last frame's median distance to its true body: {:.3} % of the diameter, median \
+             normal error {:.2}°; measured both ways against its true surface: {}.</p>\n",
             a.frames,
             seconds(a.seconds.average),
             seconds(a.seconds.min),
@@ -135,7 +136,8 @@ pub fn html(report: &DemoReport) -> String {
             a.cold_iterations,
             a.outcome,
             a.last_fidelity.median_distance_percent,
-            a.last_fidelity.median_angle_degrees
+            a.last_fidelity.median_angle_degrees,
+            esc(&a.last_two_sided.to_string())
         );
         for p in &tour.pictures {
             if p.file.starts_with("frame-") {
@@ -169,7 +171,8 @@ pub fn html(report: &DemoReport) -> String {
             "<h2>The body (Table 3, Fig. 8–9)</h2>\n<p>{} control points in {} features \
              ({}), tree <code>{}</code>: {} LM iterations in {}, training {}. \
              On {} held-out points of the true body: median distance {:.3} % of the diameter \
-             D = {:.2}, RMS {:.3} %, median normal error {:.2}°.</p>\n<table><tr>\
+             D = {:.2}, RMS {:.3} %, median normal error {:.2}°. Both ways against the true \
+             surface: {}.</p>\n<table><tr>\
              <th>module</th><th class=l>learns</th><th>points</th><th>iterations</th>\
              <th>time</th><th>final E<sub>s</sub></th></tr>\n",
             b.control_points,
@@ -183,7 +186,8 @@ pub fn html(report: &DemoReport) -> String {
             b.fidelity.median_distance_percent,
             b.fidelity.diameter,
             b.fidelity.rms_distance_percent,
-            b.fidelity.median_angle_degrees
+            b.fidelity.median_angle_degrees,
+            esc(&b.two_sided.to_string())
         );
         for m in &b.modules {
             let _ = writeln!(
@@ -208,7 +212,7 @@ pub fn html(report: &DemoReport) -> String {
                  balanced tree <code>{}</code>: {} iterations in {} (at most {} per module: the \
                  slab's sharp edges keep E<sub>s</sub> above 10<sup>−5</sup>; training {}). \
                  Median distance to the slab {:.3} % of D, RMS {:.2} %, median normal error \
-                 {:.2}°.</p>",
+                 {:.2}°. Both ways: {}.</p>",
                 w.control_points,
                 w.features,
                 esc(&w.tree),
@@ -218,7 +222,8 @@ pub fn html(report: &DemoReport) -> String {
                 w.outcome,
                 w.fidelity.median_distance_percent,
                 w.fidelity.rms_distance_percent,
-                w.fidelity.median_angle_degrees
+                w.fidelity.median_angle_degrees,
+                esc(&w.two_sided.to_string())
             );
         }
     }

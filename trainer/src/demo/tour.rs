@@ -8,7 +8,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::animation::{FrameReport, PAPER_FRAMES, Spread, animate};
-use super::body::{BodyModule, body_fidelity, body_points, modules, train_body};
+use super::body::{BodyModule, body_fidelity, body_points, body_two_sided, modules, train_body};
 use super::pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};
 use super::table5::{Table5Row, table5};
 use super::woody::{WoodyDemo, woody};
@@ -16,6 +16,7 @@ use crate::error::Result;
 use crate::fidelity::Fidelity;
 use crate::implicit::{ImplicitOptions, Outcome, Progress, Trained};
 use crate::points::PointSet;
+use crate::quality::TwoSided;
 use crate::sample::{BODY_FEATURES, BODY_TREE, Pose};
 
 /// How big the tour is: the paper's sizes, or a quick one for tests.
@@ -75,6 +76,8 @@ pub struct BodyDemo {
     pub outcome: Outcome,
     /// Against the true body on held-out points.
     pub fidelity: Fidelity,
+    /// Against the true body both ways, with stray surface and mesh pieces.
+    pub two_sided: TwoSided,
     /// Per module (Fig. 9).
     pub modules: Vec<BodyModule>,
 }
@@ -94,6 +97,8 @@ pub struct AnimationDemo {
     pub outcome: Outcome,
     /// The last frame against its true body.
     pub last_fidelity: Fidelity,
+    /// The last frame against its true body both ways, with stray surface and mesh pieces.
+    pub last_two_sided: TwoSided,
     /// Every incremental frame.
     pub per_frame: Vec<FrameReport>,
 }
@@ -174,6 +179,7 @@ pub fn tour(
         iterations: body.summary.iterations(),
         outcome: body.summary.outcome(),
         fidelity: body_fidelity(&body.network, &Pose::REST, seed)?,
+        two_sided: body_two_sided(&body.network, &Pose::REST)?,
         modules: modules(&body),
     };
 
@@ -197,6 +203,7 @@ pub fn tour(
             .map(|f| f.outcome)
             .fold(Outcome::Converged, Outcome::worst),
         last_fidelity: body_fidelity(&last_network, &last_pose, seed)?,
+        last_two_sided: body_two_sided(&last_network, &last_pose)?,
         per_frame: animation.frames.clone(),
     };
 

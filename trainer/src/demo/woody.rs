@@ -21,6 +21,8 @@ use crate::fidelity::{Fidelity, diameter};
 use crate::implicit::{self, FitRequest, ImplicitOptions, Outcome, Progress, Trained};
 use crate::io::{Mesh, data_file, read_mesh};
 use crate::points::PointSet;
+use crate::quality::{MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, two_sided};
+use crate::render::{DEFAULT_BOX_SIZE, DEFAULT_INFLATE, NetworkField};
 use crate::sample::{BODY_FEATURES, sample_mesh};
 
 /// Height of the cookie, as the synthetic body's.
@@ -51,6 +53,8 @@ pub struct WoodyDemo {
     pub outcome: Outcome,
     /// Against held-out points of the slab.
     pub fidelity: Fidelity,
+    /// Against the slab both ways, with stray surface and mesh pieces.
+    pub two_sided: TwoSided,
 }
 
 /// Extrudes a planar mesh (z = const, triangles wound consistently) into a closed slab of
@@ -168,6 +172,12 @@ pub fn woody(
         iterations: trained.summary.iterations(),
         outcome: trained.summary.outcome(),
         fidelity,
+        two_sided: two_sided(
+            &NetworkField::new(&trained.network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE)?,
+            &Truth::from_mesh(&mesh)?,
+            MEASURE_RESOLUTION,
+            STRAY_RESOLUTION,
+        )?,
     };
     Ok((demo, trained, points))
 }

@@ -13,4 +13,4 @@ pub use stray::{
     FAR_FRACTION, STRAY_GROWTH, STRAY_RESOLUTION, StrayReport, grown_bounds, stray_surface,
 };
 pub use truth::Truth;
-pub use two_sided::{Distances, MeshCheck, TwoSided, components, two_sided};
+pub use two_sided::{Distances, MEASURE_RESOLUTION, MeshCheck, TwoSided, components, two_sided};

@@ -92,6 +92,29 @@ pub struct TwoSided {
     pub stray: StrayReport,
 }
 
+impl std::fmt::Display for TwoSided {
+    /// One line: both median distances (% of the diagonal), the median normal error, the
+    /// stray sign changes and the mesh's pieces.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "truth → model {:.3} %, model → truth {:.3} % of the diagonal, normals {:.2}°, \
+             {} stray sign change{}, {} mesh piece{}",
+            self.truth_to_model.median_percent,
+            self.model_to_truth.median_percent,
+            self.normal_median_degrees,
+            self.stray.sign_changes,
+            if self.stray.sign_changes == 1 {
+                ""
+            } else {
+                "s"
+            },
+            self.mesh.components,
+            if self.mesh.components == 1 { "" } else { "s" },
+        )
+    }
+}
+
 /// A field restricted to one axis-aligned box (the mesher searches only there).
 struct Within<'a, F: ?Sized> {
     field: &'a F,
@@ -115,6 +138,10 @@ impl<F: Field + ?Sized> Field for Within<'_, F> {
         self.field.value_gradients(points, out);
     }
 }
+
+/// Cells along the longest side of the model's mesh in the two-sided measure (the resolution
+/// `neurosurf mesh` uses for the issue-style checks).
+pub const MEASURE_RESOLUTION: usize = 96;
 
 /// Measures `field` against `truth` both ways (see the module documentation); the model is
 /// meshed with `resolution` cells along the longest side of the union of the reference's
