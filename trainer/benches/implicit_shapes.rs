@@ -142,7 +142,7 @@ fn row(what: &str, seconds: f64, m: &TwoSided, rbf: Option<(f64, f64)>) {
         ),
         None => "– | –".to_string(),
     };
-    println!(
+    emit(&format!(
         "| {what} | {seconds:.2} s | {:.4} % | {:.4} % | {:.3} % | {:.2}° | {} | {} | {:.2} % | {ratios} |",
         m.truth_to_model.median_percent,
         m.model_to_truth.median_percent,
@@ -151,7 +151,7 @@ fn row(what: &str, seconds: f64, m: &TwoSided, rbf: Option<(f64, f64)>) {
         m.stray.sign_changes,
         m.mesh.components,
         m.mesh.far_vertices_percent,
-    );
+    ));
 }
 
 /// Slices through the middle of the grown box along each axis, as a PNG: white where model and
@@ -272,15 +272,53 @@ fn main() {
     let rbf = !args.iter().any(|a| a == "--no-rbf");
     // Scale every case to this bounding diagonal (as given when absent).
     let to_diagonal: Option<f64> = value("--diagonal").map(|v| v.parse().expect("diagonal"));
-    println!(
-        "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices | time ÷ RBF | truth → model ÷ RBF |"
+    emit(
+        "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices | time ÷ RBF | truth → model ÷ RBF |",
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    emit("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     if let Some(frames) = value("--body") {
         body_animation(frames.parse().expect("--body FRAMES"));
-        return;
+    } else {
+        shapes(&filter, &seeds, rbf, to_diagonal, &value);
     }
-    for mut case in cases(&filter) {
+    if let Some(path) = value("--out") {
+        let command = args[1..].join(" ");
+        let text = format!(
+            "# Implicit models on real shapes\n\nWritten by `cargo bench -p neurosurf-trainer \
+             --bench implicit_shapes -- {command}` on {} threads. Distances are medians in % of \
+             the true surface's bounding diagonal; \"stray sign changes\" counts neighbours on \
+             a 48³ grid over the bounding box grown by 10 %, both farther than 5 % of the \
+             diagonal from the surface, where Φ changes sign (0 for a clean model); \"far \
+             vertices\" are mesh vertices (resolution 96) that far away. Ratios are against \
+             the built-in RBF on the same points, in the same run.\n\n{}",
+            rayon::current_num_threads(),
+            TABLE.lock().expect("table").as_str()
+        );
+        std::fs::write(&path, text).expect("write --out");
+        eprintln!("wrote {path}");
+    }
+}
+
+/// The table so far, for `--out`.
+static TABLE: std::sync::Mutex<String> = std::sync::Mutex::new(String::new());
+
+/// Prints a table line and keeps it for `--out`.
+fn emit(line: &str) {
+    println!("{line}");
+    let mut table = TABLE.lock().expect("table");
+    table.push_str(line);
+    table.push('\n');
+}
+
+/// Every case of `filter` (all when empty) for every seed.
+fn shapes(
+    filter: &[String],
+    seeds: &[u64],
+    rbf: bool,
+    to_diagonal: Option<f64>,
+    value: &dyn Fn(&str) -> Option<String>,
+) {
+    for mut case in cases(filter) {
         if let Some(target) = to_diagonal {
             let d = neurosurf_trainer::caoen::bounding_diagonal(&case.mesh);
             for p in &mut case.mesh.positions {
@@ -288,7 +326,7 @@ fn main() {
             }
         }
         let truth = Truth::from_mesh(&case.mesh).expect("truth");
-        for &seed in &seeds {
+        for &seed in seeds {
             let points = sample_mesh(&case.mesh, case.points, seed).expect("sample");
             // The built-in RBF on the same points, first, so the network's row can give ratios.
             let rbf_row = rbf.then(|| {
