@@ -185,6 +185,19 @@ fn automatic_features_split_an_unlabelled_shape() {
         "{err}"
     );
     assert_eq!(fs::read(&model).unwrap(), before);
+    // An absurd option value is named.
+    let err = fails(&[
+        "train",
+        "implicit",
+        "--points",
+        s(&points),
+        "--offset",
+        "5",
+        "--out",
+        s(&model),
+    ]);
+    assert!(err.contains("option offset"), "{err}");
+    assert_eq!(fs::read(&model).unwrap(), before);
 }
 
 #[test]

@@ -82,6 +82,22 @@ pub struct ImplicitArgs {
     /// Fewest control points per feature.
     #[arg(long = "min-points", default_value_t = 4)]
     min_points: usize,
+    /// Off-surface offset ε as a fraction of the points' bounding diagonal (0 turns the
+    /// off-surface points off).
+    #[arg(long, default_value_t = ImplicitOptions::default().offset, value_name = "ε/D")]
+    offset: f64,
+    /// Sign points per control point of a module (0 turns them off).
+    #[arg(long = "sign-points", default_value_t = ImplicitOptions::default().sign_points)]
+    sign_points: f64,
+    /// How far sign points keep from the control points, as a fraction of the diagonal.
+    #[arg(long, default_value_t = ImplicitOptions::default().clearance, value_name = "FRACTION")]
+    clearance: f64,
+    /// |Φ| a sign point at distance d asks for, as a fraction of s·d.
+    #[arg(long = "sign-margin", default_value_t = ImplicitOptions::default().sign_margin)]
+    sign_margin: f64,
+    /// Weight of a sign point at the clearance distance (grows with the distance, up to 1).
+    #[arg(long = "sign-weight", default_value_t = ImplicitOptions::default().sign_weight)]
+    sign_weight: f64,
     /// Seed of the weight initialization (and of the feature decomposition).
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -185,6 +201,11 @@ fn implicit(args: &ImplicitArgs) -> Result<()> {
         },
         seed: args.seed,
         min_points: args.min_points,
+        offset: args.offset,
+        sign_points: args.sign_points,
+        clearance: args.clearance,
+        sign_margin: args.sign_margin,
+        sign_weight: args.sign_weight,
         ..ImplicitOptions::default()
     };
     options.lm.lambda = args.lambda;

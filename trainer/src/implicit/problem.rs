@@ -413,7 +413,7 @@ impl LeastSquares for ModuleProblem<'_> {
     /// J [`LANES`] points at a time, straight into the accumulator's block: J is never stored
     /// whole. The residuals are those of [`Self::residuals`].
     ///
-    /// Problems of more than [`PARALLEL_ROWS`] rows are split in two halves summed on two
+    /// Problems of more than `PARALLEL_ROWS` rows are split in two halves summed on two
     /// threads (the sums are added in a fixed order, so the result does not depend on the
     /// thread count).
     fn normal_equations(

@@ -642,11 +642,30 @@ fn check_options(o: &ImplicitOptions) -> Result<()> {
         ("lambda", o.lm.lambda),
         ("init range", o.init_range),
         ("threshold", o.lm.threshold),
+        ("sign margin", o.sign_margin),
+        ("sign weight", o.sign_weight),
     ];
     for (name, value) in non_negative {
         if !(value >= 0.0 && value.is_finite()) {
             return Err(Error::invalid(format!(
                 "option {name} must be non-negative and finite, got {value}"
+            )));
+        }
+    }
+    let ranges = [
+        ("offset (a fraction of the diagonal)", o.offset, 0.0, 0.1),
+        ("sign points (per control point)", o.sign_points, 0.0, 100.0),
+        (
+            "clearance (a fraction of the diagonal)",
+            o.clearance,
+            0.0,
+            0.5,
+        ),
+    ];
+    for (name, value, lo, hi) in ranges {
+        if !(lo..=hi).contains(&value) {
+            return Err(Error::invalid(format!(
+                "option {name} must lie in [{lo}, {hi}], got {value}"
             )));
         }
     }
