@@ -308,6 +308,10 @@ fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
 fn q16_kernels_saturate_like_the_host() {
     let mut trained = torus();
     let leaf = trained.network.root();
+    // A doubled, so that |x′₀| reaches about twice the Q16.16 range at these points.
+    let mut normalization = trained.network.normalization(leaf).unwrap();
+    normalization.matrix = normalization.matrix.map(|row| row.map(|a| 2.0 * a));
+    trained.network.set_normalization(leaf, &normalization);
     let layout = trained.network.trained_layout(leaf);
     let center = trained.network.normalization(leaf).unwrap().center;
     let params = trained.network.trained_params_mut(leaf);
@@ -368,6 +372,10 @@ fn q16_kernels_saturate_like_the_host() {
 fn q16_slope_kernel_falls_back_like_the_host() {
     let mut trained = torus();
     let leaf = trained.network.root();
+    // A doubled, so that |x′₀| reaches about twice the Q16.16 range at these points.
+    let mut normalization = trained.network.normalization(leaf).unwrap();
+    normalization.matrix = normalization.matrix.map(|row| row.map(|a| 2.0 * a));
+    trained.network.set_normalization(leaf, &normalization);
     let layout = trained.network.trained_layout(leaf);
     let center = trained.network.normalization(leaf).unwrap().center;
     let params = trained.network.trained_params_mut(leaf);
@@ -459,7 +467,8 @@ fn q16_node_slope_kernel_falls_back_like_the_host() {
 }
 
 /// The Q16.16 input normalization x′ = A·(x − c) where it saturates, on the target against the
-/// host: a torus leaf whose first layer reads x′₀ only, with weights 2·10⁻⁵·(j + 1), so that
+/// host: a torus leaf with its A doubled whose first layer reads x′₀ only, with weights
+/// 10⁻⁵·(j + 1) (the rest of the leaf passes that layer to Φ), so that
 /// at the ends of the Q16.16 range (|x| ≈ 32 768, where x′₀ is clamped to ±32 768) the first
 /// layer's pre-activations stay within the activation's range and the clamped x′₀ shows in Φ.
 /// Checked by making row 0's saturation give 0: this test then fails.
@@ -467,14 +476,27 @@ fn q16_node_slope_kernel_falls_back_like_the_host() {
 fn q16_normalization_saturates_like_the_host() {
     let mut trained = torus();
     let leaf = trained.network.root();
+    // A doubled, so that |x′₀| reaches about twice the Q16.16 range at these points.
+    let mut normalization = trained.network.normalization(leaf).unwrap();
+    normalization.matrix = normalization.matrix.map(|row| row.map(|a| 2.0 * a));
+    trained.network.set_normalization(leaf, &normalization);
     let layout = trained.network.trained_layout(leaf);
     let params = trained.network.trained_params_mut(leaf);
     for j in 0..layout.width {
         for i in 0..layout.inputs {
             params[layout.a_weights + j * layout.inputs + i] =
-                if i == 0 { 2e-5 * (j + 1) as f64 } else { 0.0 };
+                if i == 0 { 1e-5 * (j + 1) as f64 } else { 0.0 };
         }
+        params[layout.a_biases + j] = 0.0;
+        // The second layer passes the first through (×0.5), the output sums it: the clamp
+        // shows in Φ whatever the training left there.
+        for k in 0..layout.width {
+            params[layout.b_weights + j * layout.width + k] = if j == k { 0.5 } else { 0.0 };
+        }
+        params[layout.b_biases + j] = 0.0;
+        params[layout.out_weights + j] = 1.0;
     }
+    params[layout.out_bias] = 0.0;
     let bytes = blob(&trained, ScalarKind::Q16_16);
     let points = vec![
         [32767.0, -32768.0, 32767.0],
