@@ -17,9 +17,10 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::implicit::{self, BoxScaling, ImplicitNetwork, Normalization};
 use crate::points::PointSet;
+use crate::rbf::RbfModel;
 use crate::render::{
-    Aabb, Camera, CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, Region, RenderOptions, RenderStats,
-    View, render, write_png,
+    Aabb, Camera, CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, RbfField,
+    Region, RenderOptions, RenderStats, View, render, write_png,
 };
 
 /// Growth of the per-feature boxes (their joints must overlap; the paper: "slightly").
@@ -110,6 +111,33 @@ pub struct Picture {
     pub caption: String,
     /// The renderer's counts and time.
     pub stats: RenderStats,
+}
+
+/// Ray casts the RBF baseline `model` (on the host in f64, inside its centres' box grown by
+/// [`DEFAULT_RBF_INFLATE`]) with `camera`, writes the PNG to `dir/file`.
+///
+/// # Errors
+/// Render and I/O errors.
+pub fn rbf_picture(
+    model: &RbfModel,
+    camera: &Camera,
+    samples: u32,
+    dir: &Path,
+    file: &str,
+    caption: &str,
+) -> Result<Picture> {
+    let field = RbfField::new(model, DEFAULT_RBF_INFLATE)?;
+    let options = RenderOptions {
+        samples,
+        ..RenderOptions::default()
+    };
+    let rendered = render(&field, camera, &options, &|_, _| {})?;
+    write_png(&dir.join(file), &rendered.image)?;
+    Ok(Picture {
+        file: file.to_string(),
+        caption: caption.to_string(),
+        stats: rendered.stats,
+    })
 }
 
 /// Ray casts `network` (stored as an f32 blob and evaluated by the core) inside `regions`

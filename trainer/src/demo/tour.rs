@@ -9,8 +9,10 @@ use serde::Serialize;
 
 use super::animation::{FrameReport, PAPER_FRAMES, Spread, animate};
 use super::body::{BodyModule, body_fidelity, body_points, body_two_sided, modules, train_body};
-use super::pictures::{FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds};
-use super::table5::{Table5Row, table5};
+use super::pictures::{
+    FEATURE_INFLATE, Picture, feature_regions, framing, picture, point_bounds, rbf_picture,
+};
+use super::table5::{TABLE5_TORUS, Table5Row, table5};
 use super::woody::{WoodyDemo, woody};
 use crate::error::Result;
 use crate::fidelity::Fidelity;
@@ -149,6 +151,9 @@ pub struct TourModels<'a> {
     pub head: &'a Trained,
 }
 
+/// Control points of the Fig. 11 torus (Table 5's fewest).
+const FIG11_POINTS: usize = 48;
+
 /// The animation frames pictured: first, middle, last.
 fn pictured_frames(frames: usize) -> [usize; 3] {
     [0, frames / 2, frames.saturating_sub(1)]
@@ -234,6 +239,32 @@ pub fn tour(
         out_dir,
         "torus.png",
         "The torus: one leaf module, 96 control points",
+    )?);
+    // Fig. 11: the torus from Table 5's fewest points, by the network and by the RBF.
+    let few = crate::sample::sample_shape(&TABLE5_TORUS, FIG11_POINTS, seed)?;
+    let network = crate::implicit::fit(
+        few.clone(),
+        &crate::implicit::FitRequest::default(),
+        &options,
+        &|_| {},
+    )?;
+    pictures.push(picture(
+        &network.network,
+        Vec::new(),
+        &torus_camera,
+        size.samples,
+        out_dir,
+        "fig11-network.png",
+        &format!("Fig. 11: the torus from {FIG11_POINTS} control points, by the network"),
+    )?);
+    let (rbf_model, _) = crate::rbf::fit(&few, &crate::rbf::RbfOptions::default())?;
+    pictures.push(rbf_picture(
+        &rbf_model,
+        &torus_camera,
+        size.samples,
+        out_dir,
+        "fig11-rbf.png",
+        &format!("Fig. 11: the same {FIG11_POINTS} points, by the multiquadric RBF"),
     )?);
     pictures.push(picture(
         &models.head.network,
