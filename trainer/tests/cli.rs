@@ -7,6 +7,32 @@ use common::{fails, ok};
 use std::fs;
 use std::path::{Path, PathBuf};
 
+/// An OBJ of the torus with radii `major`, `minor` (axis z), `u` × `v` quads split in two.
+fn torus_obj(major: f64, minor: f64, u: usize, v: usize) -> String {
+    let mut text = String::new();
+    for i in 0..u {
+        let a = std::f64::consts::TAU * i as f64 / u as f64;
+        for j in 0..v {
+            let b = std::f64::consts::TAU * j as f64 / v as f64;
+            let r = major + minor * b.cos();
+            text += &format!("v {} {} {}\n", r * a.cos(), r * a.sin(), minor * b.sin());
+        }
+    }
+    let index = |i: usize, j: usize| (i % u) * v + (j % v) + 1;
+    for i in 0..u {
+        for j in 0..v {
+            let (p, q, r, t) = (
+                index(i, j),
+                index(i + 1, j),
+                index(i + 1, j + 1),
+                index(i, j + 1),
+            );
+            text += &format!("f {p} {q} {r}\nf {p} {r} {t}\n");
+        }
+    }
+    text
+}
+
 fn path(dir: &Path, name: &str) -> PathBuf {
     dir.join(name)
 }
@@ -70,6 +96,27 @@ fn sample_train_eval_info_round_trip() {
         let gx: f64 = lines[1].split(',').nth(4).unwrap().parse().unwrap();
         assert!(gx < -1.0, "{scalar}: {csv}");
     }
+    // Against the true torus, both ways, in f64 and f32.
+    let truth = path(dir.path(), "truth.obj");
+    fs::write(&truth, torus_obj(1.0, 0.4, 96, 48)).unwrap();
+    let report = ok(&["compare", s(&model), "--truth", s(&truth), "--json"]);
+    let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let measures = report["truth"].as_array().unwrap();
+    assert_eq!(measures.len(), 2, "{report}");
+    for m in measures {
+        let m = &m[1];
+        assert!(
+            m["truth_to_model"]["median_percent"].as_f64().unwrap() < 0.2,
+            "{m}"
+        );
+        assert!(
+            m["model_to_truth"]["median_percent"].as_f64().unwrap() < 0.2,
+            "{m}"
+        );
+        assert_eq!(m["stray"]["sign_changes"], 0, "{m}");
+        assert_eq!(m["mesh"]["components"], 1, "{m}");
+    }
+
     let info = ok(&["info", s(&model), "--json"]);
     let info: serde_json::Value = serde_json::from_str(&info).unwrap();
     assert_eq!(info["kind"], "implicit");

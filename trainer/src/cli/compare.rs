@@ -14,7 +14,12 @@ use neurosurf_trainer::compare::{
 };
 use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision, geometry_columns};
 use neurosurf_trainer::implicit::ImplicitOptions;
+use neurosurf_trainer::io::read_mesh;
 use neurosurf_trainer::io::{read_parameters, read_query_points, write_atomic};
+use neurosurf_trainer::quality::{
+    MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, two_sided,
+};
+use neurosurf_trainer::render::{CoreField, DEFAULT_INFLATE, Field, NetworkField, Region};
 use neurosurf_trainer::table::Table;
 
 use super::output;
@@ -30,6 +35,11 @@ pub struct Args {
     /// network: its m source coordinates (default: points spread over its sphere or torus).
     #[arg(long)]
     points: Option<PathBuf>,
+    /// The true surface (OBJ or PLY mesh) of an implicit model: also measure the model both
+    /// ways against it, in f64 and in the core's f32 (distances, normals, stray sign changes,
+    /// mesh pieces).
+    #[arg(long, value_name = "MESH")]
+    truth: Option<PathBuf>,
     /// Print the report as JSON instead of the table.
     #[arg(long)]
     json: bool,
@@ -48,6 +58,8 @@ struct Report<'a> {
     box_samples: usize,
     box_samples_on_surface: usize,
     rows: Vec<CompareRow>,
+    /// Against `--truth`, per precision.
+    truth: Vec<(&'static str, TwoSided)>,
     markdown: Option<&'a Path>,
 }
 
@@ -86,6 +98,27 @@ pub fn run(args: &Args) -> Result<()> {
         let job = Job::field_gradient(bytes, scalar, &inputs);
         Ok(target::run(simulator, &job, &args.model)?.samples())
     })?;
+    let truth = match &args.truth {
+        Some(path) => {
+            let truth = Truth::from_mesh(&read_mesh(path)?)
+                .with_context(|| format!("cannot use {} as the true surface", path.display()))?;
+            let box_size = decoded
+                .metadata
+                .as_ref()
+                .and_then(|m| m.summary.as_ref())
+                .map_or(ImplicitOptions::default().box_size, |s| s.options.box_size);
+            let f64_field = NetworkField::new(&decoded.network, box_size, DEFAULT_INFLATE)?;
+            let regions = Region::of_network(&decoded.network, box_size, DEFAULT_INFLATE);
+            let f32_field = CoreField::new(bytes, regions)?;
+            let measure =
+                |field: &dyn Field| two_sided(field, &truth, MEASURE_RESOLUTION, STRAY_RESOLUTION);
+            vec![
+                (Precision::F64.name(), measure(&f64_field)?),
+                (Precision::F32.name(), measure(&f32_field)?),
+            ]
+        }
+        None => Vec::new(),
+    };
     let report = Report {
         model: &args.model,
         stored_as: decoded.stored_as.name(),
@@ -95,6 +128,7 @@ pub fn run(args: &Args) -> Result<()> {
         box_samples: points.sampled,
         box_samples_on_surface: points.projected,
         rows,
+        truth,
         markdown: args.markdown.as_deref(),
     };
     let table = comparison_table(&report.rows);
@@ -104,7 +138,13 @@ pub fn run(args: &Args) -> Result<()> {
         report.stored_as,
         describe_points(&points, args.points.as_deref())
     );
-    publish(args, &heading, &table, LEGEND, &report)
+    publish(args, &heading, &table, LEGEND, &report)?;
+    if !args.json {
+        for (precision, measure) in &report.truth {
+            println!("against the true surface, {precision}: {measure}");
+        }
+    }
+    Ok(())
 }
 
 /// The f32 and Q16.16 rows, host and target, against the f64 reference: `evaluate` runs the
