@@ -16,49 +16,22 @@ use std::time::Instant;
 use neurosurf_core::scalar::ScalarKind;
 use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions};
 use neurosurf_trainer::io::{Mesh, data_file, read_mesh};
-use neurosurf_trainer::quality::{Truth, TwoSided, two_sided};
+use neurosurf_trainer::quality::{
+    MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, grown_bounds, signed_distance_mesh,
+    two_sided,
+};
 use neurosurf_trainer::rbf::{self, RbfOptions};
 use neurosurf_trainer::render::{
-    CoreField, DEFAULT_RBF_INFLATE, Field, RbfField, Region, extract_mesh,
+    Aabb, CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, RbfField, Region,
 };
 use neurosurf_trainer::sample::sample_mesh;
 
-/// An analytic signed distance (negative inside) as a field for the mesher: Φ = −d.
-struct Analytic<F> {
-    distance: F,
-    regions: Vec<Region>,
-}
-
-impl<F: Fn([f64; 3]) -> f64 + Sync> Field for Analytic<F> {
-    fn value(&self, p: [f64; 3]) -> f64 {
-        -(self.distance)(p)
-    }
-    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
-        let h = 1e-6;
-        let g = [0, 1, 2].map(|k| {
-            let mut a = p;
-            let mut b = p;
-            a[k] += h;
-            b[k] -= h;
-            (self.value(a) - self.value(b)) / (2.0 * h)
-        });
-        (self.value(p), g)
-    }
-    fn regions(&self) -> &[Region] {
-        &self.regions
-    }
-}
-
 fn analytic_mesh(distance: impl Fn([f64; 3]) -> f64 + Sync, half: [f64; 3]) -> Mesh {
-    let normalization = implicit::Normalization {
-        center: [0.0; 3],
-        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+    let bounds = Aabb {
+        lo: half.map(|h| -h),
+        hi: half,
     };
-    let field = Analytic {
-        distance,
-        regions: vec![Region::new(normalization, 2.0, 1.0).expect("region")],
-    };
-    extract_mesh(&field, 160, &|_, _| {}).expect("mesh").mesh
+    signed_distance_mesh(distance, bounds, 160).expect("mesh")
 }
 
 fn torus(p: [f64; 3], c: [f64; 3], big: f64, small: f64) -> f64 {
@@ -194,6 +167,14 @@ fn slices(
     img.save(path).expect("png");
 }
 
+/// `blob` (of `network`) measured as a user runs it: in the core, in f32, inside the leaf boxes
+/// `mesh` and `render` search.
+fn measure_core(blob: &[u8], network: &implicit::ImplicitNetwork, truth: &Truth) -> TwoSided {
+    let regions = Region::of_network(network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE);
+    let field = CoreField::new(blob, regions).expect("the core loads the blob");
+    two_sided(&field, truth, MEASURE_RESOLUTION, STRAY_RESOLUTION).expect("measure")
+}
+
 /// The demo's body, cold in the rest pose, then `frames − 1` animation frames each warm from
 /// the previous one, every frame measured against its true body (meshed from its signed
 /// distance).
@@ -214,28 +195,11 @@ fn body_animation(frames: usize) {
         let trained = train_body(&points, &options, init, &|_| {}).expect("training");
         let seconds = start.elapsed().as_secs_f64();
         let body = Body::new(&pose);
-        let (mut lo, mut hi) = (points.positions[0], points.positions[0]);
-        for p in &points.positions {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-        let half = [0, 1, 2].map(|k| 0.6 * (hi[k] - lo[k]));
-        let mesh = analytic_mesh(
-            |p| body.signed_distance([0, 1, 2].map(|k| p[k] + centre[k])),
-            half,
-        );
-        let mut mesh = mesh;
-        for p in &mut mesh.positions {
-            *p = [0, 1, 2].map(|k| p[k] + centre[k]);
-        }
-        let truth = Truth::from_mesh(&mesh).expect("truth");
+        let grown = grown_bounds(&Truth::from_points(&points).expect("points"), 0.2);
+        let truth =
+            Truth::from_signed_distance(|p| body.signed_distance(p), grown, 160).expect("truth");
         let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
-        let regions = Region::of_network(&trained.network, 2.0, 1.25);
-        let field = CoreField::new(&blob, regions).expect("the core loads the blob");
-        let m = two_sided(&field, &truth, 96, 48).expect("measure");
+        let m = measure_core(&blob, &trained.network, &truth);
         let s = &trained.summary;
         row(
             &format!(
@@ -334,7 +298,8 @@ fn shapes(
                 let (model, _) = rbf::fit(&points, &RbfOptions::default()).expect("rbf");
                 let seconds = start.elapsed().as_secs_f64();
                 let field = RbfField::new(&model, DEFAULT_RBF_INFLATE).expect("rbf field");
-                let m = two_sided(&field, &truth, 96, 48).expect("measure");
+                let m = two_sided(&field, &truth, MEASURE_RESOLUTION, STRAY_RESOLUTION)
+                    .expect("measure");
                 (seconds, m)
             });
             let start = Instant::now();
@@ -387,10 +352,7 @@ fn shapes(
                 let path = format!("{dir}/{}-{seed}.nsb", case.name);
                 std::fs::write(&path, &blob).expect("save");
             }
-            // Measured as a user runs it: the blob in the core, in f32.
-            let regions = Region::of_network(&trained.network, 2.0, 1.25);
-            let field = CoreField::new(&blob, regions).expect("the core loads the blob");
-            let m = two_sided(&field, &truth, 96, 48).expect("measure");
+            let m = measure_core(&blob, &trained.network, &truth);
             let s = &trained.summary;
             row(
                 &format!(

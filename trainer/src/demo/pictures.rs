@@ -19,8 +19,8 @@ use crate::implicit::{self, BoxScaling, ImplicitNetwork, Normalization};
 use crate::points::PointSet;
 use crate::rbf::RbfModel;
 use crate::render::{
-    Aabb, Camera, CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, RbfField,
-    Region, RenderOptions, RenderStats, View, render, write_png,
+    Aabb, Camera, CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, Field,
+    RbfField, Region, RenderOptions, RenderStats, View, render, write_png,
 };
 
 /// Growth of the per-feature boxes (their joints must overlap; the paper: "slightly").
@@ -113,6 +113,28 @@ pub struct Picture {
     pub stats: RenderStats,
 }
 
+/// Ray casts `field` with `camera` and `samples` rays per pixel, writes the PNG to `dir/file`.
+fn field_picture(
+    field: &impl Field,
+    camera: &Camera,
+    samples: u32,
+    dir: &Path,
+    file: &str,
+    caption: &str,
+) -> Result<Picture> {
+    let options = RenderOptions {
+        samples,
+        ..RenderOptions::default()
+    };
+    let rendered = render(field, camera, &options, &|_, _| {})?;
+    write_png(&dir.join(file), &rendered.image)?;
+    Ok(Picture {
+        file: file.to_string(),
+        caption: caption.to_string(),
+        stats: rendered.stats,
+    })
+}
+
 /// Ray casts the RBF baseline `model` (on the host in f64, inside its centres' box grown by
 /// [`DEFAULT_RBF_INFLATE`]) with `camera`, writes the PNG to `dir/file`.
 ///
@@ -127,17 +149,7 @@ pub fn rbf_picture(
     caption: &str,
 ) -> Result<Picture> {
     let field = RbfField::new(model, DEFAULT_RBF_INFLATE)?;
-    let options = RenderOptions {
-        samples,
-        ..RenderOptions::default()
-    };
-    let rendered = render(&field, camera, &options, &|_, _| {})?;
-    write_png(&dir.join(file), &rendered.image)?;
-    Ok(Picture {
-        file: file.to_string(),
-        caption: caption.to_string(),
-        stats: rendered.stats,
-    })
+    field_picture(&field, camera, samples, dir, file, caption)
 }
 
 /// Ray casts `network` (stored as an f32 blob and evaluated by the core) inside `regions`
@@ -161,15 +173,5 @@ pub fn picture(
         regions
     };
     let field = CoreField::new(&blob, regions)?;
-    let options = RenderOptions {
-        samples,
-        ..RenderOptions::default()
-    };
-    let rendered = render(&field, camera, &options, &|_, _| {})?;
-    write_png(&dir.join(file), &rendered.image)?;
-    Ok(Picture {
-        file: file.to_string(),
-        caption: caption.to_string(),
-        stats: rendered.stats,
-    })
+    field_picture(&field, camera, samples, dir, file, caption)
 }

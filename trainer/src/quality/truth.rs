@@ -11,6 +11,31 @@ use crate::io::Mesh;
 use crate::points::PointSet;
 use crate::render::{Aabb, Field, Region, extract_mesh};
 
+/// The zero set of a signed distance `distance` (negative inside) within `bounds`, meshed at
+/// `resolution` cells along the longest side (distances to the mesh are then within about 1 %
+/// of a cell of the zero set's).
+///
+/// # Errors
+/// [`Error::InvalidInput`] when `bounds` is empty; mesher errors.
+pub fn signed_distance_mesh(
+    distance: impl Fn([f64; 3]) -> f64 + Sync,
+    bounds: Aabb,
+    resolution: usize,
+) -> Result<Mesh> {
+    let half = bounds.half();
+    let normalization = Normalization {
+        center: bounds.center(),
+        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+    };
+    let region = Region::new(normalization, 2.0, 1.0)
+        .ok_or_else(|| Error::invalid(format!("empty bounds {bounds:?}")))?;
+    let field = SignedDistance {
+        distance,
+        regions: vec![region],
+    };
+    Ok(extract_mesh(&field, resolution, &|_, _| {})?.mesh)
+}
+
 /// A signed distance (negative inside) as a field for the mesher: Φ = −d, gradient by central
 /// differences.
 struct SignedDistance<F> {
@@ -89,8 +114,7 @@ impl Truth {
     }
 
     /// The zero set of a signed distance `distance` (negative inside) within `bounds`, meshed
-    /// at `resolution` cells along the longest side (distances are then exact to the mesh,
-    /// which is within about 1 % of a cell of the zero set).
+    /// by [`signed_distance_mesh`] at `resolution` cells along the longest side.
     ///
     /// # Errors
     /// [`Error::InvalidInput`] when `bounds` is empty or the zero set has no triangle inside it.
@@ -99,19 +123,7 @@ impl Truth {
         bounds: Aabb,
         resolution: usize,
     ) -> Result<Truth> {
-        let half = bounds.half();
-        let normalization = Normalization {
-            center: bounds.center(),
-            matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
-        };
-        let region = Region::new(normalization, 2.0, 1.0)
-            .ok_or_else(|| Error::invalid(format!("empty bounds {bounds:?}")))?;
-        let field = SignedDistance {
-            distance,
-            regions: vec![region],
-        };
-        let mesh = extract_mesh(&field, resolution, &|_, _| {})?.mesh;
-        Self::from_mesh(&mesh)
+        Self::from_mesh(&signed_distance_mesh(distance, bounds, resolution)?)
     }
 
     /// The surface known only by oriented points: distances are to the nearest point (an
