@@ -248,13 +248,18 @@ fn main() {
     if let Some(path) = value("--out") {
         let command = args[1..].join(" ");
         let text = format!(
-            "# Implicit models on real shapes\n\nWritten by `cargo bench -p neurosurf-trainer \
+            "# {}\n\nWritten by `cargo bench -p neurosurf-trainer \
              --bench implicit_shapes -- {command}` on {} threads. Distances are medians in % of \
              the true surface's bounding diagonal; \"stray sign changes\" counts neighbours on \
              a 48³ grid over the bounding box grown by 10 %, both farther than 5 % of the \
              diagonal from the surface, where Φ changes sign (0 for a clean model); \"far \
              vertices\" are mesh vertices (resolution 96) that far away. Ratios are against \
              the built-in RBF on the same points, in the same run.\n\n{}",
+            if value("--body").is_some() {
+                "The demo's body and its animation, frame by frame"
+            } else {
+                "Implicit models on real shapes"
+            },
             rayon::current_num_threads(),
             TABLE.lock().expect("table").as_str()
         );
