@@ -66,26 +66,8 @@ impl Rng {
 
 /// A rotation (from a random unit quaternion) scaled per axis into [0.5, 2].
 fn normalization(rng: &mut Rng) -> Normalization {
-    let q = [(); 4].map(|()| rng.range(-1.0, 1.0));
-    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt().max(1e-9);
-    let [w, x, y, z] = q.map(|v| v / n);
-    let rotation = [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ];
+    let rotation =
+        neurosurf_tests::rotation_from_quaternion([(); 4].map(|()| rng.range(-1.0, 1.0)));
     Normalization {
         center: [(); 3].map(|()| rng.range(-0.3, 0.3)),
         matrix: rotation.map(|row| {

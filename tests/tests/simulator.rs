@@ -201,26 +201,7 @@ fn random_network(tree: &str, width: usize, seed: u64) -> ImplicitNetwork {
     };
     let mut network = ImplicitNetwork::new(width, &tree.parse::<TreeSpec>().unwrap()).unwrap();
     for module in 0..network.module_count() {
-        let q = [(); 4].map(|()| next(-1.0, 1.0));
-        let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let [w, x, y, z] = q.map(|v| v / n);
-        let rotation = [
-            [
-                1.0 - 2.0 * (y * y + z * z),
-                2.0 * (x * y - w * z),
-                2.0 * (x * z + w * y),
-            ],
-            [
-                2.0 * (x * y + w * z),
-                1.0 - 2.0 * (x * x + z * z),
-                2.0 * (y * z - w * x),
-            ],
-            [
-                2.0 * (x * z - w * y),
-                2.0 * (y * z + w * x),
-                1.0 - 2.0 * (x * x + y * y),
-            ],
-        ];
+        let rotation = neurosurf_tests::rotation_from_quaternion([(); 4].map(|()| next(-1.0, 1.0)));
         let normalization = Normalization {
             center: [(); 3].map(|()| next(-0.3, 0.3)),
             matrix: rotation.map(|row| {
