@@ -74,6 +74,25 @@ fn sample_train_eval_info_round_trip() {
     );
     assert!(json["iterations"].as_u64().unwrap() > 0);
 
+    // The same points, options and seed give the same bytes, on one thread or two.
+    let again = path(dir.path(), "again.nsb");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_neurosurf"))
+        .args([
+            "train",
+            "implicit",
+            "--points",
+            s(&points),
+            "--out",
+            s(&again),
+            "-q",
+        ])
+        .env("RAYON_NUM_THREADS", "1")
+        .output()
+        .unwrap()
+        .status;
+    assert!(status.success());
+    assert_eq!(fs::read(&again).unwrap(), fs::read(&model).unwrap());
+
     let queries = path(dir.path(), "q.txt");
     fs::write(&queries, "# a comment\n1.4 0 0\n0.6 0 0 1 0 0\n\n0 0 0\n").unwrap();
     for scalar in ["f64", "f32", "q16.16"] {

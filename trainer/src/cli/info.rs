@@ -208,20 +208,14 @@ pub fn run(args: &Args) -> Result<()> {
     }
     if let Some(fit) = info.fit {
         println!(
-            "  fit          {} of {} points ({} neurons, seed {}), residual RMS {:.3e} max {:.3e}, {:.3} s",
-            fit.method,
-            fit.points,
-            fit.neurons,
-            fit.seed,
-            fit.rms_residual,
-            fit.max_residual,
-            fit.seconds
+            "  fit          {} of {} points ({} neurons, seed {}), residual RMS {:.3e} max {:.3e}",
+            fit.method, fit.points, fit.neurons, fit.seed, fit.rms_residual, fit.max_residual,
         );
     }
     if let Some(fit) = info.network_fit {
         println!(
-            "  fit          {} points, {} configurations tried, RMS error {:.3e} ({:.2e} of the diagonal), {:.3} s",
-            fit.points, fit.candidates, fit.rms_error, fit.relative_rms_error, fit.seconds
+            "  fit          {} points, {} configurations tried, RMS error {:.3e} ({:.2e} of the diagonal)",
+            fit.points, fit.candidates, fit.rms_error, fit.relative_rms_error
         );
     }
     if let Some(centers) = info.centers {
@@ -229,9 +223,8 @@ pub fn run(args: &Args) -> Result<()> {
     }
     if let Some(t) = info.training {
         println!(
-            "  training     {} iterations, {:.3} s, {}",
+            "  training     {} iterations, {}",
             t.iterations(),
-            t.seconds,
             t.outcome()
         );
         for m in &t.modules {

@@ -33,7 +33,7 @@ pub struct FitSummary {
     pub rms_residual: f64,
     /// Largest such distance.
     pub max_residual: f64,
-    /// Wall-clock seconds of ordering and fitting.
+    /// Wall-clock seconds of ordering and fitting (0 in a blob: blobs store no wall time).
     pub seconds: f64,
 }
 
@@ -217,8 +217,12 @@ fn decode_control(bytes: &[u8], scalar: ScalarKind) -> Vec<[f64; 3]> {
 fn encode_summary(summary: Option<&FitSummary>) -> Result<Vec<u8>> {
     match summary {
         None => Ok(Vec::new()),
-        Some(summary) => postcard::to_allocvec(summary)
-            .map_err(|e| Error::invalid(format!("cannot encode the fit summary: {e}"))),
+        // No wall time: the same points, options and seed give the same bytes.
+        Some(summary) => postcard::to_allocvec(&FitSummary {
+            seconds: 0.0,
+            ..summary.clone()
+        })
+        .map_err(|e| Error::invalid(format!("cannot encode the fit summary: {e}"))),
     }
 }
 

@@ -74,7 +74,7 @@ pub fn to_blob(
     }
     let metadata = ImplicitMetadata {
         leaf_features: network.leaf_features().to_vec(),
-        summary: summary.cloned(),
+        summary: summary.map(TrainingSummary::without_timings),
     };
     let metadata = postcard::to_allocvec(&metadata)
         .map_err(|e| Error::invalid(format!("cannot encode the model metadata: {e}")))?;

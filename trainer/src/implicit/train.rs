@@ -42,7 +42,7 @@ pub struct ModuleReport {
     pub parameters: usize,
     /// The Levenberg–Marquardt run.
     pub lm: LmReport,
-    /// Wall time in seconds.
+    /// Wall time in seconds (0 when read from a blob: blobs store no wall time).
     pub seconds: f64,
     /// Whether it started from a previous model's weights.
     pub warm: bool,
@@ -57,7 +57,7 @@ pub struct TrainingSummary {
     pub options: ImplicitOptions,
     /// One report per module, post-order.
     pub modules: Vec<ModuleReport>,
-    /// Wall time of the whole training in seconds.
+    /// Wall time of the whole training in seconds (0 when read from a blob).
     pub seconds: f64,
     /// Iterations per module of the cold start at the head of a warm-start chain (this run's
     /// own when it was cold): the baseline for "iterations saved".
@@ -75,6 +75,17 @@ impl TrainingSummary {
     /// Whether every module reached the error threshold.
     pub fn converged(&self) -> bool {
         self.outcome() == Outcome::Converged
+    }
+
+    /// This summary with every wall time set to 0: what a blob stores, so that the same
+    /// points, options and seed give the same bytes.
+    pub fn without_timings(&self) -> TrainingSummary {
+        let mut out = self.clone();
+        out.seconds = 0.0;
+        for m in &mut out.modules {
+            m.seconds = 0.0;
+        }
+        out
     }
 
     /// How the training ended, over all modules: the worst module's stop.

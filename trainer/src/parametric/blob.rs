@@ -32,7 +32,7 @@ pub struct NetworkSummary {
     pub rms_error: f64,
     /// The same over the points' bounding-box diagonal.
     pub relative_rms_error: f64,
-    /// Wall-clock seconds of the fit.
+    /// Wall-clock seconds of the fit (0 in a blob: blobs store no wall time).
     pub seconds: f64,
 }
 
@@ -120,8 +120,12 @@ pub fn network_to_blob(
     }
     let metadata = match summary {
         None => Vec::new(),
-        Some(summary) => postcard::to_allocvec(summary)
-            .map_err(|e| Error::invalid(format!("cannot encode the fit summary: {e}")))?,
+        // No wall time: the same points, options and seed give the same bytes.
+        Some(summary) => postcard::to_allocvec(&NetworkSummary {
+            seconds: 0.0,
+            ..summary.clone()
+        })
+        .map_err(|e| Error::invalid(format!("cannot encode the fit summary: {e}")))?,
     };
     let payload = SurfaceNetworkPayload {
         activation: network.activation.core().code(),
