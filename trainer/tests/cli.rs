@@ -115,13 +115,13 @@ fn sample_train_eval_info_round_trip() {
         let gx: f64 = lines[1].split(',').nth(4).unwrap().parse().unwrap();
         assert!(gx < -1.0, "{scalar}: {csv}");
     }
-    // Against the true torus, both ways, in f64 and f32.
+    // Against the true torus, both ways, in f64, f32 and Q16.16.
     let truth = path(dir.path(), "truth.obj");
     fs::write(&truth, torus_obj(1.0, 0.4, 96, 48)).unwrap();
     let report = ok(&["compare", s(&model), "--truth", s(&truth), "--json"]);
     let report: serde_json::Value = serde_json::from_str(&report).unwrap();
     let measures = report["truth"].as_array().unwrap();
-    assert_eq!(measures.len(), 2, "{report}");
+    assert_eq!(measures.len(), 3, "{report}");
     for m in measures {
         let m = &m[1];
         assert!(

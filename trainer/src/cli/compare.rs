@@ -19,7 +19,9 @@ use neurosurf_trainer::io::{read_parameters, read_query_points, write_atomic};
 use neurosurf_trainer::quality::{
     MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, two_sided,
 };
-use neurosurf_trainer::render::{CoreField, DEFAULT_INFLATE, Field, NetworkField, Region};
+use neurosurf_trainer::render::{
+    CoreField, DEFAULT_INFLATE, Field, NetworkField, Q16Field, Region,
+};
 use neurosurf_trainer::table::Table;
 
 use super::output;
@@ -36,8 +38,8 @@ pub struct Args {
     #[arg(long)]
     points: Option<PathBuf>,
     /// The true surface (OBJ or PLY mesh) of an implicit model: also measure the model both
-    /// ways against it, in f64 and in the core's f32 (distances, normals, stray sign changes,
-    /// mesh pieces).
+    /// ways against it, in f64 and in the core's f32 and Q16.16 (distances, normals, stray sign
+    /// changes, mesh pieces).
     #[arg(long, value_name = "MESH")]
     truth: Option<PathBuf>,
     /// Print the report as JSON instead of the table.
@@ -109,12 +111,14 @@ pub fn run(args: &Args) -> Result<()> {
                 .map_or(ImplicitOptions::default().box_size, |s| s.options.box_size);
             let f64_field = NetworkField::new(&decoded.network, box_size, DEFAULT_INFLATE)?;
             let regions = Region::of_network(&decoded.network, box_size, DEFAULT_INFLATE);
-            let f32_field = CoreField::new(bytes, regions)?;
+            let f32_field = CoreField::new(bytes, regions.clone())?;
+            let q16_field = Q16Field::new(bytes, regions)?;
             let measure =
                 |field: &dyn Field| two_sided(field, &truth, MEASURE_RESOLUTION, STRAY_RESOLUTION);
             vec![
                 (Precision::F64.name(), measure(&f64_field)?),
                 (Precision::F32.name(), measure(&f32_field)?),
+                (Precision::Q16.name(), measure(&q16_field)?),
             ]
         }
         None => Vec::new(),

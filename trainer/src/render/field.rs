@@ -11,6 +11,7 @@
 //! - [`SphereField`]: Φ = s·(r − |x − c|), analytic, for tests.
 
 use neurosurf_core::implicit::ImplicitModel;
+use neurosurf_core::scalar::{Q16, Scalar};
 use rayon::prelude::*;
 
 use super::interval::{self, Interval};
@@ -149,6 +150,49 @@ impl Field for CoreField {
                 *o = (f64::from(r.value), r.gradient.map(f64::from));
             }
         }
+    }
+}
+
+/// The core's Q16.16 evaluation of a blob (points saturated into Q16.16 as the target takes
+/// them), for measuring what fixed point does to a surface; one point at a time.
+#[derive(Debug)]
+pub struct Q16Field {
+    model: Box<ImplicitModel<Q16>>,
+    regions: Vec<Region>,
+}
+
+impl Q16Field {
+    /// Loads `blob` into the core in Q16.16 with the regions `regions`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] when the core rejects the blob in Q16.16 or there is no region.
+    pub fn new(blob: &[u8], regions: Vec<Region>) -> Result<Self> {
+        let model = ImplicitModel::<Q16>::from_blob(blob)
+            .map_err(|e| Error::invalid(format!("the core rejects the blob in Q16.16: {e}")))?;
+        check_regions(&regions)?;
+        Ok(Q16Field {
+            model: Box::new(model),
+            regions,
+        })
+    }
+}
+
+fn to_q16(p: [f64; 3]) -> [Q16; 3] {
+    p.map(|v| Q16::from_f32_saturating(v as f32))
+}
+
+impl Field for Q16Field {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        self.model.field(to_q16(p)).to_f64()
+    }
+
+    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let fg = self.model.field_gradient(to_q16(p));
+        (fg.value.to_f64(), fg.gradient.map(Scalar::to_f64))
+    }
+
+    fn regions(&self) -> &[Region] {
+        &self.regions
     }
 }
 

@@ -33,7 +33,7 @@ pub use camera::{Camera, MAX_SIDE, View};
 pub use compare::{MAX_DENSE_SAMPLES, MethodComparison, compare_methods, dense_hit};
 pub use field::{
     CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, Field, NetworkField,
-    RbfField, SphereField,
+    Q16Field, RbfField, SphereField,
 };
 pub use interval::Interval;
 pub use mesh::{BLOCK, ExtractedMesh, MAX_RESOLUTION, MeshGrid, MeshStats, extract_mesh};
