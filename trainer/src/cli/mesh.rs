@@ -8,11 +8,9 @@ use serde::Serialize;
 
 use neurosurf_trainer::io::write_mesh;
 use neurosurf_trainer::quality::components;
-use neurosurf_trainer::render::{
-    CoreField, ExtractedMesh, Field, MeshStats, RbfField, Region, extract_mesh,
-};
+use neurosurf_trainer::render::{ExtractedMesh, Field, MeshStats, RbfField, extract_mesh};
 
-use super::render::Surface;
+use super::render::{Surface, core_field};
 use super::{output, progress};
 
 #[derive(Debug, clap::Args)]
@@ -57,10 +55,11 @@ pub fn run(args: &Args) -> Result<()> {
             bytes,
             decoded,
             box_size,
-        } => {
-            let regions = Region::of_network(&decoded.network, *box_size, inflate);
-            extract(&CoreField::new(bytes, regions)?, args, &progress)?
-        }
+        } => extract(
+            &core_field(bytes, decoded, *box_size, inflate)?,
+            args,
+            &progress,
+        )?,
         Surface::Rbf(model) => extract(&RbfField::new(model, inflate)?, args, &progress)?,
     };
     bar.finish_and_clear();

@@ -77,6 +77,17 @@ pub enum Surface {
     Rbf(RbfModel),
 }
 
+/// An implicit blob in the core, in f32, inside its leaf boxes grown by `inflate`.
+pub fn core_field(
+    bytes: &[u8],
+    decoded: &DecodedImplicit,
+    box_size: f64,
+    inflate: f64,
+) -> Result<CoreField> {
+    let regions = Region::of_network(&decoded.network, box_size, inflate);
+    Ok(CoreField::new(bytes, regions)?)
+}
+
 impl Surface {
     /// Reads a model `render` and `mesh` accept.
     pub fn read(path: &Path) -> Result<Surface> {
@@ -171,8 +182,7 @@ pub fn run(args: &Args) -> Result<()> {
             decoded,
             box_size,
         } => {
-            let regions = Region::of_network(&decoded.network, *box_size, inflate);
-            let field = CoreField::new(bytes, regions)?;
+            let field = core_field(bytes, decoded, *box_size, inflate)?;
             (draw(&field, args, &view, &options, &report)?, "core f32")
         }
         Surface::Rbf(_) if args.guaranteed => bail!(
