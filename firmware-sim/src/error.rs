@@ -8,7 +8,8 @@ use neurosurf_core::BlobError;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SimError {
-    /// The toolchain or QEMU is missing and could not be installed.
+    /// The toolchain or QEMU is missing (the message names it and the command that installs
+    /// it).
     #[error("the Cortex-M toolchain is not ready: {0}")]
     Setup(String),
     /// Building the firmware or the plugin failed.

@@ -4,8 +4,9 @@
 //! `thumbv7em-none-eabihf` (Debian's Rust with `-Zbuild-std=core`) and linked for a common
 //! M4F budget (1 MiB flash, 192 KiB RAM). This crate is its host side:
 //!
-//! - [`Toolchain`]: finds, or installs through `firmware-sim/scripts/setup.sh`, the Debian
-//!   toolchain and the unpacked QEMU (idempotent, under the ignored `.tools/`);
+//! - [`Toolchain`]: finds the Debian toolchain and the unpacked QEMU (under the ignored
+//!   `.tools/`), or names what is missing and `firmware-sim/scripts/setup.sh`, which installs
+//!   it idempotently;
 //! - [`Firmware`]: builds the firmware once (cargo caches it in `target/firmware`) and reads
 //!   its ELF: marker addresses, flash and static RAM;
 //! - [`Simulator`]: one QEMU run per [`Job`] — writes the blob and the points, launches

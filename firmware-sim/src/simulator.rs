@@ -184,8 +184,8 @@ impl std::fmt::Debug for Simulator {
 }
 
 impl Simulator {
-    /// Gets everything ready (installing the toolchain on first use, building the firmware
-    /// and the plugin when their sources changed). Done once per process; later calls reuse it.
+    /// Gets everything ready (finding the toolchain, building the firmware and the plugin
+    /// when their sources changed). Done once per process; later calls reuse it.
     ///
     /// # Errors
     /// [`SimError::Setup`], [`SimError::Build`], [`SimError::Elf`].
@@ -205,7 +205,7 @@ impl Simulator {
     /// # Errors
     /// As [`Simulator::prepare`].
     pub fn prepare_in(root: &Path) -> Result<Self, SimError> {
-        let toolchain = Toolchain::ensure(root)?;
+        let toolchain = Toolchain::find(root)?;
         let firmware = Firmware::build(&toolchain, root)?;
         let plugin = plugin::build(&toolchain, root)?;
         let table = Table::parse(&firmware.bytes)

@@ -2,7 +2,6 @@
 //! works without rustup), `ld.lld`, and `qemu-system-arm` unpacked under `.tools/qemu`.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use crate::SimError;
 
@@ -53,32 +52,47 @@ impl Toolchain {
         missing
     }
 
-    /// The toolchain, installing what is missing with `firmware-sim/scripts/setup.sh` (apt
-    /// and an unpacked QEMU; safe to repeat).
+    /// The toolchain, when every part of it is installed. Nothing is installed from here:
+    /// `firmware-sim/scripts/setup.sh` does that (apt and an unpacked QEMU; safe to repeat),
+    /// and the test command `scripts/test.sh` runs it first.
     ///
     /// # Errors
-    /// [`SimError::Setup`] when something is still missing after the script ran.
-    pub fn ensure(root: &Path) -> Result<Self, SimError> {
-        let toolchain = Self::expected(root);
-        if toolchain.missing().is_empty() {
-            return Ok(toolchain);
+    /// [`SimError::Setup`] naming what is missing and the command that installs it.
+    pub fn find(root: &Path) -> Result<Self, SimError> {
+        Self::expected(root).checked(root)
+    }
+
+    /// This toolchain when nothing is missing, else the error [`Toolchain::find`] gives.
+    fn checked(self, root: &Path) -> Result<Self, SimError> {
+        let missing = self.missing();
+        if missing.is_empty() {
+            return Ok(self);
         }
-        let script = root.join("firmware-sim/scripts/setup.sh");
-        let output = Command::new("bash")
-            .arg(&script)
-            .output()
-            .map_err(|e| SimError::Setup(format!("cannot run {}: {e}", script.display())))?;
-        let still_missing = toolchain.missing();
-        if !output.status.success() || !still_missing.is_empty() {
-            return Err(SimError::Setup(format!(
-                "{} failed ({}); missing: {}\n{}{}",
-                script.display(),
-                output.status,
-                still_missing.join(", "),
-                String::from_utf8_lossy(&output.stdout),
-                String::from_utf8_lossy(&output.stderr)
-            )));
-        }
-        Ok(toolchain)
+        Err(SimError::Setup(format!(
+            "the simulated Cortex-M4F needs {}; install it with `{}` (or run the whole test \
+             command, `scripts/test.sh`, which does)",
+            missing.join(", "),
+            root.join("firmware-sim/scripts/setup.sh").display()
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_tool_is_named_with_the_command_that_installs_it() {
+        let root = Path::new("/nonexistent/neurosurf");
+        let mut toolchain = Toolchain::expected(root);
+        toolchain.qemu = root.join(".tools/qemu/usr/bin/qemu-system-arm");
+        let Err(SimError::Setup(message)) = toolchain.checked(root) else {
+            panic!("a toolchain without QEMU was accepted");
+        };
+        assert!(message.contains("qemu-system-arm"), "{message}");
+        assert!(
+            message.contains("firmware-sim/scripts/setup.sh"),
+            "{message}"
+        );
     }
 }

@@ -3,7 +3,8 @@
 //! computes — bit for bit, in Q16.16 and in f32 (the issue allows 2 ulp) — while bad blobs and bad requests
 //! come back as their error codes, and a hang as a time-out, never as a wrong answer.
 //!
-//! These tests install the toolchain on first use (`firmware-sim/scripts/setup.sh`).
+//! The toolchain comes from `firmware-sim/scripts/setup.sh` (the test command `scripts/test.sh`
+//! runs it first); without it these tests fail with a message naming that script.
 
 use std::path::Path;
 use std::time::Duration;

@@ -2,8 +2,8 @@
 //! exactly what `eval` prints, `compare` reports the fixed-versus-float errors and the
 //! target's bit-exactness, `sim-bench` measures the cost — and bad requests fail clearly.
 //!
-//! The simulator is installed on first use (`firmware-sim/scripts/setup.sh`); a run takes
-//! about 0.1 s.
+//! The simulator's toolchain comes from `firmware-sim/scripts/setup.sh` (the test command
+//! `scripts/test.sh` runs it first); a run takes about 0.1 s.
 
 mod common;
 

@@ -50,7 +50,7 @@ pub fn op_name(op: Op) -> &'static str {
     }
 }
 
-/// The simulator, ready (the toolchain installed and the firmware built on first use).
+/// The simulator, ready (the toolchain found and the firmware built on first use).
 pub fn simulator() -> Result<Simulator> {
     Simulator::prepare().context("cannot prepare the simulated Cortex-M4F")
 }
