@@ -30,6 +30,17 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 #![warn(missing_debug_implementations)]
+// The library never panics; its tests may (a failing test is the point), so these lints stop
+// at the library and the integration tests in `core/tests/` need no `allow` header.
+#![cfg_attr(
+    not(test),
+    warn(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
 
 pub mod blob;
 pub mod caoen;

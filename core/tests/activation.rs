@@ -5,13 +5,6 @@
 //! 1 572 865 values) plus a strided scan of the saturated tails out to the ends of the range.
 //! `f32` is checked with proptest over H ∈ [−50, 50]. The derivative bounds live in
 //! `common/mod.rs` (the evaluation tests' error analysis uses them too).
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod common;
 

@@ -2,13 +2,6 @@
 //! trip, one crafted input for every [`BlobError`] variant, and a seeded fuzz run (random byte
 //! strings, mutations, truncations and extensions of valid blobs, structurally random payloads)
 //! that must never panic and must keep the loaders mutually consistent.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod common;
 

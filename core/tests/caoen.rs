@@ -1,13 +1,6 @@
 //! Cao En networks through the public API: the paper's analytic cases (W = V = the six axis
 //! points, Figs. 2 and 3), `f32` and Q16.16 against the `f64` reference, exact normals against
 //! finite differences, projections against dot products, and batches against single points.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod caoen_support;
 

@@ -1,12 +1,6 @@
 //! Cao En blobs through the public API: round trips, one crafted input for every error the
 //! loader reports (corrupt, truncated, NaN, out of range, bad shapes), in-place loading, and a
 //! seeded mutation fuzz that must never panic.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic
-)]
 
 mod caoen_support;
 

@@ -1,12 +1,6 @@
 //! The implicit form of convex Cao En surfaces (paper §9) and its ray intersections (§10.1):
 //! inside/outside against the exact test of the polyhedron it rounds, and both intersections
 //! against brute-force sampling along the ray.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic
-)]
 
 mod caoen_support;
 

@@ -1,12 +1,6 @@
 //! The scalar operations the Cao En blending needs, measured exhaustively: Q16.16 e^x over every
 //! input (no overflow anywhere, the error the docs state), exponential blending in Q16.16 for q
 //! up to 16 and beyond, and the quotient of accumulators used by the rational form.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic
-)]
 
 use neurosurf_core::scalar::{Q16, Scalar};
 

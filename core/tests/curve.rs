@@ -1,13 +1,6 @@
 //! B-spline curves in `f32` and Q16.16 against an independent `f64` reference
 //! (`curve_support`), and the properties of the basis: partition of unity, C² joints, phantom
 //! ends, clamping, batches bit-identical to single points.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod curve_support;
 

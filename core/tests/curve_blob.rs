@@ -2,13 +2,6 @@
 //! scalars, one crafted input for every error the loaders report, in-place loading, and a
 //! seeded fuzz run (random bytes, mutations of valid blobs, structurally random payloads) that
 //! must never panic and must keep the loaders consistent with each other.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod curve_support;
 

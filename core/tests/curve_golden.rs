@@ -22,13 +22,6 @@
 //! ```
 //!
 //! review the diff, and commit the files. Without `NEUROSURF_BLESS=1` nothing is written.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod curve_support;
 mod golden_support;

@@ -1,13 +1,6 @@
 //! B-spline tensor-product surfaces in `f32` and Q16.16 against the independent `f64`
 //! reference (`curve_support`): position, partials, normal; partition of unity, planar nets,
 //! continuity across patch joints, closed directions, clamping, batches.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod curve_support;
 

@@ -9,13 +9,6 @@
 //! [−0.25, 0.25]³. Every parameter and every query point
 //! lies on the Q16.16 grid, so `f32`, Q16.16 and the reference see exactly the same numbers and
 //! the comparison measures evaluation error only (no quantization of the model itself).
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod common;
 

@@ -19,13 +19,6 @@
 //!
 //! review the diff of the outputs, and commit the files. Without `NEUROSURF_BLESS=1` the test
 //! never writes anything and fails on the first differing bit.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 mod common;
 

@@ -1,13 +1,6 @@
 //! Parametric surface networks in `f32` and Q16.16 against an independent `f64` evaluation of
 //! the same stored words: positions, partials (also against central differences), normals,
 //! batches, and the loader's errors.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    clippy::panic,
-    clippy::needless_range_loop
-)]
 
 use neurosurf_core::BlobError;
 use neurosurf_core::parametric::{

@@ -192,7 +192,6 @@ fn split<S: Scalar>(s: S, last: usize) -> (usize, S) {
 }
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing)]
 mod tests {
     use super::*;
     use crate::scalar::Q16;

@@ -1,14 +1,7 @@
 //! Shared helpers of the Cao En tests: blob builders and an independent `f64` reference
 //! written from the contract in `core/src/caoen/mod.rs` — plain sums, `powi`/`exp` from std,
 //! and normals from an explicit tangent frame (not the core's cofactor form).
-#![allow(
-    dead_code,
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::needless_range_loop,
-    clippy::indexing_slicing,
-    clippy::panic
-)]
+#![allow(dead_code)]
 
 use neurosurf_core::caoen::CaoEnPayload;
 use neurosurf_core::scalar::{Q16, ScalarKind};

@@ -2,12 +2,7 @@
 //! Q16.16 grid, blob builders, and an independent `f64` reference evaluator written from the
 //! mathematical contract in `core/src/curve/mod.rs` (not from the core's code: plain
 //! Σ Bₖ(u)·Pₖ with the textbook basis, modulo for wrapping, `floor` for the segment).
-#![allow(
-    dead_code,
-    clippy::unwrap_used,
-    clippy::indexing_slicing,
-    clippy::panic
-)]
+#![allow(dead_code)]
 
 use neurosurf_core::blob;
 use neurosurf_core::curve::{CurvePayload, SurfacePayload};

@@ -1,12 +1,7 @@
 //! Golden-file helpers shared by the evaluators' golden tests: where the files live, blessing
 //! on request (`NEUROSURF_BLESS=1`), word (de)serialization, and the two comparisons — Q16.16
 //! bit for bit, `f32` within one ulp.
-#![allow(
-    dead_code,
-    clippy::unwrap_used,
-    clippy::indexing_slicing,
-    clippy::panic
-)]
+#![allow(dead_code)]
 
 use std::path::PathBuf;
 use std::sync::Once;
