@@ -2,7 +2,8 @@
 //!
 //! The host side of neurosurf: reads point sets and meshes, trains the models of the four
 //! papers in `f64`, writes blobs that `neurosurf-core` evaluates, and evaluates them itself as
-//! the `f64` reference. The `neurosurf` binary is a thin command-line layer over this library.
+//! the `f64` reference. The `neurosurf` command (crate `neurosurf-cli`) is a thin layer over
+//! this library.
 
 pub mod caoen;
 pub mod compare;

@@ -1,4 +1,8 @@
-//! The command line: one module per command, each a thin layer over the library.
+//! `neurosurf`: train neural freeform surfaces on a desktop, write blobs for microcontrollers,
+//! evaluate them in f64, f32 and Q16.16. Run `neurosurf --help`.
+//!
+//! The command line: one module per command, each a thin layer over the `neurosurf-trainer`
+//! library.
 
 mod caoen;
 mod compare;
@@ -105,7 +109,8 @@ enum Command {
 }
 
 /// Parses the arguments, runs the command, and turns an error into a message and exit code 1.
-pub fn main() -> ExitCode {
+fn main() -> ExitCode {
+    restore_default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Sample(args) => sample::run(&args),
@@ -146,3 +151,17 @@ fn describe(error: &anyhow::Error) -> String {
     }
     text
 }
+
+/// Rust ignores SIGPIPE, so `neurosurf eval … | head` would panic on the closed pipe; a
+/// command-line tool should end quietly instead, as `cat` does.
+#[cfg(unix)]
+fn restore_default_sigpipe() {
+    // SAFETY: called first thing in `main`, before any thread exists; setting a signal's
+    // disposition to its default has no other effect on the program.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(not(unix))]
+fn restore_default_sigpipe() {}
