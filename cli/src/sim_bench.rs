@@ -4,6 +4,7 @@
 //! with the
 //! firmware's flash, RAM and stack.
 
+use neurosurf_trainer::geometry::vector::inner;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -244,7 +245,7 @@ fn cao_en_sphere(n: usize, blending: Blending) -> Result<Subject> {
                     keys.iter()
                         .enumerate()
                         .filter(|&(j, _)| j != i)
-                        .map(|(_, b)| dot(a, b))
+                        .map(|(_, b)| inner(a, b))
                         .fold(-1.0_f64, f64::max)
                 })
                 .fold(1.0_f64, f64::min);
@@ -278,10 +279,6 @@ fn cao_en_sphere(n: usize, blending: Blending) -> Result<Subject> {
         arity: 3,
         ops: [Op::Position, Op::PositionDirection],
     })
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The approximating spline of 200 noisy points on a two-turn spiral (fixed seed), in both

@@ -13,7 +13,7 @@
 mod common;
 
 use common::{
-    BALANCED_4, LEFT_COMB, PAIR, Reference, Rng, SINGLE_LEAF, TREES, f32_point, model_blob,
+    BALANCED_4, LEFT_COMB, PAIR, Reference, Rng, SINGLE_LEAF, TREES, f32_point, model_blob, norm,
     q16_point, random_parameters,
 };
 use neurosurf_core::LengthMismatch;
@@ -87,10 +87,6 @@ fn cases() -> Vec<Case> {
         }
     }
     cases
-}
-
-fn norm(v: [f64; 3]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 fn to_f64<S: Scalar>(v: [S; 3]) -> [f64; 3] {

@@ -9,8 +9,9 @@ use neurosurf_core::implicit::ImplicitModel;
 use neurosurf_core::scalar::{Q16, ScalarKind};
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::fidelity::Fidelity;
-use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions, StopReason, Trained};
+use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions, Trained};
 use neurosurf_trainer::sample::{Shape, sample_shape};
+use neurosurf_trainer::solve::StopReason;
 
 const TORUS: Shape = Shape::Torus {
     major: 1.0,

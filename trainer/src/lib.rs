@@ -5,6 +5,7 @@
 //! the `f64` reference. The `neurosurf` command (crate `neurosurf-cli`) is a thin layer over
 //! this library.
 
+pub mod blob;
 pub mod caoen;
 pub mod compare;
 pub mod curve;
@@ -12,6 +13,7 @@ pub mod demo;
 pub mod error;
 pub mod evaluate;
 pub mod fidelity;
+pub mod geometry;
 pub mod implicit;
 pub mod io;
 pub mod parametric;
@@ -21,6 +23,7 @@ pub mod quality;
 pub mod rbf;
 pub mod render;
 pub mod sample;
+pub mod solve;
 pub mod table;
 
 pub use error::{Error, Result};

@@ -12,6 +12,7 @@ pub use common::{LSB, Rng, fix_crc, frame, to_grid};
 /// The PRNG, test constants and framing shared with the other core tests.
 #[path = "../common/mod.rs"]
 mod common;
+pub use common::{cross, dot, norm, sub};
 
 /// A Cao En network in f64, as the trainer would hold it.
 #[derive(Clone, Debug, PartialEq)]
@@ -301,26 +302,6 @@ pub fn random_network(
             })
             .collect(),
     }
-}
-
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-pub fn norm(v: [f64; 3]) -> f64 {
-    dot(&v, &v).sqrt()
 }
 
 pub fn normalize(v: [f64; 3]) -> [f64; 3] {

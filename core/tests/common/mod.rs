@@ -1,4 +1,4 @@
-//! Shared helpers of the core's integration tests: a seeded PRNG, random models on the Q16.16
+//! Shared helpers of the core's integration tests: `f64` vector helpers, a seeded PRNG, random models on the Q16.16
 //! grid, blob framing, and an independent `f64` reference evaluator written from the documented
 //! parameter layout (`core/src/implicit/layout.rs`).
 #![allow(dead_code)]
@@ -21,6 +21,30 @@ pub const Q16_CURVATURE_MAX_ERROR: f64 = 1.25 / 16384.0;
 pub const F32_SLOPE_MAX_ERROR: f64 = 5.0e-7;
 /// Largest absolute error of the `f32` a″ over H ∈ [−50, 50] (measured 4.5·10⁻⁷).
 pub const F32_CURVATURE_MAX_ERROR: f64 = 5.0e-7;
+
+/// `a − b`.
+pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// `Σ aᵢ·bᵢ`, summed in order.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `a × b`.
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// `|v|`.
+pub fn norm(v: [f64; 3]) -> f64 {
+    dot(&v, &v).sqrt()
+}
 
 /// One Q16.16 unit in the last place.
 pub const LSB: f64 = 1.0 / 65536.0;

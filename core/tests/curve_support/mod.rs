@@ -14,6 +14,7 @@ pub use common::{LSB, Rng, to_grid};
 /// The PRNG, test constants and grid rounding shared with the implicit-model tests.
 #[path = "../common/mod.rs"]
 mod common;
+pub use common::{cross, norm};
 
 /// The unit roundoff of `f32` (half an ulp of 1).
 pub const F32_EPS: f64 = 1.0 / 16_777_216.0;
@@ -125,18 +126,6 @@ pub fn f64s_f32(v: [f32; 3]) -> [f64; 3] {
 
 pub fn max_abs_diff(a: [f64; 3], b: [f64; 3]) -> f64 {
     (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max)
-}
-
-pub fn norm(v: [f64; 3]) -> f64 {
-    v.iter().map(|c| c * c).sum::<f64>().sqrt()
-}
-
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 /// Angle between two vectors, in radians (robust near 0).

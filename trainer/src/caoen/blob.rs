@@ -8,8 +8,8 @@ use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 
 use super::groups::order_for_groups;
 use super::network::CaoEnNetwork;
+use crate::blob;
 use crate::error::{Error, Result};
-use crate::implicit::frame;
 
 /// Encodes `network` as a Cao En blob storing its words as `scalar` (`metadata` is opaque to
 /// the core). Compact networks are stored with their keys in [`order_for_groups`]'s order.
@@ -66,7 +66,7 @@ pub fn to_blob(network: &CaoEnNetwork, scalar: ScalarKind, metadata: &[u8]) -> R
         sharpness: &sharpness,
         metadata,
     };
-    frame(ModelKind::CaoEn, scalar, &payload)
+    blob::encode(ModelKind::CaoEn, scalar, &payload)
 }
 
 /// Reads a Cao En blob back into an f64 network (words widened exactly) and its metadata.

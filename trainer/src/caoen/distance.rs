@@ -11,6 +11,7 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::geometry::vector::{dot, sub};
 use crate::io::Mesh;
 
 /// Triangles per leaf of the hierarchy.
@@ -132,14 +133,6 @@ fn box_distance_squared(node: &Node, p: [f64; 3]) -> f64 {
             d * d
         })
         .sum()
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Squared distance from `p` to triangle `t` (Ericson, Real-Time Collision Detection §5.1.5:

@@ -15,8 +15,9 @@
 
 use neurosurf_core::caoen::{Blending, Domain};
 
-use super::network::{CaoEnNetwork, dot};
+use super::network::CaoEnNetwork;
 use crate::error::{Error, Result};
+use crate::geometry::vector::inner;
 use crate::io::Mesh;
 
 /// A distortion of the ball of `radius` around `centre`.
@@ -91,7 +92,7 @@ impl Distortion {
     /// The point of S³ above `p`.
     fn lift(&self, p: [f64; 3]) -> Result<[f64; 4]> {
         let u = [0, 1, 2].map(|k| (p[k] - self.centre[k]) / self.radius);
-        let r2 = dot(&u, &u);
+        let r2 = inner(&u, &u);
         if r2.is_nan() || r2 > 1.0 + 1e-12 {
             return Err(Error::invalid(format!(
                 "{p:?} is outside the distortion's ball (radius {} around {:?})",
@@ -171,11 +172,11 @@ mod tests {
         {
             let u = [0, 1, 2].map(|k| (p[k] - centre[k]) / 2.0);
             let x = bump.lift(*p).unwrap();
-            let near = dot(&x, &w).max(0.0).powi(6);
+            let near = inner(&x, &w).max(0.0).powi(6);
             let expected = [
                 p[0] - 0.3 * near,
                 p[1] + 0.1 * near,
-                p[2] + 0.4 * (1.0 - dot(&u, &u)),
+                p[2] + 0.4 * (1.0 - inner(&u, &u)),
             ];
             for k in 0..3 {
                 assert!((moved[k] - expected[k]).abs() < 1e-12, "{p:?}");

@@ -3,8 +3,9 @@
 
 use std::collections::HashMap;
 
-use super::network::{CaoEnNetwork, dot};
+use super::network::CaoEnNetwork;
 use crate::error::{Error, Result};
+use crate::geometry::vector::{cross, inner, sub};
 use crate::io::Mesh;
 
 /// Most subdivisions of the icosahedron (level 8: 655 362 vertices).
@@ -167,7 +168,7 @@ pub fn map_mesh(
     let mut fallback = vec![[0.0; 3]; positions.len()];
     for t in &triangles {
         let [a, b, c] = t.map(|v| positions[v as usize]);
-        let n = super::network::cross(sub(b, a), sub(c, a));
+        let n = cross(sub(b, a), sub(c, a));
         for &v in t {
             for k in 0..3 {
                 fallback[v as usize][k] += n[k];
@@ -210,17 +211,13 @@ pub fn torus_mesh(network: &CaoEnNetwork, around: usize, across: usize) -> Resul
     map_mesh(network, grid.sources, grid.triangles)
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
 fn unit(p: [f64; 3]) -> [f64; 3] {
-    let r = dot(&p, &p).sqrt();
+    let r = inner(&p, &p).sqrt();
     p.map(|c| c / r)
 }
 
 fn unit_or_z(p: [f64; 3]) -> [f64; 3] {
-    if dot(&p, &p) > 0.0 {
+    if inner(&p, &p) > 0.0 {
         unit(p)
     } else {
         [0.0, 0.0, 1.0]

@@ -77,7 +77,9 @@ pub use texture::{
     LIGHTING_CHECK_SUBDIVISIONS, LightingFit, cosine_law, fold_lighting, mesh_texture,
     position_part, texture_coordinates,
 };
-pub use topology::{boundary_loops, cap_holes, check_sphere_topology, edge_components, weld};
+pub use topology::{
+    cap_holes, check_sphere_topology, edge_components, oriented_boundary_loops, weld,
+};
 
 #[cfg(test)]
 mod support;

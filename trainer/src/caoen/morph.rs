@@ -22,9 +22,10 @@
 use neurosurf_core::caoen::Blending;
 
 use super::mesh::{CaoEnMesh, map_mesh};
-use super::network::{CaoEnNetwork, dot};
+use super::network::CaoEnNetwork;
 use super::{icosphere, torus_grid};
 use crate::error::{Error, Result};
+use crate::geometry::vector::inner;
 
 /// The most frames [`morph_meshes`] makes.
 pub const MAX_FRAMES: usize = 10_000;
@@ -70,7 +71,7 @@ impl Morph {
         for (i, a) in from.weights.iter().enumerate() {
             for (j, b) in to.weights.iter().enumerate() {
                 if !power || from.sharpness[i] == to.sharpness[j] {
-                    let cos = dot(a, b) / (dot(a, a) * dot(b, b)).sqrt().max(1e-300);
+                    let cos = inner(a, b) / (inner(a, a) * inner(b, b)).sqrt().max(1e-300);
                     candidates.push((cos, i, j));
                 }
             }
@@ -159,8 +160,8 @@ impl Morph {
                 (Some(i), Some(j)) => {
                     let (a, b) = (&self.from.weights[i], &self.to.weights[j]);
                     let direction = lerp(a, b);
-                    let norm = dot(&direction, &direction).sqrt();
-                    let length = (1.0 - t) * dot(a, a).sqrt() + t * dot(b, b).sqrt();
+                    let norm = inner(&direction, &direction).sqrt();
+                    let length = (1.0 - t) * inner(a, a).sqrt() + t * inner(b, b).sqrt();
                     let w = if t == 0.0 {
                         a.clone()
                     } else if t == 1.0 || norm == 0.0 {

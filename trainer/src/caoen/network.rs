@@ -1,5 +1,6 @@
 //! The f64 Cao En network: the trainer's model and the reference the core is compared with.
 
+use crate::geometry::vector::{cross, inner};
 use neurosurf_core::caoen::{Blending, Domain, MAX_KEY_POINTS, MAX_SHARPNESS};
 use neurosurf_core::caoen::{MAX_SOURCE_DIMENSION, MAX_TARGET_DIMENSION};
 use serde::{Deserialize, Serialize};
@@ -139,7 +140,7 @@ impl CaoEnNetwork {
             .weights
             .iter()
             .enumerate()
-            .map(|(i, w)| self.blend(i, dot(w, x)).0)
+            .map(|(i, w)| self.blend(i, inner(w, x)).0)
             .collect();
         if !self.normalized {
             return k;
@@ -159,7 +160,7 @@ impl CaoEnNetwork {
         let mut da = vec![vec![0.0; m]; p];
         let (mut b, mut db) = (0.0, vec![0.0; m]);
         for (i, (w, t)) in self.weights.iter().zip(&self.targets).enumerate() {
-            let (f, df) = self.blend(i, dot(w, x));
+            let (f, df) = self.blend(i, inner(w, x));
             b += f;
             for (h, &wh) in w.iter().enumerate() {
                 db[h] += df * wh;
@@ -226,7 +227,7 @@ impl CaoEnNetwork {
             }
             _ => return None,
         };
-        let length = dot(&n, &n).sqrt();
+        let length = inner(&n, &n).sqrt();
         (length > 1e-300).then(|| n.map(|c| c / length))
     }
 
@@ -257,7 +258,7 @@ impl CaoEnNetwork {
 /// A point brought back onto the unit sphere, or onto the torus (each circle normalized).
 pub fn on_domain(domain: u8, x: &[f64]) -> Vec<f64> {
     let unit = |v: &[f64]| {
-        let r = dot(v, v).sqrt();
+        let r = inner(v, v).sqrt();
         v.iter().map(|c| c / r).collect::<Vec<_>>()
     };
     if domain == 1 && x.len() == 4 {
@@ -267,16 +268,4 @@ pub fn on_domain(domain: u8, x: &[f64]) -> Vec<f64> {
     } else {
         unit(x)
     }
-}
-
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }

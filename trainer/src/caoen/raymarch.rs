@@ -9,9 +9,10 @@ use neurosurf_core::caoen::{Blending, CaoEnModel, Domain, Ray};
 use neurosurf_core::scalar::ScalarKind;
 
 use super::blob::to_blob;
-use super::network::{CaoEnNetwork, dot};
+use super::network::CaoEnNetwork;
 use super::render::{Rendering, View};
 use crate::error::{Error, Result};
+use crate::geometry::vector::inner;
 use crate::plot::Rgb;
 
 /// The implicit network of a convex polyhedron whose face planes have foot points `feet`
@@ -25,7 +26,7 @@ pub fn convex_implicit(feet: &[[f64; 3]], blending: Blending, q: f64) -> Result<
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            let r2 = dot(t, t);
+            let r2 = inner(t, t);
             if r2 > 0.0 && r2.is_finite() {
                 Ok(t.iter().map(|c| c / r2).collect())
             } else {
@@ -99,7 +100,7 @@ pub fn ray_marched_image(
             let t = f64::from(hit.entry);
             let p: Vec<f64> = (0..3).map(|k| origin[k] + t * view.direction[k]).collect();
             let gradient = &network.evaluate(&p).jacobian[0];
-            let length = dot(gradient, gradient).sqrt();
+            let length = inner(gradient, gradient).sqrt();
             let n = if length > 0.0 {
                 [0, 1, 2].map(|k| gradient[k] / length)
             } else {

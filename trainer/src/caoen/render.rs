@@ -14,9 +14,10 @@
 
 use image::RgbImage;
 
-use super::network::{CaoEnNetwork, cross, dot};
+use super::network::CaoEnNetwork;
 use super::{icosphere, on_domain, torus_grid};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{cross, inner};
 use crate::plot::{MAX_SIDE, Rgb};
 
 /// Largest screen distance, in pixels, between adjacent samples of a splatted triangle.
@@ -69,7 +70,7 @@ impl View {
             )));
         }
         let unit = |v: [f64; 3], what: &str| -> Result<[f64; 3]> {
-            let r = dot(&v, &v).sqrt();
+            let r = inner(&v, &v).sqrt();
             if r > 1e-12 && r.is_finite() {
                 Ok(v.map(|c| c / r))
             } else {
@@ -104,15 +105,15 @@ impl View {
     pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
         let d = [0, 1, 2].map(|k| p[k] - self.centre[k]);
         [
-            0.5 * f64::from(self.width) + self.scale * dot(&d, &self.right),
-            0.5 * f64::from(self.height) - self.scale * dot(&d, &self.up),
-            dot(&d, &self.direction),
+            0.5 * f64::from(self.width) + self.scale * inner(&d, &self.right),
+            0.5 * f64::from(self.height) - self.scale * inner(&d, &self.up),
+            inner(&d, &self.direction),
         ]
     }
 
     /// The shade of a surface of `color` with unit normal `n` (Lambert, plus ambient).
     pub fn shade(&self, n: [f64; 3], color: Rgb) -> image::Rgb<u8> {
-        let intensity = AMBIENT + (1.0 - AMBIENT) * dot(&n, &self.light).max(0.0);
+        let intensity = AMBIENT + (1.0 - AMBIENT) * inner(&n, &self.light).max(0.0);
         let scale = |c: u8| (f64::from(c) * intensity).round().clamp(0.0, 255.0) as u8;
         image::Rgb([scale(color.0), scale(color.1), scale(color.2)])
     }
@@ -304,9 +305,9 @@ fn screen_network(network: &CaoEnNetwork, view: &View) -> CaoEnNetwork {
         .iter()
         .map(|t| {
             vec![
-                view.scale * dot(t, &view.right),
-                -view.scale * dot(t, &view.up),
-                dot(t, &view.direction),
+                view.scale * inner(t, &view.right),
+                -view.scale * inner(t, &view.up),
+                inner(t, &view.direction),
             ]
         })
         .collect();

@@ -29,8 +29,9 @@ use super::mesh::{map_mesh, torus_grid};
 use super::mesh_fit::{MeshFit, MeshFitOptions, fit_parameterized};
 use super::network::CaoEnNetwork;
 use super::spherical::spherical_parameterization;
-use super::topology::{boundary_loops, cap_holes, edge_components, neighbours, weld};
+use super::topology::{cap_holes, edge_components, neighbours, oriented_boundary_loops, weld};
 use crate::error::{Error, Result};
+use crate::geometry::vector::cross;
 use crate::io::Mesh;
 
 /// The share of the torus's θ circle the visible handle takes.
@@ -249,7 +250,7 @@ fn tube_coordinates(mesh: &Mesh, from: &[u32], to: &[u32]) -> Result<Tube> {
 /// has no good conformal (Tutte) map to the sphere — its middle shrinks to a thin band — but
 /// this one spreads the vertices evenly in latitude.
 fn fit_spout(mesh: &Mesh, keys: usize, options: &MeshFitOptions) -> Result<TeapotPart> {
-    let loops = boundary_loops(mesh)?;
+    let loops = oriented_boundary_loops(mesh)?;
     if loops.len() != 2 {
         return Err(Error::invalid(format!(
             "the spout should be a tube with 2 open ends, found {}",
@@ -328,7 +329,7 @@ fn faces_outward(network: &CaoEnNetwork, sources: &[Vec<f64>], mesh: &Mesh) -> b
     let mut normals = vec![[0.0; 3]; mesh.positions.len()];
     for t in &mesh.triangles {
         let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
-        let n = super::network::cross(
+        let n = cross(
             [0, 1, 2].map(|k| b[k] - a[k]),
             [0, 1, 2].map(|k| c[k] - a[k]),
         );
@@ -351,7 +352,7 @@ fn faces_outward(network: &CaoEnNetwork, sources: &[Vec<f64>], mesh: &Mesh) -> b
 
 /// The handle as a torus network (see the module documentation).
 fn fit_handle(mesh: &Mesh, settings: HandleFit) -> Result<TeapotPart> {
-    let loops = boundary_loops(mesh)?;
+    let loops = oriented_boundary_loops(mesh)?;
     if loops.len() != 2 {
         return Err(Error::invalid(format!(
             "the handle should be a tube with 2 open ends, found {}",

@@ -1,6 +1,7 @@
 //! Tests of the Cao En trainer: fitting through the targets, blob round trips through the
 //! core, the reference normals against the core's, meshes, and the approximate-normal network.
 
+use crate::geometry::vector::cross;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -151,7 +152,7 @@ fn meshes_are_closed_and_outward() {
                 *edges.entry((a.min(b), a.max(b))).or_default() += if a < b { 1 } else { -1 };
             }
             let [a, b, c] = t.map(|v| sphere.positions[v as usize]);
-            let n = super::network::cross(
+            let n = cross(
                 [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
                 [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
             );

@@ -23,8 +23,9 @@
 
 use super::fit::fit_shape;
 use super::mesh::{CaoEnMesh, icosphere};
-use super::network::{CaoEnNetwork, dot, on_domain};
+use super::network::{CaoEnNetwork, on_domain};
 use crate::error::{Error, Result};
+use crate::geometry::vector::inner;
 use crate::io::TextureCoordinates;
 
 use std::f64::consts::{PI, TAU};
@@ -117,10 +118,10 @@ pub fn mesh_texture(domain: u8, mapped: &CaoEnMesh) -> TextureCoordinates {
 /// The cosine law N(x)·L at source point x of a shape network (the first three outputs), with
 /// L normalized; `None` where the normal is undefined.
 pub fn cosine_law(network: &CaoEnNetwork, x: &[f64], light: [f64; 3]) -> Option<f64> {
-    let length = dot(&light, &light).sqrt();
+    let length = inner(&light, &light).sqrt();
     network
         .normal(x)
-        .map(|n| dot(&n, &light) / length.max(f64::MIN_POSITIVE))
+        .map(|n| inner(&n, &light) / length.max(f64::MIN_POSITIVE))
 }
 
 /// A shape network with its lighting folded in, and how well the folded outputs follow the
@@ -175,7 +176,7 @@ pub fn fold_lighting(network: &CaoEnNetwork, lights: &[[f64; 3]]) -> Result<Ligh
     let lights = lights
         .iter()
         .map(|l| {
-            let length = dot(l, l).sqrt();
+            let length = inner(l, l).sqrt();
             if length > 0.0 && length.is_finite() {
                 Ok(l.map(|c| c / length))
             } else {
@@ -195,7 +196,7 @@ pub fn fold_lighting(network: &CaoEnNetwork, lights: &[[f64; 3]]) -> Result<Ligh
         .collect();
     let shading = |x: &[f64]| -> Option<Vec<f64>> {
         let n = shape.normal(x)?;
-        Some(lights.iter().map(|l| dot(&n, l)).collect())
+        Some(lights.iter().map(|l| inner(&n, l)).collect())
     };
     let values = keys
         .iter()

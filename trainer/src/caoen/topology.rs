@@ -121,57 +121,24 @@ fn directed_edges(mesh: &Mesh) -> Result<HashMap<(u32, u32), usize>> {
 }
 
 /// The boundary loops of an oriented manifold mesh, each as vertices in the order of its
-/// triangles' edges (so the loop runs counter-clockwise around the surface it bounds).
+/// triangles' edges (so the loop runs counter-clockwise around the surface it bounds): the
+/// shared [`crate::geometry::boundary_loops`], after checking the mesh is an oriented manifold.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for a non-manifold or inconsistently wound mesh, or a boundary
 /// vertex where two loops touch.
-pub fn boundary_loops(mesh: &Mesh) -> Result<Vec<Vec<u32>>> {
-    let directed = directed_edges(mesh)?;
-    let mut next: HashMap<u32, u32> = HashMap::new();
-    for &(a, b) in directed.keys() {
-        if !directed.contains_key(&(b, a)) && next.insert(a, b).is_some() {
-            return Err(Error::invalid(format!(
-                "vertex {a} starts two boundary edges: boundary loops touch"
-            )));
-        }
-    }
-    let mut starts: Vec<u32> = next.keys().copied().collect();
-    starts.sort_unstable();
-    let mut seen = std::collections::HashSet::new();
-    let mut loops = Vec::new();
-    for start in starts {
-        if seen.contains(&start) {
-            continue;
-        }
-        let mut chain = vec![start];
-        seen.insert(start);
-        let mut v = start;
-        loop {
-            let Some(&w) = next.get(&v) else {
-                return Err(Error::invalid(format!("the boundary stops at vertex {v}")));
-            };
-            if w == start {
-                break;
-            }
-            if !seen.insert(w) {
-                return Err(Error::invalid(format!("the boundary revisits vertex {w}")));
-            }
-            chain.push(w);
-            v = w;
-        }
-        loops.push(chain);
-    }
-    Ok(loops)
+pub fn oriented_boundary_loops(mesh: &Mesh) -> Result<Vec<Vec<u32>>> {
+    directed_edges(mesh)?;
+    crate::geometry::boundary_loops(&mesh.triangles)
 }
 
 /// Closes every boundary loop with a fan around a new vertex at the loop's centroid (wound to
 /// match the surface). The original vertices keep their indices; the caps' vertices follow.
 ///
 /// # Errors
-/// As [`boundary_loops`].
+/// As [`oriented_boundary_loops`].
 pub fn cap_holes(mesh: &Mesh) -> Result<Mesh> {
-    let loops = boundary_loops(mesh)?;
+    let loops = oriented_boundary_loops(mesh)?;
     let mut capped = mesh.clone();
     for chain in loops {
         let mut centre = [0.0; 3];

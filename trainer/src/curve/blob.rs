@@ -14,8 +14,8 @@ use neurosurf_core::scalar::{Q16, ScalarKind};
 use serde::{Deserialize, Serialize};
 
 use super::spline::{BSplineCurve, BSplineSurface};
+use crate::blob::encode;
 use crate::error::{Error, Result};
-use crate::implicit::frame;
 
 /// How a curve or surface blob was made (stored as its metadata).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -79,7 +79,7 @@ pub fn curve_to_blob(
         control: &control,
         metadata: &metadata,
     };
-    let bytes = frame(ModelKind::Curve, scalar, &payload)?;
+    let bytes = encode(ModelKind::Curve, scalar, &payload)?;
     let loads = match scalar {
         ScalarKind::Q16_16 => core_curve::BSplineCurve::<Q16>::from_blob(&bytes).map(drop),
         _ => core_curve::BSplineCurve::<f32>::from_blob(&bytes).map(drop),
@@ -118,7 +118,7 @@ pub fn surface_to_blob(
         control: &control,
         metadata: &metadata,
     };
-    let bytes = frame(ModelKind::SplineSurface, scalar, &payload)?;
+    let bytes = encode(ModelKind::SplineSurface, scalar, &payload)?;
     let loads = match scalar {
         ScalarKind::Q16_16 => core_curve::BSplineSurface::<Q16>::from_blob(&bytes).map(drop),
         _ => core_curve::BSplineSurface::<f32>::from_blob(&bytes).map(drop),

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::grid::NeuronGrid;
 use super::points::CurvePoints;
-use super::vector::distance_to_line;
+use crate::geometry::vector::distance_to_line;
 
 /// Both convergence tests on one chain state.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -15,7 +15,7 @@ use super::least_squares::{Affine, NormalEquations};
 use super::points::MIN_POINTS;
 use super::spline::{BSplineCurve, MIN_CONTROL_POINTS};
 use super::tridiagonal::{solve_cyclic, solve_tridiagonal};
-use super::vector::distance;
+use crate::geometry::vector::distance;
 
 /// Settings of [`approximate`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -6,7 +6,7 @@
 //! a neuron between cells is O(1), and a query visits rings of cells around the query until
 //! no unvisited cell can hold a closer neuron — the answer is exact, not approximate.
 
-use super::vector::distance_squared;
+use crate::geometry::vector::distance_squared;
 
 /// No neuron (end of a cell list).
 const NONE: u32 = u32::MAX;

@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 
-use super::vector::distance_to_segment;
+use crate::geometry::vector::distance_to_segment;
 
 /// The fraction of consecutive pairs of a recovered `order` that are neighbours on the true
 /// curve.
@@ -64,7 +64,7 @@ pub fn directed_distance(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 pub fn distance_to_polyline(p: [f64; 3], line: &[[f64; 3]]) -> f64 {
     match line {
         [] => f64::INFINITY,
-        [only] => super::vector::distance(p, *only),
+        [only] => crate::geometry::vector::distance(p, *only),
         _ => line
             .windows(2)
             .map(|s| distance_to_segment(p, s[0], s[1]))

@@ -57,7 +57,6 @@ mod surface_fit;
 mod surface_mesh;
 mod tour;
 mod tridiagonal;
-pub(crate) mod vector;
 
 pub use basis::{cubic_basis, cubic_basis_derivative, locate};
 pub use bench::{BENCHMARK_SIZES, BenchmarkRow, benchmark};

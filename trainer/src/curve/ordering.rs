@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use super::grid::NeuronGrid;
 use super::kohonen::{KohonenChain, Topology};
 use super::points::CurvePoints;
-use super::vector::{dot, sub};
+use crate::geometry::vector::{dot, sub};
 
 /// The recovered order of the input points.
 #[derive(Clone, Debug, PartialEq)]

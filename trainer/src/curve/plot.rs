@@ -15,7 +15,7 @@ use crate::plot::{Dot, Rgb, Scene, Stroke, to_svg, write_picture};
 
 use super::kohonen::{KohonenChain, Topology};
 use super::spline::BSplineCurve;
-use super::vector::{dot, sub};
+use crate::geometry::vector::{dot, sub};
 
 /// How 3-D points are flattened.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

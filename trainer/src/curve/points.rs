@@ -4,7 +4,7 @@ use std::collections::HashMap;
 
 use crate::error::{Error, Result};
 
-use super::vector::{bounds, distance_squared};
+use crate::geometry::vector::{bounds, distance_squared};
 
 /// Fewest points the curve pipeline accepts: one cubic B-spline segment needs four.
 pub const MIN_POINTS: usize = 4;

@@ -17,7 +17,7 @@ use crate::error::{Error, Result};
 
 use super::kohonen::Topology;
 use super::points::{CurvePoints, MAX_POINTS, MIN_POINTS};
-use super::vector::{bounds, distance};
+use crate::geometry::vector::{bounds, distance};
 
 /// Vertices of the true-curve polyline (its chords deviate from the curve by < 1e-6 of its
 /// size).

@@ -181,8 +181,8 @@ impl BSplineSurface {
     /// not finite (a degenerate point).
     pub fn normal(&self, u: f64, v: f64) -> Option<[f64; 3]> {
         let (a, b) = self.partials(u, v);
-        let n = super::vector::cross(a, b);
-        let length = super::vector::norm(n);
+        let n = crate::geometry::vector::cross(a, b);
+        let length = crate::geometry::vector::norm(n);
         (length > 0.0 && length.is_finite()).then(|| n.map(|c| c / length))
     }
 

@@ -16,7 +16,7 @@ use super::grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
 use super::points::CurvePoints;
 use super::spline::BSplineSurface;
 use super::surface_fit::fit_surface_to_parameters;
-use super::vector::{distance, dot, sub};
+use crate::geometry::vector::{distance, dot, sub};
 
 /// Settings of [`fit_surface`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

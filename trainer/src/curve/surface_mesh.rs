@@ -4,7 +4,7 @@ use crate::error::{Error, Result};
 use crate::io::Mesh;
 
 use super::spline::BSplineSurface;
-use super::vector::{add, cross, norm, sub};
+use crate::geometry::vector::{add, cross, norm, sub};
 
 /// Most vertices of a surface mesh.
 pub const MAX_MESH_VERTICES: usize = 16_000_000;

@@ -10,9 +10,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::samples::gaussian;
-use super::vector::distance;
 use super::*;
 use crate::error::Error;
+use crate::geometry::vector::distance;
 
 /// Points per test curve.
 const COUNT: usize = 200;
@@ -396,9 +396,10 @@ fn surface_partials_and_normals_match_differences() {
             let (pu, pv) = surface.partials(u, v);
             assert!(distance(pu, du) <= 1e-6 && distance(pv, dv) <= 1e-6);
             let n = surface.normal(u, v).unwrap();
-            assert!((super::vector::norm(n) - 1.0).abs() <= 1e-12);
+            assert!((crate::geometry::vector::norm(n) - 1.0).abs() <= 1e-12);
             assert!(
-                super::vector::dot(n, pu).abs() <= 1e-9 && super::vector::dot(n, pv).abs() <= 1e-9
+                crate::geometry::vector::dot(n, pu).abs() <= 1e-9
+                    && crate::geometry::vector::dot(n, pv).abs() <= 1e-9
             );
         }
     }

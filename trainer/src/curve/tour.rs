@@ -5,7 +5,7 @@ use super::grid::NeuronGrid;
 use super::ordering::Ordering;
 use super::points::CurvePoints;
 use super::refine::RefineOptions;
-use super::vector::distance;
+use crate::geometry::vector::distance;
 
 /// A cyclic tour over the points (plus a dummy node for an open order).
 pub(crate) struct Tour<'a> {

@@ -2,7 +2,7 @@
 //! in `f32`) with search regions and a camera chosen for the shape.
 //!
 //! Regions: by default the renderer searches each leaf's *normalization* box, which is a cube
-//! as long as the feature's longest side (isotropic scaling, see `shared/notes`). Around a
+//! as long as the feature's longest side (isotropic scaling, [`BoxScaling`]). Around a
 //! thin limb that cube is mostly empty space, where nothing constrains the blended field and
 //! it can turn positive: the renderer then draws flat sheets clipped by the cube. The paper's
 //! Fig. 5 boxes hug the features, so here each feature's region is the principal-axis

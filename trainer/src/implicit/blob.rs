@@ -6,7 +6,7 @@
 //! so `neurosurf info` can tell the model's story and `--init` can check it warm-starts the
 //! right tree.
 
-use neurosurf_core::blob::{self, ModelKind};
+use neurosurf_core::blob::ModelKind;
 use neurosurf_core::implicit::{ImplicitPayload, ModuleKind};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use std::path::Path;
@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use super::network::ImplicitNetwork;
 use super::train::TrainingSummary;
+use crate::blob::encode;
 use crate::error::{Error, Result};
 
 /// What the trainer stores next to the parameters.
@@ -87,28 +88,7 @@ pub fn to_blob(
         parameters: &parameters,
         metadata: &metadata,
     };
-    frame(ModelKind::Implicit, scalar, &payload)
-}
-
-/// Frames any serializable payload as a blob, sizing the buffer exactly.
-///
-/// # Errors
-/// [`Error::InvalidInput`] if the payload does not serialize.
-pub fn frame<T: Serialize + ?Sized>(
-    model: ModelKind,
-    scalar: ScalarKind,
-    payload: &T,
-) -> Result<Vec<u8>> {
-    let needed = match blob::write(model, scalar, payload, &mut []) {
-        Err(BlobError::BufferTooSmall { needed, .. }) => needed,
-        Ok(len) => len,
-        Err(e) => return Err(Error::invalid(format!("cannot encode the blob: {e}"))),
-    };
-    let mut out = vec![0; needed];
-    let len = blob::write(model, scalar, payload, &mut out)
-        .map_err(|e| Error::invalid(format!("cannot encode the blob: {e}")))?;
-    out.truncate(len);
-    Ok(out)
+    encode(ModelKind::Implicit, scalar, &payload)
 }
 
 /// Reads an implicit blob back into an `f64` network (parameters widened exactly). `path`

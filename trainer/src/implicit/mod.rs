@@ -9,7 +9,6 @@ mod constraints;
 mod features;
 mod frame;
 mod jacobian;
-mod lm;
 mod network;
 mod normalize;
 mod options;
@@ -21,19 +20,11 @@ mod tree;
 mod value_rows;
 
 pub use activation::{Activation, activation};
-pub use blob::{DecodedImplicit, ImplicitMetadata, frame, from_blob, to_blob};
+pub use blob::{DecodedImplicit, ImplicitMetadata, from_blob, to_blob};
 pub use capacity::{check_capacity, fits, model_size};
 pub use features::decompose;
 pub use frame::{Frame, MODEL_DIAGONAL};
-pub use jacobian::{
-    HiddenJet, InputJet, LANES, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows,
-};
-pub(crate) use jacobian::{Lanes, tanh_lanes};
-pub(crate) use lm::cpu_has_fma;
-pub use lm::{
-    DampedSystem, DecayScale, LeastSquares, LmOptions, LmReport, NormalEquations, StopReason,
-    levenberg_marquardt,
-};
+pub use jacobian::{HiddenJet, InputJet, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows};
 pub use network::ImplicitNetwork;
 pub use normalize::{BoxScaling, Normalization};
 pub use options::ImplicitOptions;

@@ -2,8 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::lm::LmOptions;
 use super::normalize::BoxScaling;
+use crate::solve::LmOptions;
 
 /// Everything that shapes how an implicit model is trained. Every field is overridable from
 /// the command line.

@@ -1,12 +1,15 @@
 //! The least-squares problem of one module: its control points' inputs and target gradients,
 //! and the points that constrain only its value (off-surface and sign points).
+//!
+//! About 660 lines, 200 of them the tests that hold the lane-wise rows to the one-point
+//! Jacobian.
 
 use super::jacobian::{
-    InputJet, InputLanes, LANES, Lanes, MAX_INPUTS, TapeLanes, TrainedLayout, forward_lanes,
-    jacobian_lanes, transpose_lanes,
+    InputJet, InputLanes, MAX_INPUTS, TapeLanes, TrainedLayout, forward_lanes, jacobian_lanes,
+    transpose_lanes,
 };
-use super::lm::{LeastSquares, NormalEquations, cpu_has_fma};
 use super::value_rows::{ValueTape, forward_value_lanes, value_row_lanes};
+use crate::solve::{LANES, Lanes, LeastSquares, NormalEquations, cpu_has_fma};
 
 /// Receives a group of active value rows: `(rows, residuals, point indices)`.
 type RowSink<'a> = dyn FnMut(&[f64], &[f64], &[usize]) + 'a;

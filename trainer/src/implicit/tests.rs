@@ -6,6 +6,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::*;
 use crate::points::PointSet;
+use crate::solve::StopReason;
 
 /// Random module inputs with tangents, like a leaf (d = 3) or a node (d = 2N + 3: both
 /// children's last hidden layers, then its normalized position).
@@ -178,7 +179,7 @@ fn torus_sizes_probe() {
 #[test]
 #[ignore = "timing probe"]
 fn lm_breakdown_probe() {
-    use super::lm::LeastSquares;
+    use crate::solve::LeastSquares;
     let points = torus_points(576, 1);
     let norm = Normalization::fit(&points.positions, 2.0, BoxScaling::Isotropic, "f").unwrap();
     let mut data = ModuleData::new(3);
@@ -219,7 +220,7 @@ fn lm_breakdown_probe() {
     let t = std::time::Instant::now();
     let mut m = nalgebra::DMatrix::zeros(p, p);
     for _ in 0..reps {
-        m = super::lm::normal_equations(&j, &e, ns, p).0;
+        m = crate::solve::normal_equations::normal_equations(&j, &e, ns, p).0;
     }
     eprintln!(
         "gemm {:.3} ms",
@@ -271,5 +272,116 @@ fn a_subtree_is_the_model_its_root_module_computes() {
         for x in [[0.1, 0.2, 0.3], [-1.0, 0.4, 2.0]] {
             assert_eq!(sub.eval(x), network.eval_module(module, x));
         }
+    }
+}
+
+/// Timing probes of training (run with `--ignored --nocapture`).
+mod probes {
+    use crate::solve::normal_equations::best_ms;
+    use crate::solve::{LeastSquares, NormalEquations};
+
+    /// This thread's time on a CPU so far, in seconds (Linux; wall time elsewhere). The
+    /// machine is shared, so wall time overstates the work.
+    fn cpu_seconds() -> f64 {
+        std::fs::read_to_string("/proc/thread-self/schedstat")
+            .ok()
+            .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+            .map_or_else(
+                || {
+                    static START: std::sync::OnceLock<std::time::Instant> =
+                        std::sync::OnceLock::new();
+                    START
+                        .get_or_init(std::time::Instant::now)
+                        .elapsed()
+                        .as_secs_f64()
+                },
+                |ns| ns * 1e-9,
+            )
+    }
+
+    #[test]
+    #[ignore = "timing probe"]
+    fn lm_torus_table_probe() {
+        use crate::implicit::{ImplicitOptions, TreeSpec, train};
+        let runs = 7;
+        eprintln!("points seed iterations evaluations | median wall s, median CPU s, min CPU s");
+        // PROBE_POINTS=576 (say) restricts the table to one size, for profiling.
+        let only: Option<usize> = std::env::var("PROBE_POINTS")
+            .ok()
+            .and_then(|s| s.parse().ok());
+        for n in [48, 96, 160, 336, 576] {
+            if only.is_some_and(|m| m != n) {
+                continue;
+            }
+            for seed in [1, 2, 3] {
+                let points = crate::implicit::tests::torus_points(n, seed);
+                let options = ImplicitOptions {
+                    seed,
+                    ..Default::default()
+                };
+                let mut wall = Vec::new();
+                let mut cpu = Vec::new();
+                let mut report = None;
+                for _ in 0..runs {
+                    let (t, c) = (std::time::Instant::now(), cpu_seconds());
+                    let trained = train(&points, &TreeSpec::Leaf(0), &options, None, &|_| {});
+                    cpu.push(cpu_seconds() - c);
+                    wall.push(t.elapsed().as_secs_f64());
+                    report = Some(trained.unwrap().summary.modules[0].lm);
+                }
+                wall.sort_by(f64::total_cmp);
+                cpu.sort_by(f64::total_cmp);
+                let lm = report.unwrap();
+                eprintln!(
+                    "{n:4} {seed} {:3} {:3} {:?} | {:.4} {:.4} {:.4}",
+                    lm.iterations,
+                    lm.evaluations,
+                    lm.stop,
+                    wall[runs / 2],
+                    cpu[runs / 2],
+                    cpu[0]
+                );
+            }
+        }
+    }
+
+    /// Per-iteration costs of the fused path the LM loop runs, at 576 torus points (as
+    /// `implicit::tests::lm_breakdown_probe`, which times the materialized J instead).
+    #[test]
+    #[ignore = "timing probe"]
+    fn fused_breakdown_probe() {
+        use crate::implicit::{BoxScaling, ModuleData, ModuleProblem, Normalization};
+        let points = crate::implicit::tests::torus_points(576, 1);
+        let norm = Normalization::fit(&points.positions, 2.0, BoxScaling::Isotropic, "f").unwrap();
+        let mut data = ModuleData::new(3);
+        let cols: [[f64; 3]; 3] = std::array::from_fn(|k| norm.matrix.map(|r| r[k]));
+        for (x, n) in points.positions.iter().zip(&points.normals) {
+            let target = n.map(|n| -5.0 * n);
+            data.push(&norm.apply(*x), [&cols[0], &cols[1], &cols[2]], target);
+        }
+        let problem = ModuleProblem::new(&data, 9, 0.05);
+        let (p, ns) = (problem.parameter_count(), problem.residual_count());
+        let params: Vec<f64> = (0..p)
+            .map(|i| ((i * 37 % 17) as f64 - 8.0) / 16.0)
+            .collect();
+        let mut e = vec![0.0; ns];
+        let mut sums = NormalEquations::new(p);
+        let residuals = best_ms(100, || problem.residuals(&params, &mut e));
+        let fused = best_ms(100, || {
+            sums.clear();
+            problem.normal_equations(&params, &mut e, &mut sums);
+            sums.finish();
+        });
+        let mut j = vec![0.0; ns * p];
+        problem.jacobian(&params, &mut e, &mut j);
+        let gram = best_ms(100, || {
+            sums.clear();
+            sums.add_jacobian(&j, &e);
+            sums.finish();
+        });
+        eprintln!(
+            "576 points: residuals {residuals:.3} ms, J + JᵀJ fused {fused:.3} ms \
+             (JᵀJ alone from a stored J {gram:.3} ms)"
+        );
     }
 }

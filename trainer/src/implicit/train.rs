@@ -1,5 +1,8 @@
 //! Training a module tree: every leaf on its feature's points (in parallel), then every node
 //! on the union of its leaves' points with its children frozen (Carcenac §3, §5).
+//!
+//! This file is long (about 690 lines) because it holds the whole schedule — leaves, nodes,
+//! warm starts — and the assembly of every module's training data, which share one setting.
 
 use std::time::Instant;
 
@@ -14,7 +17,6 @@ use super::capacity::check_capacity;
 use super::constraints::{OffSurface, SampleBox, SignPoint, off_surface, sign_points};
 use super::frame::{Frame, MODEL_DIAGONAL};
 use super::jacobian::{MAX_INPUTS, TrainedLayout};
-use super::lm::{LmReport, StopReason, levenberg_marquardt};
 use super::network::ImplicitNetwork;
 use super::normalize::Normalization;
 use super::options::ImplicitOptions;
@@ -23,6 +25,7 @@ use super::problem::{ModuleData, ModuleProblem, ValueGoal};
 use super::tree::TreeSpec;
 use crate::error::{Error, Result};
 use crate::points::PointSet;
+use crate::solve::{LmReport, StopReason, levenberg_marquardt};
 
 /// Outcome of one leaf's training: module index, its box, its weights, its report.
 type TrainedLeaf = (usize, Normalization, Vec<f64>, ModuleReport);

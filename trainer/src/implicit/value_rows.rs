@@ -7,8 +7,8 @@
 use neurosurf_core::implicit::MAX_WIDTH;
 use neurosurf_core::scalar::{ACTIVATION_AMPLITUDE, ACTIVATION_GAIN};
 
-use super::jacobian::{LANES, Lanes, TrainedLayout, tanh_lanes};
-use super::lm::madd;
+use super::jacobian::TrainedLayout;
+use crate::solve::{LANES, Lanes, madd, tanh_lanes};
 
 /// The forward pass of [`LANES`] points: each hidden layer's values and slopes, and Φ.
 #[derive(Clone, Debug)]

@@ -368,7 +368,7 @@ pub(crate) mod tests {
 
     #[test]
     fn shared_test_models_load() {
-        // Counts from /work/shared/data/README.md.
+        // Counts from data/README.md.
         for (name, vertices, faces) in [
             ("spot.obj", 2930, 5856),
             ("woody.obj", 694, 1267),

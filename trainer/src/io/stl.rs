@@ -7,8 +7,8 @@
 
 use std::path::Path;
 
-use crate::curve::vector::{cross, norm, sub};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{cross, norm, sub};
 
 use super::mesh::{Mesh, check_writable};
 use super::write_atomic_with;

@@ -18,8 +18,8 @@ use serde::{Deserialize, Serialize};
 use super::activation::Activation;
 use super::fit::SurfaceFit;
 use super::network::SurfaceNetwork;
+use crate::blob::encode;
 use crate::error::{Error, Result};
-use crate::implicit::frame;
 
 /// How a surface-network blob was made (stored as its metadata).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -133,7 +133,7 @@ pub fn network_to_blob(
         parameters: &words,
         metadata: &metadata,
     };
-    let bytes = frame(ModelKind::SurfaceNetwork, scalar, &payload)?;
+    let bytes = encode(ModelKind::SurfaceNetwork, scalar, &payload)?;
     let loads = match scalar {
         ScalarKind::Q16_16 => SurfaceNetworkModel::<Q16>::from_blob(&bytes).map(drop),
         _ => SurfaceNetworkModel::<f32>::from_blob(&bytes).map(drop),

@@ -9,9 +9,9 @@
 
 use std::collections::{BinaryHeap, HashMap};
 
-use super::mesh_graph::boundary_loops;
 use super::planar::{delaunay, signed_area};
 use crate::error::{Error, Result};
+use crate::geometry::mesh_graph::boundary_loops;
 
 /// Boundary settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -16,6 +16,7 @@
 //! eigenvector by about that residual over the spectral gap; or when the wanted Ritz values
 //! change by less than 10⁻¹² of that scale between iterations.
 
+use crate::geometry::vector::inner;
 use nalgebra::{DMatrix, SymmetricEigen};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -94,7 +95,7 @@ pub fn smallest_nonconstant(m: &SymmetricMatrix, wanted: usize) -> Result<Eigenp
         let mut h = DMatrix::<f64>::zeros(block, block);
         for i in 0..block {
             for j in i..block {
-                let v = dot(&x[i], &mx[j]);
+                let v = inner(&x[i], &mx[j]);
                 h[(i, j)] = v;
                 h[(j, i)] = v;
             }
@@ -147,10 +148,6 @@ pub fn smallest_nonconstant(m: &SymmetricMatrix, wanted: usize) -> Result<Eigenp
     )))
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 /// Makes the vectors orthonormal and orthogonal to the constant vector (modified
 /// Gram–Schmidt, twice); a vector that vanishes is replaced by a random one.
 fn orthonormalize(vectors: &mut [Vec<f64>], rng: &mut ChaCha8Rng) {
@@ -161,13 +158,13 @@ fn orthonormalize(vectors: &mut [Vec<f64>], rng: &mut ChaCha8Rng) {
                 vectors[i].iter_mut().for_each(|v| *v -= mean);
                 for j in 0..i {
                     let (done, rest) = vectors.split_at_mut(i);
-                    let d = dot(&done[j], &rest[0]);
+                    let d = inner(&done[j], &rest[0]);
                     for (v, &q) in rest[0].iter_mut().zip(done[j].iter()) {
                         *v -= d * q;
                     }
                 }
             }
-            let norm = dot(&vectors[i], &vectors[i]).sqrt();
+            let norm = inner(&vectors[i], &vectors[i]).sqrt();
             if norm > 1e-300 && norm.is_finite() {
                 vectors[i].iter_mut().for_each(|v| *v /= norm);
                 break;

@@ -9,10 +9,10 @@
 
 use super::eigen::smallest_nonconstant;
 use super::folds::{FoldReport, check_flat, fold_report};
-use super::mesh_graph::one_rings;
 use super::neighbors::{check_points, nearest_neighbors};
 use super::weights::{embedding_matrix, reconstruction_weights};
 use crate::error::{Error, Result};
+use crate::geometry::mesh_graph::one_rings;
 use crate::io::Mesh;
 
 /// Embedding settings.

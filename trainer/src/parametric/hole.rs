@@ -13,10 +13,10 @@ use std::collections::VecDeque;
 use super::embedding::{LleOptions, embed_mesh};
 use super::fit::{SurfaceFit, fit_network};
 use super::grid::grid_inside;
-use super::mesh_graph::{boundary_loops, one_rings};
 use super::planar::triangulate_polygon;
 use super::topology::TopologyOptions;
 use crate::error::{Error, Result};
+use crate::geometry::mesh_graph::{boundary_loops, one_rings};
 use crate::io::Mesh;
 
 /// Hole-filling settings.

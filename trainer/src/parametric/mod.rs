@@ -55,7 +55,6 @@ mod grid;
 mod growth;
 mod hole;
 mod laplacian;
-mod mesh_graph;
 mod neighbors;
 mod network;
 mod normal;
@@ -73,6 +72,9 @@ mod topology;
 mod train;
 mod weights;
 
+pub use crate::geometry::mesh_graph::{
+    EdgeReport, boundary_loops, edge_report, edge_uses, one_rings,
+};
 pub use activation::Activation;
 pub use bench::{
     BACK_SEED, BENCHMARK_SIZES, BenchmarkRow, PATCH_VERTICES, back_patch_points, benchmark,
@@ -92,7 +94,6 @@ pub use folds::{
 pub use grid::{delaunay_grid, fill_polygon, grid_inside};
 pub use hole::{HoleFill, HoleOptions, fill_hole, point_triangle_distance, punch_hole};
 pub use laplacian::cotangent_laplacian;
-pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
 pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};
 pub use picture::wireframe;

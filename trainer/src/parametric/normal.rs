@@ -9,7 +9,7 @@
 //! outputs' weights are exactly 0. That is (P_h + n + 1)² instead of P² per row: 0.79× for
 //! 2 × 12, 0.43× for 1 × 12.
 
-use crate::implicit::{DampedSystem, NormalEquations};
+use crate::solve::{DampedSystem, NormalEquations};
 
 /// J's rows of one part of the training set, split by output coordinate.
 pub(crate) struct OutputNormalEquations {

@@ -14,7 +14,7 @@
 
 use super::activation::Activation;
 use super::network::SurfaceNetwork;
-use crate::implicit::{LANES, Lanes, cpu_has_fma, tanh_lanes};
+use crate::solve::{LANES, Lanes, cpu_has_fma, tanh_lanes};
 
 /// One layer: `columns[i * outputs + o]` is the weight from input i to output o.
 #[derive(Clone, Debug)]

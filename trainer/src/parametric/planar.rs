@@ -94,7 +94,7 @@ pub fn triangulate_polygon(boundary: &[[f64; 2]], interior: &[[f64; 2]]) -> Resu
         .map(|f| f.vertices().map(|v| map[v.fix().index()]))
         .collect();
     let triangles = inside_by_parity(&all_triangles, m as u32);
-    let uses = super::mesh_graph::edge_uses(&triangles);
+    let uses = crate::geometry::mesh_graph::edge_uses(&triangles);
     for i in 0..m {
         let (a, b) = (i as u32, ((i + 1) % m) as u32);
         if uses.get(&(a.min(b), a.max(b))) != Some(&1) {

@@ -16,9 +16,9 @@
 //! that bring the loops closest.
 
 use super::laplacian::cotangent_laplacian;
-use super::mesh_graph::{boundary_loops, edge_report};
 use super::sparse::SymmetricMatrix;
 use crate::error::{Error, Result};
+use crate::geometry::mesh_graph::{boundary_loops, edge_report};
 use crate::io::Mesh;
 
 /// Weight of a seam constraint row.

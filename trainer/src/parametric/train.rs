@@ -6,7 +6,7 @@
 //! lane per point) and three backward passes per point; row k leaves out the other outputs'
 //! weights, which it does not touch, and goes to output k's normal equations
 //! ([`OutputNormalEquations`]), in [`PARTS`] parts of the training set that run in parallel.
-//! The products run in f32 ([`crate::implicit::NormalEquations::single_precision`], about
+//! The products run in f32 ([`crate::solve::NormalEquations::single_precision`], about
 //! twice as fast: JᵀJ only steers the step, whose acceptance is decided by the f64 error); Jᵀe
 //! and every error stay in f64. On the bunny's 10 000-point patch the f32 products alone gave
 //! the same fit to three digits (relative RMS 8.37·10⁻³) in 0.79–0.89× the fitting time
@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use super::network::SurfaceNetwork;
 use super::normal::OutputNormalEquations;
 use super::packed::{LaneRecord, PackedNetwork, gather};
-use crate::implicit::{DampedSystem, LANES, Lanes};
+use crate::solve::{DampedSystem, LANES, Lanes};
 
 /// Levenberg–Marquardt settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

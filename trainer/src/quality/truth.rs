@@ -4,8 +4,8 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use crate::caoen::TriangleTree;
-use crate::curve::vector::{add, cross, norm, scale, sub};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{add, cross, norm, scale, sub};
 use crate::implicit::Normalization;
 use crate::io::Mesh;
 use crate::points::PointSet;

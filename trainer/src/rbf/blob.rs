@@ -21,8 +21,8 @@ use neurosurf_core::{BlobError, Quantity};
 use serde::{Deserialize, Serialize};
 
 use super::model::{MAX_CENTERS, RbfModel};
+use crate::blob::encode;
 use crate::error::{Error, Result};
-use crate::implicit::frame;
 
 /// How RBF blobs store their parameters: IEEE binary64. The RBF is host-only, so nothing
 /// forces 4-byte words, and `f64` keeps a loaded model bit-identical to the fit (constraint
@@ -76,7 +76,7 @@ impl RbfModel {
             parameters: &parameters,
             metadata: &[],
         };
-        frame(ModelKind::Rbf, RBF_SCALAR, &payload)
+        encode(ModelKind::Rbf, RBF_SCALAR, &payload)
     }
 
     /// Decodes and validates an RBF blob; `path` only names the source in errors.

@@ -1,4 +1,7 @@
 //! Tests of the RBF baseline: interpolation, gradient, fidelity on a torus, errors, blobs.
+//!
+//! One file for the baseline's tests (about 860 lines): each test builds on the same sampled
+//! shapes and blob helpers.
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -9,8 +12,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::*;
+use crate::blob::encode;
 use crate::error::Error;
-use crate::implicit::frame;
 use crate::points::PointSet;
 
 /// Torus major radius (axis z).
@@ -400,7 +403,7 @@ fn blob_rejects_bad_bytes() {
     // Hand-built payloads: (centres, values, scalar, kind).
     let build = |m: u32, values: &[f64], kind: ModelKind| {
         let parameters: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        frame(
+        encode(
             kind,
             RBF_SCALAR,
             &(m, parameters.as_slice(), [0_u8; 0].as_slice()),
@@ -440,7 +443,7 @@ fn blob_rejects_bad_bytes() {
         RbfModel::from_blob(&build(0, &values[..5], ModelKind::Rbf), path),
         Err(Error::Format { .. })
     ));
-    let f32_blob = frame(
+    let f32_blob = encode(
         ModelKind::Rbf,
         neurosurf_core::scalar::ScalarKind::F32,
         &(1_u32, [0_u8; 72].as_slice(), [0_u8; 0].as_slice()),
@@ -450,7 +453,7 @@ fn blob_rejects_bad_bytes() {
         blob_error(&f32_blob),
         BlobError::UnsupportedStorage { .. }
     ));
-    let trailing = frame(
+    let trailing = encode(
         ModelKind::Rbf,
         RBF_SCALAR,
         &(1_u32, [0_u8; 72].as_slice(), [0_u8; 0].as_slice(), 7_u8),

@@ -4,8 +4,8 @@
 use serde::Serialize;
 
 use super::region::Aabb;
-use crate::curve::vector::{add, cross, dot, norm, scale, sub};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{add, cross, dot, norm, scale, sub};
 
 /// Largest image side accepted (pixels).
 pub const MAX_SIDE: u32 = 16_384;

@@ -11,8 +11,8 @@ use super::camera::Camera;
 use super::field::Field;
 use super::raycast::{Method, RenderOptions, Tracer, hit_map};
 use super::region::ray_spans;
-use crate::curve::vector::{add, scale};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{add, scale};
 
 /// Most samples per ray the dense reference takes.
 pub const MAX_DENSE_SAMPLES: f64 = 1e6;

@@ -16,8 +16,8 @@ use rayon::prelude::*;
 
 use super::interval::{self, Interval};
 use super::region::Region;
-use crate::curve::vector::{dot, norm, sub};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{dot, norm, sub};
 use crate::implicit::ImplicitNetwork;
 use crate::rbf::RbfModel;
 

@@ -19,7 +19,7 @@
 
 use super::field::Field;
 use super::interval::Interval;
-use crate::curve::vector::{add, scale};
+use crate::geometry::vector::{add, scale};
 
 /// The first zero of Φ along the ray in `span`, or `None` when the field has no interval
 /// bounds or the span holds no zero (see the module docs). `direction` is unit.

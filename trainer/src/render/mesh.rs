@@ -37,8 +37,8 @@ use serde::Serialize;
 
 use super::field::Field;
 use super::region::{Aabb, bounds_of};
-use crate::curve::vector::{add, cross, dot, norm, scale, sub};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{add, cross, dot, norm, scale, sub};
 use crate::io::Mesh;
 
 /// Largest grid resolution accepted (cells along the longest side).

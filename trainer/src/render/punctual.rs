@@ -23,7 +23,7 @@
 //! own evaluation error divided by |φ′|.
 
 use super::field::Field;
-use crate::curve::vector::{add, dot, scale};
+use crate::geometry::vector::{add, dot, scale};
 
 /// Newton steps allowed per bracket.
 pub const MAX_ITERATIONS: usize = 24;

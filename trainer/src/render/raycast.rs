@@ -16,8 +16,8 @@ use super::interval::Interval;
 use super::octree::Octree;
 use super::punctual;
 use super::shade::{Shading, to_srgb8};
-use crate::curve::vector::{add, dot, scale};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{add, dot, scale};
 
 /// Side of the square image tiles rendered in parallel.
 pub const TILE: u32 = 16;

@@ -1,7 +1,7 @@
 //! Where the surface is assumed to lie: the leaf modules' normalization boxes, inflated
 //! (Carcenac §6, Fig. 5), and the axis-aligned boxes the octree and the mesher work with.
 
-use crate::curve::vector::{add, scale, sub};
+use crate::geometry::vector::{add, scale, sub};
 use crate::implicit::{ImplicitNetwork, Normalization};
 
 /// An axis-aligned box `[lo, hi]`.

@@ -1,7 +1,7 @@
 //! Lambert + Phong shading from the analytic normal n = −∇Φ/|∇Φ|, in linear RGB, and the
 //! conversion to 8-bit sRGB.
 
-use crate::curve::vector::{dot, norm, scale, sub};
+use crate::geometry::vector::{dot, norm, scale, sub};
 
 /// Colours and lights of a rendering.
 #[derive(Copy, Clone, Debug, PartialEq)]

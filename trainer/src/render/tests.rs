@@ -99,7 +99,7 @@ fn trained_sphere_in_f32_is_hit_where_the_true_sphere_is() {
             (Some(e), Some(t)) => {
                 // Only where the ray meets the sphere well inside its silhouette.
                 let grazing =
-                    crate::curve::vector::distance_to_line([0.0; 3], o, add3(o, d)) > 0.95;
+                    crate::geometry::vector::distance_to_line([0.0; 3], o, add3(o, d)) > 0.95;
                 if !grazing {
                     if (e - t).abs() > 0.05 && worst <= 0.05 {
                         let samples: Vec<String> = (0..40)

@@ -24,9 +24,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::norm;
 use super::shape::{Ellipsoid, HEAD_PARTS, unit_sphere};
 use crate::error::{Error, Result};
+use crate::geometry::vector::norm;
 use crate::points::PointSet;
 
 /// Names of the body's features, indexed by feature label.

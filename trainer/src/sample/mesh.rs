@@ -7,7 +7,8 @@ use crate::error::{Error, Result};
 use crate::io::Mesh;
 use crate::points::PointSet;
 
-use super::{check_count, cross, norm, sub};
+use super::check_count;
+use crate::geometry::vector::{cross, norm, sub};
 
 /// Draws `count` points area-uniformly on the triangles of `mesh`, each with the unit normal
 /// of its triangle (`(b - a) × (c - a)`: counter-clockwise winding seen from outside gives

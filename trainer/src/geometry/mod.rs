@@ -1,0 +1,7 @@
+//! Geometry every family shares: small vector helpers on `[f64; 3]` and the connectivity of
+//! triangle meshes (one-rings, edge uses, boundary loops, the watertightness test).
+
+pub mod mesh_graph;
+pub mod vector;
+
+pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};

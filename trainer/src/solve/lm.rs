@@ -1,0 +1,242 @@
+//! Levenberg–Marquardt with weight decay, exactly as Carcenac §5.
+//!
+//! Minimizes E_sc = E_s + E_c with E_s = (1/2N_s)·Σe² over the N_s error terms and the weight
+//! decay E_c. Each iteration forms A = JᵀJ/N_s + λ′I and B = −(Jᵀe/N_s + λ′V), solves
+//! (A + μI)ΔV = B by Cholesky, and raises μ by θ until E_s decreases; after an accepted step μ
+//! is lowered by θ. It stops when E_s ≤ threshold, at the iteration cap, or when μ exceeds
+//! [`LmOptions::mu_max`] without finding a decrease (stalled).
+//!
+//! λ′ depends on [`DecayScale`]: the paper's formulas read literally (λ′ = λ beside the
+//! normalized E_s) collapse every network to Φ ≡ 0 at Table 1's λ = 1.2·10⁻⁴ (measured on
+//! the paper's torus); the default reads the decay per error term,
+//! λ′ = λ/N_s, which trains.
+//!
+//! JᵀJ is accumulated a block of rows at a time ([`NormalEquations`]), so a problem can hand
+//! over its Jacobian in pieces that stay in cache; A + μI is factored in place
+//! ([`DampedSystem`]).
+
+use super::normal_equations::{DampedSystem, NormalEquations};
+
+/// A nonlinear least-squares problem: residuals e(V) and their Jacobian.
+pub trait LeastSquares {
+    /// Number of parameters V.
+    fn parameter_count(&self) -> usize;
+    /// Number of residuals.
+    fn residual_count(&self) -> usize;
+    /// N_s, the number of error terms E_s is the mean over (and the weight decay is scaled
+    /// by); by default every residual. A problem with auxiliary residuals (constraints beside
+    /// the paper's error terms) counts only the error terms, so that the auxiliary ones add to
+    /// E_s without diluting it.
+    fn error_terms(&self) -> usize {
+        self.residual_count()
+    }
+    /// Writes e(V).
+    fn residuals(&self, params: &[f64], residuals: &mut [f64]);
+    /// Writes e(V) and J = ∂e/∂V (row-major, N_s × parameters).
+    fn jacobian(&self, params: &[f64], residuals: &mut [f64], jacobian: &mut [f64]);
+    /// Writes e(V) and accumulates JᵀJ and Jᵀe into `normal` (cleared by the caller).
+    ///
+    /// The default forms J with [`Self::jacobian`] and feeds its rows; a problem can instead
+    /// hand its rows over a few at a time ([`NormalEquations::rows_mut`]) so J never exists
+    /// whole and each block is multiplied while it is still in cache.
+    fn normal_equations(
+        &self,
+        params: &[f64],
+        residuals: &mut [f64],
+        normal: &mut NormalEquations,
+    ) {
+        let p = self.parameter_count();
+        let mut jacobian = vec![0.0; residuals.len() * p];
+        self.jacobian(params, residuals, &mut jacobian);
+        normal.add_jacobian(&jacobian, residuals);
+    }
+}
+
+/// How the weight-decay coefficient λ enters the criterion.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum DecayScale {
+    /// E_c = (λ/2N_s)·ΣV²: λ beside the un-normalized ½Σe² (trains at Table 1's λ).
+    #[default]
+    PerTerm,
+    /// E_c = (λ/2)·ΣV²: the paper's formula read literally.
+    Normalized,
+}
+
+/// Levenberg–Marquardt settings (defaults: Carcenac's Table 1).
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LmOptions {
+    /// Weight decay λ (1.2·10⁻⁴).
+    pub lambda: f64,
+    /// How λ is scaled.
+    pub decay: DecayScale,
+    /// Initial damping μ₀ (10⁻⁴).
+    pub mu0: f64,
+    /// Damping ratio θ (2).
+    pub theta: f64,
+    /// Stop when E_s ≤ threshold (10⁻⁵).
+    pub threshold: f64,
+    /// Iteration cap.
+    pub max_iterations: usize,
+    /// Give up when μ grows past this without a decrease of E_s.
+    pub mu_max: f64,
+    /// Stop as stagnated when E_s fell by less than [`Self::stagnation_decrease`] (relative)
+    /// over this many accepted iterations (10); 0 never stops so.
+    pub stagnation_window: usize,
+    /// The relative decrease of E_s over [`Self::stagnation_window`] iterations below which
+    /// training has stagnated (0.02).
+    pub stagnation_decrease: f64,
+}
+
+impl Default for LmOptions {
+    fn default() -> Self {
+        LmOptions {
+            lambda: 1.2e-4,
+            decay: DecayScale::PerTerm,
+            mu0: 1e-4,
+            theta: 2.0,
+            threshold: 1e-5,
+            max_iterations: 2000,
+            mu_max: 1e12,
+            stagnation_window: 10,
+            stagnation_decrease: 0.02,
+        }
+    }
+}
+
+/// Why the iteration stopped.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum StopReason {
+    /// E_s reached the threshold.
+    Converged,
+    /// The iteration cap was reached first.
+    IterationLimit,
+    /// μ exceeded its cap without a decrease of E_s.
+    Stalled,
+    /// E_s stopped falling: less than the stagnation decrease over the stagnation window.
+    Stagnated,
+}
+
+/// What a run did.
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LmReport {
+    /// Accepted iterations.
+    pub iterations: usize,
+    /// E_s before the first iteration.
+    pub initial_error: f64,
+    /// Final E_s.
+    pub error: f64,
+    /// Final E_s + E_c.
+    pub criterion: f64,
+    /// Why it stopped.
+    pub stop: StopReason,
+    /// Residual evaluations, including rejected trial steps.
+    pub evaluations: usize,
+}
+
+/// E_s = ½Σe² / N_s.
+fn half_mean_square(residuals: &[f64], terms: usize) -> f64 {
+    let sum: f64 = residuals.iter().map(|e| e * e).sum();
+    0.5 * sum / terms.max(1) as f64
+}
+
+/// Runs Levenberg–Marquardt on `problem` from `params` (updated in place). `progress` is called
+/// after every accepted iteration with (iteration, E_s).
+pub fn levenberg_marquardt(
+    problem: &dyn LeastSquares,
+    params: &mut [f64],
+    options: &LmOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> LmReport {
+    let p = problem.parameter_count();
+    let ns = problem.error_terms();
+    let decay = match options.decay {
+        DecayScale::PerTerm => options.lambda / ns.max(1) as f64,
+        DecayScale::Normalized => options.lambda,
+    };
+    let scale = 1.0 / ns.max(1) as f64;
+    let decay_energy = |v: &[f64]| 0.5 * decay * v.iter().map(|x| x * x).sum::<f64>();
+
+    // Every buffer is allocated once; an iteration allocates nothing.
+    let mut residuals = vec![0.0; problem.residual_count()];
+    let mut normal = NormalEquations::single_precision(p);
+    let mut system = DampedSystem::new(p);
+    let mut trial = vec![0.0; p];
+    problem.residuals(params, &mut residuals);
+    let mut evaluations = 1;
+    let initial_error = half_mean_square(&residuals, ns);
+    let mut error = initial_error;
+    let mut mu = options.mu0;
+    let mut iterations = 0;
+    let mut stop = StopReason::Converged;
+
+    // E_s after each of the last `stagnation_window` accepted iterations (a ring: slot
+    // i mod window holds E_s after iteration i).
+    let window = options.stagnation_window;
+    let mut history = vec![error; window.max(1)];
+    while error > options.threshold {
+        if iterations >= options.max_iterations {
+            stop = StopReason::IterationLimit;
+            break;
+        }
+        if window > 0
+            && iterations >= window
+            && error > (1.0 - options.stagnation_decrease) * history[iterations % window]
+        {
+            stop = StopReason::Stagnated;
+            break;
+        }
+        if window > 0 {
+            // Read again `window` iterations from now.
+            history[iterations % window] = error;
+        }
+        normal.clear();
+        problem.normal_equations(params, &mut residuals, &mut normal);
+        normal.finish();
+        for i in 0..p {
+            let row = system.lhs_row_mut(i);
+            for j in i..p {
+                row[j - i] = normal.gram(i, j) * scale;
+            }
+            row[0] += decay;
+            // B = −(Jᵀe/N_s + λ′V).
+            system.rhs_mut()[i] = -(normal.gradient(i) * scale + params[i] * decay);
+        }
+        let mut accepted = false;
+        while mu <= options.mu_max {
+            let Some(step) = system.solve(mu) else {
+                mu *= options.theta;
+                continue;
+            };
+            for ((t, &x), &dx) in trial.iter_mut().zip(params.iter()).zip(step.iter()) {
+                *t = x + dx;
+            }
+            problem.residuals(&trial, &mut residuals);
+            evaluations += 1;
+            let trial_error = half_mean_square(&residuals, ns);
+            if trial_error.is_finite() && trial_error <= error {
+                params.copy_from_slice(&trial);
+                error = trial_error;
+                accepted = true;
+                break;
+            }
+            mu *= options.theta;
+        }
+        if !accepted {
+            stop = StopReason::Stalled;
+            // Leave the residuals consistent with the parameters we keep.
+            problem.residuals(params, &mut residuals);
+            break;
+        }
+        mu /= options.theta;
+        iterations += 1;
+        progress(iterations, error);
+    }
+    LmReport {
+        iterations,
+        initial_error,
+        error,
+        criterion: error + decay_energy(params),
+        stop,
+        evaluations,
+    }
+}
