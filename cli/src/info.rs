@@ -203,7 +203,9 @@ pub fn run(args: &Args) -> Result<()> {
             ModelKind::SplineSurface | ModelKind::CaoEn | ModelKind::SurfaceNetwork => {
                 println!("  MACs         {value} per position, {derivative} per position+normal")
             }
-            _ => println!("  MACs         {value} per field, {derivative} per field+gradient"),
+            ModelKind::Implicit | ModelKind::Rbf => {
+                println!("  MACs         {value} per field, {derivative} per field+gradient")
+            }
         }
     }
     if let Some(fit) = info.fit {

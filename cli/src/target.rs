@@ -133,10 +133,17 @@ pub fn mac_count(
         (Ok(ModelKind::SurfaceNetwork), _) => {
             SurfaceNetworkModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
         }
-        (_, ScalarKind::Q16_16) => {
+        (Ok(ModelKind::Implicit), ScalarKind::Q16_16) => {
             ImplicitModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))
         }
-        _ => ImplicitModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative)),
+        (Ok(ModelKind::Implicit), _) => {
+            ImplicitModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
+        }
+        (Ok(ModelKind::Rbf), _) => bail!(
+            "{}: an RBF model runs on the host only (the core has no RBF evaluator)",
+            model.display()
+        ),
+        (Err(e), _) => Err(e),
     };
     count.with_context(|| {
         format!(

@@ -70,7 +70,6 @@ pub const TRAILER_LEN: usize = 4;
 /// What a blob holds.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[non_exhaustive]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ModelKind {
     /// Carcenac's modular implicit surface (a tree of MLP modules), see [`crate::implicit`].

@@ -179,11 +179,12 @@ fn serve(out: &mut HostFile) -> Answer {
         (ModelKind::CaoEn, true) => serve_caoen::<Q16>(blob, io),
         (ModelKind::SurfaceNetwork, false) => serve_network::<f32>(blob, io),
         (ModelKind::SurfaceNetwork, true) => serve_network::<Q16>(blob, io),
-        (other, _) => reject(
+        // The RBF baseline is evaluated by the host trainer only.
+        (ModelKind::Rbf, _) => reject(
             io.out,
             BlobError::WrongModelKind {
                 expected: ModelKind::Implicit,
-                found: other,
+                found: ModelKind::Rbf,
             },
         ),
     }

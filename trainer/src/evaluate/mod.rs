@@ -125,10 +125,6 @@ impl LoadedModel {
                 let decoded = Box::new(network_from_blob(&bytes, path)?);
                 Ok(LoadedModel::SurfaceNetwork { bytes, decoded })
             }
-            other => Err(Error::format(
-                path,
-                format!("{} models cannot be evaluated here", other.name()),
-            )),
         }
     }
 
