@@ -9,10 +9,10 @@
 //! kernels return their layers by value, computed neuron by neuron, so no buffer is zeroed
 //! before it is written (see `unwritten`).
 //!
-//! A scalar may bring target kernels for whole layers ([`Scalar::layer_kernel`],
-//! [`Scalar::affine_kernel`], [`Scalar::transposed_kernel`]), for the chain rule through a
-//! layer ([`Scalar::times_slope_kernel`]) and for both at once
-//! ([`Scalar::transposed_slope_kernel`]): for single points whose layer shape one of them
+//! A scalar may bring target kernels for whole layers (`Kernels::layer_kernel`,
+//! `Kernels::affine_kernel`, `Kernels::transposed_kernel`), for the chain rule through a
+//! layer (`Kernels::times_slope_kernel`) and for both at once
+//! (`Kernels::transposed_slope_kernel`): for single points whose layer shape one of them
 //! covers, the loops below hand the work to it (with `affine_kernel`, the products only, and
 //! apply the activations themselves). f32 and Q16.16 on a Cortex-M4F have them for the N = 9
 //! shapes (`neurosurf-m4f`); they compute the loops' exact bits, so which path ran never shows
@@ -119,7 +119,7 @@ fn activate<S: Scalar, const L: usize>(out: &mut [[S; L]], acc: &[S::Acc]) {
     }
 }
 
-/// [`Scalar::layer_kernel`] on slices of exactly the shape `(OUT, IN)`.
+/// `Kernels::layer_kernel` on slices of exactly the shape `(OUT, IN)`.
 #[inline(always)]
 fn layer_kernel<S: Scalar, const IN: usize, const OUT: usize>(
     weights: &[S],
@@ -133,7 +133,7 @@ fn layer_kernel<S: Scalar, const IN: usize, const OUT: usize>(
     S::layer_kernel::<IN, OUT>(rows.first_chunk()?, biases.first_chunk()?, x.first_chunk()?)
 }
 
-/// [`Scalar::affine_kernel`] on slices of exactly the shape `(OUT, IN)`.
+/// `Kernels::affine_kernel` on slices of exactly the shape `(OUT, IN)`.
 #[inline(always)]
 fn affine_kernel<S: Scalar, const IN: usize, const OUT: usize>(
     weights: &[S],
@@ -145,6 +145,7 @@ fn affine_kernel<S: Scalar, const IN: usize, const OUT: usize>(
         return None;
     }
     S::affine_kernel::<IN, OUT>(rows.first_chunk()?, biases.first_chunk()?, x.first_chunk()?)
+        .map(|sums| sums.map(S::to_acc))
 }
 
 /// [`transposed`] over all columns for one point through the scalar's target kernel, when it
@@ -166,7 +167,7 @@ fn transposed_by_kernel<S: Scalar, const L: usize, const K: usize>(
     .then_some(out)
 }
 
-/// [`Scalar::transposed_kernel`] on slices of exactly the shape `(OUT, IN)`.
+/// `Kernels::transposed_kernel` on slices of exactly the shape `(OUT, IN)`.
 #[inline(always)]
 fn transposed_kernel<S: Scalar, const IN: usize, const OUT: usize>(
     weights: &[S],
@@ -300,7 +301,7 @@ pub(crate) fn transposed<S: Scalar, const L: usize, const K: usize, const EXACT:
 
 /// [`transposed`] followed by [`through_activation`] with `outputs` (the layer whose inputs
 /// the columns are): δᵢ = a′ᵢ·Σⱼ Wⱼᵢ·gⱼ, the gradient at the pre-activations of the layer
-/// below. A scalar's [`Scalar::transposed_slope_kernel`] does both in one pass for one point
+/// below. A scalar's `Kernels::transposed_slope_kernel` does both in one pass for one point
 /// over all columns of the shapes it covers; the result is the same bit for bit.
 #[inline(always)]
 pub(crate) fn transposed_through_activation<
@@ -349,7 +350,7 @@ fn transposed_slope_by_kernel<S: Scalar, const L: usize, const K: usize>(
     .then_some(out)
 }
 
-/// [`Scalar::transposed_slope_kernel`] on slices of exactly the shape `(OUT, IN)`.
+/// `Kernels::transposed_slope_kernel` on slices of exactly the shape `(OUT, IN)`.
 #[inline(always)]
 fn transposed_slope_kernel<S: Scalar, const IN: usize, const OUT: usize>(
     weights: &[S],

@@ -42,6 +42,7 @@
     )
 )]
 
+mod arch;
 pub mod blob;
 pub mod caoen;
 pub mod curve;

@@ -8,6 +8,7 @@
 
 mod common;
 
+use neurosurf_core::implicit::Activation;
 use neurosurf_core::scalar::{
     ACTIVATION_AMPLITUDE, F32_ACTIVATION_MAX_ERROR, Q16, Q16_ACTIVATION_MAX_ERROR, Scalar,
 };
@@ -170,9 +171,9 @@ fn q16_slope_and_curvature_have_the_right_sign() {
 }
 
 fn f32_errors(h: f32) -> (f64, f64, f64) {
-    let a = <f32 as Scalar>::activation(h);
-    let slope = <f32 as Scalar>::activation_slope(a);
-    let curvature = <f32 as Scalar>::activation_curvature(a, slope);
+    let a = <f32 as Activation>::activation(h);
+    let slope = <f32 as Activation>::activation_slope(a);
+    let curvature = <f32 as Activation>::activation_curvature(a, slope);
     let (ev, es, ec) = exact(f64::from(h));
     (
         (f64::from(a) - ev).abs(),
@@ -222,7 +223,7 @@ fn f32_activation_scan() {
     // f32 is odd to within twice its error (computed from the signed H, not from |H|).
     for i in 0..10_000 {
         let h = i as f32 * 0.0051;
-        let sum = <f32 as Scalar>::activation(-h) + <f32 as Scalar>::activation(h);
+        let sum = <f32 as Activation>::activation(-h) + <f32 as Activation>::activation(h);
         assert!(
             f64::from(sum.abs()) <= 2.0 * F32_ACTIVATION_MAX_ERROR,
             "a(−H) + a(H) = {sum} at H = {h}"
@@ -239,13 +240,13 @@ fn f32_activation_scan() {
 #[ignore = "exhaustive over 1.1e9 inputs: run on demand"]
 fn f32_activation_exhaustive_monotonicity_and_symmetry() {
     let (mut error, mut step_down, mut asymmetry) = (0.0_f64, 0.0_f32, 0.0_f32);
-    let mut previous = <f32 as Scalar>::activation(0.0);
+    let mut previous = <f32 as Activation>::activation(0.0);
     for bits in 0..=16.0_f32.to_bits() {
         let h = f32::from_bits(bits);
-        let a = <f32 as Scalar>::activation(h);
+        let a = <f32 as Activation>::activation(h);
         error = error.max((f64::from(a) - exact(f64::from(h)).0).abs());
         step_down = step_down.max(previous - a);
-        asymmetry = asymmetry.max((a + <f32 as Scalar>::activation(-h)).abs());
+        asymmetry = asymmetry.max((a + <f32 as Activation>::activation(-h)).abs());
         previous = a;
     }
     println!(

@@ -65,7 +65,7 @@
 //!   output neuron) reuses each input's register for a later weight once its product is done.
 //! - The backward pass fuses each transpose with the chain rule δ·a′ on its sums
 //!   (`q16_transposed_slope_9x9`, `q16_transposed_slope_1x9`, the core's
-//!   `Scalar::transposed_slope_kernel`): the 9×9 reads two columns at once, one `ldrd` of two
+//!   `Kernels::transposed_slope_kernel`): the 9×9 reads two columns at once, one `ldrd` of two
 //!   weights per row with g₀…g₄ and then g₅…g₈ in registers, and tests the slope's fast range
 //!   (−2 ≤ a < 2, −2¹³ ≤ t < 2¹³) on the accumulator's high word, so that path needs no saturation
 //!   test. A neuron outside it keeps its rounded sum and comes back in a mask, which the core

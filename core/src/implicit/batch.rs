@@ -1,7 +1,7 @@
 //! Batch evaluation: [`LANES`] points at a time in structure-of-arrays form, so every
 //! multiply–accumulate of a weight runs over contiguous lanes (the parallel-hardware intent of
 //! both Carcenac and Wyvill–Cao: one weight, many points) — for the scalars where that pays on
-//! the machine ([`Scalar::LANE_GROUP`], [`Scalar::GRADIENT_LANE_GROUP`]): on 64-bit hosts
+//! the machine (`Kernels::LANE_GROUP`, `Kernels::GRADIENT_LANE_GROUP`): on 64-bit hosts
 //! always; on a Cortex-M4F never for Q16.16 (eight 64-bit accumulators do not fit its register
 //! file), not for the `f32` field and gradient at a width compiled as a constant (its
 //! eight-lane backward layers are zeroed and copied in memory), and not for the `f32` field at
@@ -15,7 +15,7 @@ use crate::error::LengthMismatch;
 use crate::scalar::Scalar;
 
 /// Points evaluated together by the batch functions (for scalars whose
-/// [`Scalar::LANE_GROUP`] or [`Scalar::GRADIENT_LANE_GROUP`] is 1: one at a time).
+/// `Kernels::LANE_GROUP` or `Kernels::GRADIENT_LANE_GROUP` is 1: one at a time).
 pub const LANES: usize = 8;
 
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
@@ -50,7 +50,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
 }
 
 impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
-    /// Φ at every point, [`LANES`] at a time (see [`Scalar::LANE_GROUP`]).
+    /// Φ at every point, [`LANES`] at a time (see `Kernels::LANE_GROUP`).
     ///
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
@@ -71,7 +71,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         Ok(())
     }
 
-    /// Φ and ∇Φ at every point, [`LANES`] at a time (see [`Scalar::GRADIENT_LANE_GROUP`]).
+    /// Φ and ∇Φ at every point, [`LANES`] at a time (see `Kernels::GRADIENT_LANE_GROUP`).
     ///
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).

@@ -6,6 +6,7 @@
 //! - evaluation of Φ, ∇Φ (reverse mode) and the unit normal, for one point or in batches of
 //!   [`LANES`], for the whole tree or any module's subtree ([`ModuleView`]).
 
+mod activation;
 mod batch;
 mod eval;
 mod layout;
@@ -13,6 +14,7 @@ mod model;
 mod reverse;
 mod width;
 
+pub use activation::Activation;
 pub use batch::LANES;
 pub use eval::{FieldGradient, ModuleView};
 pub use layout::{DenseLayout, MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};

@@ -17,18 +17,6 @@ impl Scalar for f32 {
     const KIND: ScalarKind = ScalarKind::F32;
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    /// Eight `f32` accumulators (and their inputs) fit the FPU's 32 registers.
-    const LANE_GROUP: usize = 8;
-    /// Eight on 64-bit hosts (the lanes vectorize); one on 32-bit targets: on the Cortex-M4F
-    /// the backward pass's eight-lane layers (288 bytes each) are zeroed and copied in memory,
-    /// and with N = 9 compiled in, point by point costs fewer instructions (measured: 1978 vs
-    /// 1997 per point for the N = 9 leaf, 10 916 vs 11 389 for the three-leaf head) and a third
-    /// of the stack. (At run-time widths eight lanes stay cheaper: width 16, 4356 vs 6397.)
-    const GRADIENT_LANE_GROUP: usize = if cfg!(target_pointer_width = "64") {
-        8
-    } else {
-        1
-    };
     const MAX_PARAMETER: f32 = f32::MAX;
 
     #[inline]
@@ -95,36 +83,6 @@ impl Scalar for f32 {
     }
 
     #[inline]
-    fn activation(h: Self) -> Self {
-        super::activation_f32::activation(h)
-    }
-    #[inline]
-    fn activation_slope(a: Self) -> Self {
-        SLOPE_OFFSET - SLOPE_SQUARE * (a * a)
-    }
-    #[inline]
-    fn activation_curvature(a: Self, slope: Self) -> Self {
-        -CURVATURE * a * slope
-    }
-
-    const TARGET_KERNELS: bool = super::kernels_f32::AVAILABLE;
-    #[inline(always)]
-    fn affine_kernel<const IN: usize, const OUT: usize>(
-        w: &[[f32; IN]; OUT],
-        b: &[f32; OUT],
-        x: &[f32; IN],
-    ) -> Option<[f32; OUT]> {
-        super::kernels_f32::affine(w, b, x)
-    }
-    #[inline(always)]
-    fn transposed_kernel<const IN: usize, const OUT: usize>(
-        w: &[[f32; IN]; OUT],
-        g: &[f32; OUT],
-    ) -> Option<[f32; IN]> {
-        super::kernels_f32::transposed(w, g)
-    }
-
-    #[inline]
     fn sqrt(self) -> Self {
         if self > 0.0 { math::sqrtf(self) } else { 0.0 }
     }
@@ -145,5 +103,24 @@ impl Scalar for f32 {
         } else {
             numerator / denominator
         }
+    }
+}
+
+impl crate::implicit::Activation for f32 {
+    #[inline]
+    fn activation(h: Self) -> Self {
+        super::activation_f32::activation(h)
+    }
+    #[inline]
+    fn activation_slope(a: Self) -> Self {
+        SLOPE_OFFSET - SLOPE_SQUARE * (a * a)
+    }
+    #[inline(always)]
+    fn times_slope(delta: Self, a: Self) -> Self {
+        delta * Self::activation_slope(a)
+    }
+    #[inline]
+    fn activation_curvature(a: Self, slope: Self) -> Self {
+        -CURVATURE * a * slope
     }
 }

@@ -3,10 +3,10 @@
 //! [`Scalar`] is sealed and implemented side by side for [`f32`] and for Q16.16 fixed point
 //! ([`Q16`] = `fixed::types::I16F16`), so a single test binary can evaluate the same model in
 //! both and compare them with an `f64` reference. It provides exactly what the models need:
-//! saturating arithmetic, a wide multiply–accumulate ([`Scalar::Acc`]), the activation
-//! a(H) = 1.7159·tanh(2H/3) with its first and second derivatives, `sqrt`/`recip` for
+//! saturating arithmetic, a wide multiply–accumulate ([`Scalar::Acc`]), `sqrt`/`recip` for
 //! normalization, `exp` and a quotient of accumulators for the Cao En blending functions, and
-//! conversions.
+//! conversions. The implicit modules' activation a(H) = 1.7159·tanh(2H/3), with its first and
+//! second derivatives, is [`crate::implicit::Activation`], which every scalar also implements.
 //!
 //! The hot loop of every network is `acc = mac(acc, weight, input)` followed by one
 //! [`Scalar::from_acc`] per neuron: for `f32` that is a plain multiply–add; for Q16.16 it is a
@@ -14,23 +14,20 @@
 //! (no division, no per-term rounding).
 //!
 //! ```
+//! use neurosurf_core::implicit::Activation;
 //! use neurosurf_core::scalar::{Q16, Scalar};
 //! let h = 0.75_f32;
-//! let float = <f32 as Scalar>::activation(h);
+//! let float = <f32 as Activation>::activation(h);
 //! let fixed = Q16::activation(Q16::from_f32_saturating(h)).to_f32();
 //! assert!((float - fixed).abs() < 1.0 / 16384.0);
 //! ```
 
 mod activation_f32;
-mod activation_table;
+pub(crate) mod activation_table;
 mod exp_f32;
 mod exp_q16;
 mod float;
-#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-mod kernel_shapes;
-mod kernels_f32;
-mod kernels_q16;
-mod q16;
+pub(crate) mod q16;
 
 pub use q16::Q16;
 
@@ -53,7 +50,7 @@ pub const Q16_ACTIVATION_MAX_ERROR: f64 = 1.25 / 32768.0;
 /// 3.0·10⁻⁷ (measured 2.855·10⁻⁷ by `core/tests/activation.rs`) with a margin.
 pub const F32_ACTIVATION_MAX_ERROR: f64 = 4.0e-7;
 
-mod sealed {
+pub(crate) mod sealed {
     pub trait Sealed {}
     impl Sealed for f32 {}
     impl Sealed for super::Q16 {}
@@ -143,7 +140,15 @@ impl ScalarKind {
 /// implementation. Every operation is total — none panics, none wraps; fixed-point
 /// operations saturate at the ends of the range.
 pub trait Scalar:
-    Copy + Default + PartialEq + PartialOrd + Debug + sealed::Sealed + 'static
+    Copy
+    + Default
+    + PartialEq
+    + PartialOrd
+    + Debug
+    + sealed::Sealed
+    + crate::implicit::Activation
+    + crate::arch::Kernels
+    + 'static
 {
     /// Wide accumulator for dot products (`f32` for `f32`, Q32.32 in an `i64` for [`Q16`]).
     type Acc: Copy + Debug;
@@ -154,16 +159,6 @@ pub trait Scalar:
     const ZERO: Self;
     /// 1.
     const ONE: Self;
-    /// How many points of a field batch go through the layers together, in structure-of-arrays
-    /// lanes: 1 or [`crate::implicit::LANES`], whichever is cheaper per point on the machine
-    /// compiled for (other values mean [`crate::implicit::LANES`]). Never changes a result:
-    /// every lane computes exactly what a single point does.
-    const LANE_GROUP: usize;
-    /// [`Scalar::LANE_GROUP`] for field-and-gradient batches at a width compiled as a constant
-    /// ([`crate::implicit::SPECIALIZED_WIDTHS`]), whose backward pass keeps four layers per
-    /// module alive. At other widths [`Scalar::LANE_GROUP`] applies: loops with run-time bounds
-    /// amortize their set-up over the lanes.
-    const GRADIENT_LANE_GROUP: usize;
     /// Largest parameter magnitude a blob may hold for evaluation in this scalar; the loader
     /// rejects larger ones so that accumulators provably cannot overflow.
     const MAX_PARAMETER: f32;
@@ -203,101 +198,11 @@ pub trait Scalar:
     /// Rounds an accumulator back to the scalar, saturating.
     fn from_acc(acc: Self::Acc) -> Self;
 
-    /// The activation a(H) = 1.7159·tanh(2H/3).
-    fn activation(h: Self) -> Self;
-    /// `activation(from_acc(acc))`, bit for bit: a neuron's epilogue, which an implementation
-    /// may fuse.
+    /// [`Activation::activation`](crate::implicit::Activation::activation)`(from_acc(acc))`,
+    /// bit for bit: a neuron's epilogue, which an implementation may fuse.
     #[inline(always)]
     fn activation_from_acc(acc: Self::Acc) -> Self {
         Self::activation(Self::from_acc(acc))
-    }
-    /// a′(H), computed from `a = a(H)`: a′ = (2/3)(1.7159 − a²/1.7159).
-    fn activation_slope(a: Self) -> Self;
-    /// `delta · a′(H)`, with a′ computed from `a = a(H)`: the chain rule through a neuron in the
-    /// backward pass, exactly `delta.mul(activation_slope(a))`, bit for bit (an
-    /// implementation may fuse the two).
-    #[inline(always)]
-    fn times_slope(delta: Self, a: Self) -> Self {
-        delta.mul(Self::activation_slope(a))
-    }
-    /// [`Scalar::times_slope`] on every pair `(delta[i], a[i])` by a target kernel, when there
-    /// is one for `N` neurons (Q16.16 on a Cortex-M4F: N = 9); false, with `delta` unchanged,
-    /// means "use the portable loop". The same bits as the portable loop.
-    #[inline(always)]
-    fn times_slope_kernel<const N: usize>(delta: &mut [Self; N], a: &[Self; N]) -> bool {
-        let _ = (delta, a);
-        false
-    }
-    /// A module's normalized position x′ = A·(x − c) (a leaf's input, a node's last three
-    /// inputs) for one point by a target kernel, when there is one: `normalization` is
-    /// [c₀, c₁, c₂, then A row by row], and x′ᵣ is
-    /// `from_acc(ZERO.to_acc() + Σₖ mac(A[r][k], x[k].sub(c[k])))`, bit for bit; `None` means
-    /// "use the portable loop". (Q16.16 on a Cortex-M4F.)
-    #[inline(always)]
-    fn normalization_kernel(normalization: &[Self; 12], x: &[Self; 3]) -> Option<[Self; 3]> {
-        let _ = (normalization, x);
-        None
-    }
-    /// [`Scalar::transposed_kernel`] followed by [`Scalar::times_slope`] on each output with
-    /// `a[i]`, by a target kernel, when there is one for this shape: output i is
-    /// `times_slope(from_acc(ZERO.to_acc() + Σⱼ mac(W[j][i], g[j])), a[i])`, bit for bit;
-    /// `None` means "use the two steps". (Q16.16 on a Cortex-M4F: the 9×9 and 1×9 transposes
-    /// of the backward pass, the chain rule on the column sums while they are in registers.)
-    #[inline(always)]
-    fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Self; IN]; OUT],
-        g: &[Self; OUT],
-        a: &[Self; IN],
-    ) -> Option<[Self; IN]> {
-        let _ = (w, g, a);
-        None
-    }
-    /// a″(H), computed from `a = a(H)` and `slope = a′(H)`: a″ = −(4/3)·a·a′/1.7159.
-    fn activation_curvature(a: Self, slope: Self) -> Self;
-
-    /// Whether this scalar has target kernels on the machine compiled for, for some shapes
-    /// ([`Scalar::affine_kernel`], [`Scalar::layer_kernel`], [`Scalar::transposed_kernel`],
-    /// [`Scalar::times_slope_kernel`], [`Scalar::transposed_slope_kernel`],
-    /// [`Scalar::normalization_kernel`]); the layer loops only ask when it does.
-    const TARGET_KERNELS: bool = false;
-    /// `b + W·x` (W row-major, one row per output) by a kernel written for the target, when
-    /// there is one for this shape; `None` means "use the portable loop". A kernel computes
-    /// exactly the portable loop's bits: each output starts at its bias and accumulates
-    /// [`Scalar::mac`] over the inputs in order. (f32 on a Cortex-M4F: the `neurosurf-m4f`
-    /// assembly for the width-9 layers.)
-    #[inline(always)]
-    fn affine_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Self; IN]; OUT],
-        b: &[Self; OUT],
-        x: &[Self; IN],
-    ) -> Option<[Self::Acc; OUT]> {
-        let _ = (w, b, x);
-        None
-    }
-    /// A whole forward layer by a target kernel, when there is one for this shape: output j is
-    /// [`Scalar::activation_from_acc`] of the accumulation [`Scalar::affine_kernel`] describes,
-    /// bit for bit; `None` means "use `affine_kernel` or the portable loop". (Q16.16 on a
-    /// Cortex-M4F: the width-9 hidden layers, whose rounding and table lookup the kernel does
-    /// too.)
-    #[inline(always)]
-    fn layer_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Self; IN]; OUT],
-        b: &[Self; OUT],
-        x: &[Self; IN],
-    ) -> Option<[Self; OUT]> {
-        let _ = (w, b, x);
-        None
-    }
-    /// `Wᵀ·g` by a target kernel, like [`Scalar::affine_kernel`], rounded: each output is
-    /// [`Scalar::from_acc`] of `ZERO.to_acc()` accumulating [`Scalar::mac`] over the rows in
-    /// order. (f32 and Q16.16 on a Cortex-M4F: the width-9 transposes.)
-    #[inline(always)]
-    fn transposed_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Self; IN]; OUT],
-        g: &[Self; OUT],
-    ) -> Option<[Self; IN]> {
-        let _ = (w, g);
-        None
     }
 
     /// Square root; 0 for negative inputs.

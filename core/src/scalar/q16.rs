@@ -18,8 +18,8 @@ const HALF_BITS: i64 = 1 << 15;
 const fn q(value: f64) -> i32 {
     (value * 65536.0 + 0.5) as i32
 }
-const SLOPE_OFFSET: i32 = q(ACTIVATION_GAIN * ACTIVATION_AMPLITUDE);
-const SLOPE_SQUARE: i32 = q(ACTIVATION_GAIN / ACTIVATION_AMPLITUDE);
+pub(crate) const SLOPE_OFFSET: i32 = q(ACTIVATION_GAIN * ACTIVATION_AMPLITUDE);
+pub(crate) const SLOPE_SQUARE: i32 = q(ACTIVATION_GAIN / ACTIVATION_AMPLITUDE);
 const CURVATURE: i32 = q(2.0 * ACTIVATION_GAIN / ACTIVATION_AMPLITUDE);
 
 /// Saturates a Q16.16 value held in an `i64` to `i32` range: one comparison in the common
@@ -93,11 +93,11 @@ fn interpolate(magnitude: u32) -> i32 {
 /// `delta[i] ← times_slope(delta[i], a[i])` for each bit i set in `slow`: what a chain-rule
 /// kernel left outside its fast range, finished on the portable (saturating) path.
 #[inline(always)]
-fn finish_times_slope<const N: usize>(delta: &mut [Q16; N], a: &[Q16; N], slow: u32) {
+pub(crate) fn finish_times_slope<const N: usize>(delta: &mut [Q16; N], a: &[Q16; N], slow: u32) {
     if slow != 0 {
         for (i, (d, &a)) in delta.iter_mut().zip(a).enumerate() {
             if slow.checked_shr(i as u32).unwrap_or(0) & 1 != 0 {
-                *d = Q16::times_slope(*d, a);
+                *d = <Q16 as crate::implicit::Activation>::times_slope(*d, a);
             }
         }
     }
@@ -115,17 +115,6 @@ impl Scalar for Q16 {
     const KIND: ScalarKind = ScalarKind::Q16_16;
     const ZERO: Self = Q16::ZERO;
     const ONE: Self = Q16::ONE;
-    /// One on 32-bit targets: a 64-bit accumulator takes two of the Cortex-M4's 13 general
-    /// registers, so even two lanes spill (measured for the N = 9 leaf's field and gradient: 2
-    /// lanes cost 6 % more per point than one, 8 lanes 21 % more). Eight on 64-bit hosts, where
-    /// an accumulator is one register and the lanes vectorize.
-    const LANE_GROUP: usize = if cfg!(target_pointer_width = "64") {
-        8
-    } else {
-        1
-    };
-    /// As [`Q16::LANE_GROUP`].
-    const GRADIENT_LANE_GROUP: usize = Self::LANE_GROUP;
     /// 1024: with |parameter| ≤ 2¹⁰ (2²⁶ in bits) and inputs below 2³¹ bits, each product is
     /// below 2⁵⁷, and a neuron's at most 2·16 inputs plus its bias stay below 2⁶².
     const MAX_PARAMETER: f32 = 1024.0;
@@ -206,10 +195,6 @@ impl Scalar for Q16 {
         round_q32(acc)
     }
 
-    #[inline]
-    fn activation(h: Self) -> Self {
-        Q16::from_bits(activation_bits(h.to_bits()))
-    }
     #[inline(always)]
     fn activation_from_acc(acc: i64) -> Self {
         // Exactly `activation(from_acc(acc))`: when the high word of the rounded accumulator
@@ -227,80 +212,6 @@ impl Scalar for Q16 {
             let last = saturated_activation();
             if high < 0 { -last } else { last }
         })
-    }
-    #[inline]
-    fn activation_slope(a: Self) -> Self {
-        // For |a| ≤ 2 (every activation output: |a| ≤ 1.7159) nothing here can saturate, so
-        // exact integer products give the saturating a·a, SLOPE_SQUARE·(a·a) and the
-        // difference. Other inputs (not produced by `activation`) take the saturating path.
-        let bits = i64::from(a.to_bits());
-        if bits.unsigned_abs() > 2 << 16 {
-            let square = a.mul(a);
-            return Q16::from_bits(SLOPE_OFFSET).sub(Q16::from_bits(SLOPE_SQUARE).mul(square));
-        }
-        Q16::from_bits(slope_bits(bits as i32))
-    }
-    #[inline(always)]
-    fn times_slope(delta: Self, a: Self) -> Self {
-        // The common case as two rounded high words: for |a| ≤ 2 the slope is `slope_bits`
-        // (|a′| ≤ 1.144, below 2¹⁷ in bits), and for |δ| < 2¹³ (2²⁹ in bits) the product
-        // round(δ·a′/2¹⁶) is the rounded high word of (δ·2²)·(a′·2¹⁴), both factors below 2³¹,
-        // and cannot saturate (|δ·a′| < 2¹⁴). The same bits as `mul`, which rounds
-        // (δ·a′ + 2¹⁵)/2¹⁶ down: (δ·a′·2¹⁶ + 2³¹)/2³² is that quotient.
-        let (delta_bits, a_bits) = (delta.to_bits(), a.to_bits());
-        // |a| ≤ 2·2¹⁶ and |δ| < 2²⁹ as one add and one unsigned compare each.
-        let a_in_range = a_bits.wrapping_add(2 << 16) as u32 <= 4 << 16;
-        let delta_in_range = (delta_bits.wrapping_add(1 << 29) as u32) < 1 << 30;
-        if a_in_range && delta_in_range {
-            let slope = slope_bits(a_bits);
-            return Q16::from_bits(high_word_rounded(delta_bits << 2, slope << 14));
-        }
-        delta.mul(Self::activation_slope(a))
-    }
-    #[inline(always)]
-    fn times_slope_kernel<const N: usize>(delta: &mut [Self; N], a: &[Self; N]) -> bool {
-        let Some(slow) = super::kernels_q16::times_slope(delta, a, SLOPE_OFFSET, SLOPE_SQUARE)
-        else {
-            return false;
-        };
-        finish_times_slope(delta, a, slow);
-        true
-    }
-    #[inline(always)]
-    fn normalization_kernel(normalization: &[Self; 12], x: &[Self; 3]) -> Option<[Self; 3]> {
-        super::kernels_q16::normalize(normalization, x)
-    }
-    #[inline(always)]
-    fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Self; IN]; OUT],
-        g: &[Self; OUT],
-        a: &[Self; IN],
-    ) -> Option<[Self; IN]> {
-        let (mut delta, slow) =
-            super::kernels_q16::transposed_slope(w, g, a, SLOPE_OFFSET, SLOPE_SQUARE)?;
-        finish_times_slope(&mut delta, a, slow);
-        Some(delta)
-    }
-    #[inline]
-    fn activation_curvature(a: Self, slope: Self) -> Self {
-        Q16::from_bits(CURVATURE).mul(a).mul(slope).neg()
-    }
-
-    const TARGET_KERNELS: bool = super::kernels_q16::AVAILABLE;
-    #[inline(always)]
-    fn layer_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Q16; IN]; OUT],
-        b: &[Q16; OUT],
-        x: &[Q16; IN],
-    ) -> Option<[Q16; OUT]> {
-        super::kernels_q16::layer(w, b, x, &SEGMENTS)
-    }
-    #[inline(always)]
-    fn transposed_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Q16; IN]; OUT],
-        g: &[Q16; OUT],
-    ) -> Option<[Q16; IN]> {
-        super::kernels_q16::transposed(w, g)
     }
 
     #[inline]
@@ -371,11 +282,52 @@ fn isqrt(n: u64) -> u64 {
     root
 }
 
+impl crate::implicit::Activation for Q16 {
+    #[inline]
+    fn activation(h: Self) -> Self {
+        Q16::from_bits(activation_bits(h.to_bits()))
+    }
+    #[inline]
+    fn activation_slope(a: Self) -> Self {
+        // For |a| ≤ 2 (every activation output: |a| ≤ 1.7159) nothing here can saturate, so
+        // exact integer products give the saturating a·a, SLOPE_SQUARE·(a·a) and the
+        // difference. Other inputs (not produced by `activation`) take the saturating path.
+        let bits = i64::from(a.to_bits());
+        if bits.unsigned_abs() > 2 << 16 {
+            let square = a.mul(a);
+            return Q16::from_bits(SLOPE_OFFSET).sub(Q16::from_bits(SLOPE_SQUARE).mul(square));
+        }
+        Q16::from_bits(slope_bits(bits as i32))
+    }
+    #[inline(always)]
+    fn times_slope(delta: Self, a: Self) -> Self {
+        // The common case as two rounded high words: for |a| ≤ 2 the slope is `slope_bits`
+        // (|a′| ≤ 1.144, below 2¹⁷ in bits), and for |δ| < 2¹³ (2²⁹ in bits) the product
+        // round(δ·a′/2¹⁶) is the rounded high word of (δ·2²)·(a′·2¹⁴), both factors below 2³¹,
+        // and cannot saturate (|δ·a′| < 2¹⁴). The same bits as `mul`, which rounds
+        // (δ·a′ + 2¹⁵)/2¹⁶ down: (δ·a′·2¹⁶ + 2³¹)/2³² is that quotient.
+        let (delta_bits, a_bits) = (delta.to_bits(), a.to_bits());
+        // |a| ≤ 2·2¹⁶ and |δ| < 2²⁹ as one add and one unsigned compare each.
+        let a_in_range = a_bits.wrapping_add(2 << 16) as u32 <= 4 << 16;
+        let delta_in_range = (delta_bits.wrapping_add(1 << 29) as u32) < 1 << 30;
+        if a_in_range && delta_in_range {
+            let slope = slope_bits(a_bits);
+            return Q16::from_bits(high_word_rounded(delta_bits << 2, slope << 14));
+        }
+        delta.mul(Self::activation_slope(a))
+    }
+    #[inline]
+    fn activation_curvature(a: Self, slope: Self) -> Self {
+        Q16::from_bits(CURVATURE).mul(a).mul(slope).neg()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{
         FRACTION_BITS, HALF_BITS, LAST, Q16, SLOPE_OFFSET, SLOPE_SQUARE, activation_bits, isqrt,
     };
+    use crate::implicit::Activation;
     use crate::scalar::Scalar;
     use crate::scalar::activation_table::TABLE;
 

@@ -1,0 +1,194 @@
+//! The one seam between the portable core and target-specific speed-ups, in the manner of
+//! libm's `math/arch/`: the layer loops ask a scalar's [`Kernels`] whether a kernel covers a
+//! shape, and the answer comes from the one module chosen below — the Cortex-M4F assembly of
+//! `neurosurf-m4f` (`m4f.rs`), or none at all (`portable.rs`). Every kernel computes exactly
+//! the bits of the loop it replaces, so the choice changes speed, never a result.
+//!
+//! [`Kernels`] is a supertrait of [`crate::scalar::Scalar`] that users cannot name: it is not
+//! part of the public API.
+
+use crate::scalar::Q16;
+
+/// Chooses the kernels' module: the target condition, written once.
+macro_rules! select_target {
+    ($target:item $portable:item) => {
+        #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+        $target
+        #[cfg(not(all(target_arch = "arm", target_abi = "eabihf", target_os = "none")))]
+        $portable
+    };
+}
+
+select_target! {
+    #[path = "m4f.rs"]
+    mod target;
+    #[path = "portable.rs"]
+    mod target;
+}
+
+/// Target kernels and lane counts of a scalar. Each `*_kernel` returns `None` (or `false`)
+/// for "use the portable loop"; what it returns otherwise is exactly that loop's bits.
+pub trait Kernels: Sized + Copy {
+    /// Whether this scalar has kernels on the machine compiled for, for some shapes; the layer
+    /// loops only ask when it does.
+    const TARGET_KERNELS: bool;
+    /// How many points of a field batch go through the layers together, in structure-of-arrays
+    /// lanes: 1 or [`crate::implicit::LANES`], whichever is cheaper per point on the machine
+    /// compiled for (other values mean [`crate::implicit::LANES`]). Never changes a result:
+    /// every lane computes exactly what a single point does.
+    const LANE_GROUP: usize;
+    /// `LANE_GROUP` for field-and-gradient batches at a width compiled as a constant
+    /// ([`crate::implicit::SPECIALIZED_WIDTHS`]), whose backward pass keeps four layers per
+    /// module alive. At other widths `LANE_GROUP` applies: loops with run-time bounds amortize
+    /// their set-up over the lanes.
+    const GRADIENT_LANE_GROUP: usize;
+
+    /// `b + W·x` (W row-major, one row per output), each output the bias accumulating `mac`
+    /// over the inputs in order and rounded by `from_acc` (exact for `f32`, whose accumulator
+    /// is an `f32`). (f32 on a Cortex-M4F: the width-9 layers.)
+    #[inline(always)]
+    fn affine_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        b: &[Self; OUT],
+        x: &[Self; IN],
+    ) -> Option<[Self; OUT]> {
+        let _ = (w, b, x);
+        None
+    }
+    /// A whole forward layer: output j is `activation_from_acc` of the accumulation
+    /// `affine_kernel` describes. (Q16.16 on a Cortex-M4F: the width-9 hidden layers, whose
+    /// rounding and table lookup the kernel does too.)
+    #[inline(always)]
+    fn layer_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        b: &[Self; OUT],
+        x: &[Self; IN],
+    ) -> Option<[Self; OUT]> {
+        let _ = (w, b, x);
+        None
+    }
+    /// `Wᵀ·g`: each output `from_acc` of `ZERO.to_acc()` accumulating `mac` over the rows in
+    /// order. (f32 and Q16.16 on a Cortex-M4F: the width-9 transposes.)
+    #[inline(always)]
+    fn transposed_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        g: &[Self; OUT],
+    ) -> Option<[Self; IN]> {
+        let _ = (w, g);
+        None
+    }
+    /// `times_slope` on every pair `(delta[i], a[i])`; `false`, with `delta` unchanged, means
+    /// "use the portable loop". (Q16.16 on a Cortex-M4F: N = 9.)
+    #[inline(always)]
+    fn times_slope_kernel<const N: usize>(delta: &mut [Self; N], a: &[Self; N]) -> bool {
+        let _ = (delta, a);
+        false
+    }
+    /// A module's normalized position x′ = A·(x − c) for one point (`normalization` is
+    /// [c₀, c₁, c₂, then A row by row]); x′ᵣ is
+    /// `from_acc(ZERO.to_acc() + Σₖ mac(A[r][k], x[k].sub(c[k])))`. (Q16.16 on a Cortex-M4F.)
+    #[inline(always)]
+    fn normalization_kernel(normalization: &[Self; 12], x: &[Self; 3]) -> Option<[Self; 3]> {
+        let _ = (normalization, x);
+        None
+    }
+    /// `transposed_kernel` followed by `times_slope` on each output with `a[i]`. (Q16.16 on a
+    /// Cortex-M4F: the 9×9 and 1×9 transposes of the backward pass, the chain rule on the
+    /// column sums while they are in registers.)
+    #[inline(always)]
+    fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Self; IN]; OUT],
+        g: &[Self; OUT],
+        a: &[Self; IN],
+    ) -> Option<[Self; IN]> {
+        let _ = (w, g, a);
+        None
+    }
+}
+
+impl Kernels for f32 {
+    const TARGET_KERNELS: bool = neurosurf_m4f::AVAILABLE;
+    /// Eight `f32` accumulators (and their inputs) fit the FPU's 32 registers.
+    const LANE_GROUP: usize = 8;
+    /// Eight on 64-bit hosts (the lanes vectorize); one on 32-bit targets: on the Cortex-M4F
+    /// the backward pass's eight-lane layers (288 bytes each) are zeroed and copied in memory,
+    /// and with N = 9 compiled in, point by point costs fewer instructions (measured: 1978 vs
+    /// 1997 per point for the N = 9 leaf, 10 916 vs 11 389 for the three-leaf head) and a third
+    /// of the stack. (At run-time widths eight lanes stay cheaper: width 16, 4356 vs 6397.)
+    const GRADIENT_LANE_GROUP: usize = if cfg!(target_pointer_width = "64") {
+        8
+    } else {
+        1
+    };
+
+    #[inline(always)]
+    fn affine_kernel<const IN: usize, const OUT: usize>(
+        w: &[[f32; IN]; OUT],
+        b: &[f32; OUT],
+        x: &[f32; IN],
+    ) -> Option<[f32; OUT]> {
+        target::f32_affine(w, b, x)
+    }
+    #[inline(always)]
+    fn transposed_kernel<const IN: usize, const OUT: usize>(
+        w: &[[f32; IN]; OUT],
+        g: &[f32; OUT],
+    ) -> Option<[f32; IN]> {
+        target::f32_transposed(w, g)
+    }
+}
+
+impl Kernels for Q16 {
+    const TARGET_KERNELS: bool = neurosurf_m4f::AVAILABLE;
+    /// One on 32-bit targets: a 64-bit accumulator takes two of the Cortex-M4's 13 general
+    /// registers, so even two lanes spill (measured for the N = 9 leaf's field and gradient: 2
+    /// lanes cost 6 % more per point than one, 8 lanes 21 % more). Eight on 64-bit hosts, where
+    /// an accumulator is one register and the lanes vectorize.
+    const LANE_GROUP: usize = if cfg!(target_pointer_width = "64") {
+        8
+    } else {
+        1
+    };
+    /// As `LANE_GROUP`.
+    const GRADIENT_LANE_GROUP: usize = Self::LANE_GROUP;
+
+    #[inline(always)]
+    fn layer_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Q16; IN]; OUT],
+        b: &[Q16; OUT],
+        x: &[Q16; IN],
+    ) -> Option<[Q16; OUT]> {
+        target::q16_layer(w, b, x, &crate::scalar::activation_table::SEGMENTS)
+    }
+    #[inline(always)]
+    fn transposed_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Q16; IN]; OUT],
+        g: &[Q16; OUT],
+    ) -> Option<[Q16; IN]> {
+        target::q16_transposed(w, g)
+    }
+    #[inline(always)]
+    fn times_slope_kernel<const N: usize>(delta: &mut [Q16; N], a: &[Q16; N]) -> bool {
+        use crate::scalar::q16::{SLOPE_OFFSET, SLOPE_SQUARE, finish_times_slope};
+        let Some(slow) = target::q16_times_slope(delta, a, SLOPE_OFFSET, SLOPE_SQUARE) else {
+            return false;
+        };
+        finish_times_slope(delta, a, slow);
+        true
+    }
+    #[inline(always)]
+    fn normalization_kernel(normalization: &[Q16; 12], x: &[Q16; 3]) -> Option<[Q16; 3]> {
+        target::q16_normalize(normalization, x)
+    }
+    #[inline(always)]
+    fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
+        w: &[[Q16; IN]; OUT],
+        g: &[Q16; OUT],
+        a: &[Q16; IN],
+    ) -> Option<[Q16; IN]> {
+        use crate::scalar::q16::{SLOPE_OFFSET, SLOPE_SQUARE, finish_times_slope};
+        let (mut delta, slow) = target::q16_transposed_slope(w, g, a, SLOPE_OFFSET, SLOPE_SQUARE)?;
+        finish_times_slope(&mut delta, a, slow);
+        Some(delta)
+    }
+}

@@ -1,0 +1,65 @@
+//! No target kernels: every function says "use the portable loop". What every target but the
+//! Cortex-M4F compiles (signatures as in `m4f.rs`).
+
+use crate::scalar::Q16;
+
+#[inline(always)]
+pub(super) fn f32_affine<const IN: usize, const OUT: usize>(
+    _: &[[f32; IN]; OUT],
+    _: &[f32; OUT],
+    _: &[f32; IN],
+) -> Option<[f32; OUT]> {
+    None
+}
+
+#[inline(always)]
+pub(super) fn f32_transposed<const IN: usize, const OUT: usize>(
+    _: &[[f32; IN]; OUT],
+    _: &[f32; OUT],
+) -> Option<[f32; IN]> {
+    None
+}
+
+#[inline(always)]
+pub(super) fn q16_transposed<const IN: usize, const OUT: usize>(
+    _: &[[Q16; IN]; OUT],
+    _: &[Q16; OUT],
+) -> Option<[Q16; IN]> {
+    None
+}
+
+#[inline(always)]
+pub(super) fn q16_times_slope<const N: usize>(
+    _: &mut [Q16; N],
+    _: &[Q16; N],
+    _: i32,
+    _: i32,
+) -> Option<u32> {
+    None
+}
+
+#[inline(always)]
+pub(super) fn q16_layer<const IN: usize, const OUT: usize>(
+    _: &[[Q16; IN]; OUT],
+    _: &[Q16; OUT],
+    _: &[Q16; IN],
+    _: &[[i32; 2]; 1281],
+) -> Option<[Q16; OUT]> {
+    None
+}
+
+#[inline(always)]
+pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
+    _: &[[Q16; IN]; OUT],
+    _: &[Q16; OUT],
+    _: &[Q16; IN],
+    _: i32,
+    _: i32,
+) -> Option<([Q16; IN], u32)> {
+    None
+}
+
+#[inline(always)]
+pub(super) fn q16_normalize(_: &[Q16; 12], _: &[Q16; 3]) -> Option<[Q16; 3]> {
+    None
+}
