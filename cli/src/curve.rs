@@ -132,7 +132,8 @@ pub struct FitArgs {
     /// Fit the spline through every ordered point instead of a least-squares approximation.
     #[arg(long)]
     interpolate: bool,
-    /// Control points of the approximation (default: about a third of the points).
+    /// Control points of the approximation (default: a fifth of the points, 8 to 512; the
+    /// core holds at most 512).
     #[arg(long)]
     control: Option<usize>,
     /// Neurons per input point in the chain (the paper: 4).
@@ -183,6 +184,12 @@ fn fit(args: &FitArgs) -> Result<()> {
     let (dimension, raw) = read_scattered_points(&args.points)?;
     let points = CurvePoints::new(dimension, raw)
         .with_context(|| format!("cannot fit a curve to {}", args.points.display()))?;
+    neurosurf_trainer::curve::check_curve_capacity(
+        points.len(),
+        args.closed,
+        args.control,
+        args.interpolate,
+    )?;
     let topology = if args.closed {
         Topology::Closed
     } else {
@@ -218,7 +225,7 @@ fn fit(args: &FitArgs) -> Result<()> {
     if let Some(path) = &args.plot {
         check_picture_path(path)?;
     }
-    write_atomic(&args.blob.out, &blob)?;
+    neurosurf_trainer::blob::write_checked(&args.blob.out, &blob)?;
     if let Some(path) = &args.plot {
         let layers = PlotLayers {
             points: points.points(),
@@ -402,7 +409,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         let mesh = surface_mesh(&fit.surface, args.resolution, args.resolution)?;
         write_mesh(path, &mesh.mesh, Some(&mesh.normals))?;
     }
-    write_atomic(&args.blob.out, &blob)?;
+    neurosurf_trainer::blob::write_checked(&args.blob.out, &blob)?;
     let report = SurfaceReport {
         out: &args.blob.out,
         stored_as: scalar.name(),

@@ -328,7 +328,7 @@ fn fit(args: &FitArgs) -> Result<()> {
     let fitting_seconds = start.elapsed().as_secs_f64();
     let summary = NetworkSummary::of(&fit, points.len(), embedding_seconds + fitting_seconds);
     let bytes = network_to_blob(&fit.network, Some(&summary), scalar)?;
-    write_atomic(&args.out, &bytes)?;
+    neurosurf_trainer::blob::write_checked(&args.out, &bytes)?;
     if let Some(path) = &args.parameters_out {
         write_atomic(path, rows(&parameters).as_bytes())?;
     }

@@ -10,7 +10,7 @@ use neurosurf_core::scalar::ScalarKind;
 use neurosurf_trainer::implicit::{
     self, BoxScaling, DecodedImplicit, FitRequest, ImplicitOptions, TrainingSummary, TreeSpec,
 };
-use neurosurf_trainer::io::{read_points, write_atomic};
+use neurosurf_trainer::io::read_points;
 use neurosurf_trainer::rbf::{self, RbfKernel, RbfOptions, RbfReport};
 
 use super::{output, progress};
@@ -226,7 +226,7 @@ fn implicit(args: &ImplicitArgs) -> Result<()> {
     bar.finish_and_clear();
     let summary = &trained.summary;
     let bytes = implicit::to_blob(&trained.network, Some(summary), args.scalar.kind())?;
-    write_atomic(&args.out, &bytes)?;
+    neurosurf_trainer::blob::write_checked(&args.out, &bytes)?;
     let saved = (request.init.is_some() && !summary.cold_iterations.is_empty()).then(|| {
         summary.cold_iterations.iter().sum::<usize>() as i64 - summary.iterations() as i64
     });
@@ -312,7 +312,7 @@ fn rbf(args: &RbfArgs) -> Result<()> {
     let (model, report) = rbf::fit(&points, &options)
         .with_context(|| format!("cannot fit an RBF to {}", args.points.display()))?;
     let bytes = model.to_blob()?;
-    write_atomic(&args.out, &bytes)?;
+    neurosurf_trainer::blob::write_checked(&args.out, &bytes)?;
     let summary = RbfSummary {
         out: &args.out,
         blob_bytes: bytes.len(),

@@ -259,3 +259,61 @@ fn shading_folds_into_the_network_and_meshes_carry_texture_coordinates() {
     ]);
     assert!(error.contains("no direction"), "{error}");
 }
+
+#[test]
+fn key_counts_beyond_the_core_are_refused_before_fitting() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k.nsb");
+    // 257 key points on the sphere: one past the core's 256.
+    let text: String = (0..257)
+        .map(|i| {
+            let t = f64::from(i) * 2.399_963;
+            let z = 1.0 - 2.0 * (f64::from(i) + 0.5) / 257.0;
+            let r = (1.0 - z * z).sqrt();
+            format!("{} {} {}\n", r * t.cos(), r * t.sin(), z)
+        })
+        .collect();
+    let keys = dir.path().join("keys.txt");
+    fs::write(&keys, text).unwrap();
+    let error = fails(&["caoen", "fit", s(&keys), "--out", s(&out)]);
+    assert!(
+        error.contains("257 key points") && error.contains("256"),
+        "{error}"
+    );
+    let spot = format!("{}/../data/spot.obj", env!("CARGO_MANIFEST_DIR"));
+    let error = fails(&[
+        "caoen",
+        "fit-mesh",
+        &spot,
+        "--keys",
+        "300",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        error.contains("--keys") && error.contains("300") && error.contains("256"),
+        "{error}"
+    );
+    let picture = dir.path().join("p.png");
+    ok(&[
+        "caoen",
+        "image",
+        "sample",
+        "--size",
+        "16,16",
+        "--out",
+        s(&picture),
+    ]);
+    let error = fails(&[
+        "caoen",
+        "image",
+        "compress",
+        s(&picture),
+        "--keys",
+        "257",
+        "--out",
+        s(&out),
+    ]);
+    assert!(error.contains("--keys") && error.contains("257"), "{error}");
+    assert!(!out.exists());
+}

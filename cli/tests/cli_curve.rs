@@ -245,3 +245,61 @@ fn bad_point_sets_fail_with_a_message_naming_the_problem() {
     let surface = fails(&["curve", "surface", s(&flat), "--out", s(&out)]);
     assert!(surface.contains("3-D points"), "{surface}");
 }
+
+#[test]
+fn curves_beyond_the_core_are_refused_before_training_and_large_sets_fit_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("big.txt");
+    ok(&[
+        "curve",
+        "sample",
+        "ellipse",
+        "-n",
+        "2700",
+        "--seed",
+        "3",
+        "--out",
+        s(&points),
+    ]);
+    let model = dir.path().join("big.nsb");
+    let through = fails(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--closed",
+        "--interpolate",
+        "--out",
+        s(&model),
+    ]);
+    assert!(
+        through.contains("--interpolate") && through.contains("512"),
+        "{through}"
+    );
+    let many = fails(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--closed",
+        "--control",
+        "600",
+        "--out",
+        s(&model),
+    ]);
+    assert!(
+        many.contains("--control 600") && many.contains("512"),
+        "{many}"
+    );
+    assert!(!model.exists());
+    // The default K = n/5 = 540 is capped at what the core holds.
+    let fit = json(&ok(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--closed",
+        "--out",
+        s(&model),
+        "--json",
+    ]));
+    assert_eq!(fit["control_points"], 512, "{fit}");
+    assert!(model.exists());
+}

@@ -1,12 +1,20 @@
 //! Writing blobs: every family's payload framed by the core's container (header, postcard
-//! payload, CRC), so that what the trainer writes is exactly what the core reads.
+//! payload, CRC), and loaded back through the core before it is written, so that no command
+//! writes a blob the core refuses.
+
+use std::path::Path;
 
 use neurosurf_core::BlobError;
 use neurosurf_core::blob::{self, ModelKind};
-use neurosurf_core::scalar::ScalarKind;
+use neurosurf_core::caoen::CaoEnModel;
+use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
+use neurosurf_core::implicit::ImplicitModel;
+use neurosurf_core::parametric::SurfaceNetworkModel;
+use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::io::write_atomic;
 
 /// Frames any serializable payload as a blob, sizing the buffer exactly.
 ///
@@ -27,4 +35,124 @@ pub fn encode<T: Serialize + ?Sized>(
         .map_err(|e| Error::invalid(format!("cannot encode the blob: {e}")))?;
     out.truncate(len);
     Ok(out)
+}
+
+/// Loads `bytes` through the core in the scalar they are stored in (the RBF baseline, which
+/// the core does not evaluate, through the trainer's own reader), as a user's firmware would.
+///
+/// # Errors
+/// [`Error::Blob`] naming `path` and what the core refuses.
+pub fn check_loads(bytes: &[u8], path: &Path) -> Result<()> {
+    let rejected = |source| Error::Blob {
+        path: path.to_path_buf(),
+        source,
+    };
+    let (header, _) = blob::parse(bytes).map_err(rejected)?;
+    match header.model {
+        ModelKind::Implicit => {
+            loads::<ImplicitModel<f32>, ImplicitModel<Q16>>(bytes, header.scalar)
+        }
+        ModelKind::Rbf => return crate::rbf::RbfModel::from_blob(bytes, path).map(|_| ()),
+        ModelKind::Curve => loads::<BSplineCurve<f32>, BSplineCurve<Q16>>(bytes, header.scalar),
+        ModelKind::SplineSurface => {
+            loads::<BSplineSurface<f32>, BSplineSurface<Q16>>(bytes, header.scalar)
+        }
+        ModelKind::CaoEn => loads::<CaoEnModel<f32>, CaoEnModel<Q16>>(bytes, header.scalar),
+        ModelKind::SurfaceNetwork => {
+            loads::<SurfaceNetworkModel<f32>, SurfaceNetworkModel<Q16>>(bytes, header.scalar)
+        }
+    }
+    .map_err(rejected)
+}
+
+/// Writes `bytes` to `path` atomically once [`check_loads`] accepts them; nothing is written
+/// (and an existing file is kept) otherwise.
+///
+/// # Errors
+/// As [`check_loads`], and [`Error::Io`] when the file cannot be written.
+pub fn write_checked(path: &Path, bytes: &[u8]) -> Result<()> {
+    check_loads(bytes, path)?;
+    write_atomic(path, bytes)
+}
+
+/// A model type the core loads from a blob.
+trait Loads: Sized {
+    fn load(bytes: &[u8]) -> core::result::Result<(), BlobError>;
+}
+
+macro_rules! loads_impl {
+    ($($model:ident),*) => {$(
+        impl<S: Scalar> Loads for $model<S> {
+            fn load(bytes: &[u8]) -> core::result::Result<(), BlobError> {
+                // Boxed: some models are tens of kilobytes, held on the heap here as a
+                // firmware holds them in a static.
+                let mut model = Box::new($model::<S>::new());
+                model.load(bytes)
+            }
+        }
+    )*};
+}
+loads_impl!(
+    ImplicitModel,
+    BSplineCurve,
+    BSplineSurface,
+    CaoEnModel,
+    SurfaceNetworkModel
+);
+
+/// Loads through `F` (f32) or `Q` (Q16.16), whichever the blob stores.
+fn loads<F: Loads, Q: Loads>(
+    bytes: &[u8],
+    scalar: ScalarKind,
+) -> core::result::Result<(), BlobError> {
+    match scalar {
+        ScalarKind::Q16_16 => Q::load(bytes),
+        _ => F::load(bytes),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::caoen::{from_key_points, to_blob};
+    use neurosurf_core::caoen::{Blending, DEFAULT_KEY_POINTS, Domain};
+
+    /// A sphere network with `n` key points spread over the sphere.
+    fn sphere_blob(n: usize) -> Vec<u8> {
+        let keys: Vec<Vec<f64>> = (0..n)
+            .map(|i| {
+                let t = i as f64 * 2.399_963;
+                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let r = (1.0 - z * z).sqrt();
+                vec![r * t.cos(), r * t.sin(), z]
+            })
+            .collect();
+        let network =
+            from_key_points(Domain::Sphere, Blending::Power, false, &keys, &keys, 4.0).unwrap();
+        to_blob(&network, ScalarKind::F32, b"test").unwrap()
+    }
+
+    #[test]
+    fn a_blob_at_the_core_limit_is_written_and_one_past_it_is_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let at = dir.path().join("at.nsb");
+        write_checked(&at, &sphere_blob(DEFAULT_KEY_POINTS)).unwrap();
+        assert!(at.exists());
+        let past = dir.path().join("past.nsb");
+        std::fs::write(&past, b"kept").unwrap();
+        let error = write_checked(&past, &sphere_blob(DEFAULT_KEY_POINTS + 1)).unwrap_err();
+        assert!(error.to_string().contains("past.nsb"), "{error}");
+        assert_eq!(std::fs::read(&past).unwrap(), b"kept");
+    }
+
+    #[test]
+    fn a_corrupt_blob_is_not_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.nsb");
+        let mut bytes = sphere_blob(12);
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        assert!(write_checked(&path, &bytes).is_err());
+        assert!(!path.exists());
+    }
 }

@@ -9,7 +9,7 @@ use neurosurf_trainer::caoen::{
     self, MeshFitOptions, SurfaceDistance, fit_parameterized, spherical_parameterization,
 };
 use neurosurf_trainer::evaluate::Precision;
-use neurosurf_trainer::io::{read_mesh, write_atomic};
+use neurosurf_trainer::io::read_mesh;
 
 use super::super::output::{self, blob_scalar, wrote_blob};
 
@@ -47,9 +47,10 @@ pub fn run(args: &Args) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
     let mesh = read_mesh(&args.mesh)?;
     let map = spherical_parameterization(&mesh)?;
+    neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
     let fit = fit_parameterized(&mesh, &map.points, args.keys, &MeshFitOptions::default())?;
     let blob = caoen::to_blob(&fit.network, scalar, b"neurosurf caoen fit-mesh")?;
-    write_atomic(&args.out, &blob)?;
+    neurosurf_trainer::blob::write_checked(&args.out, &blob)?;
     let report = Report {
         out: &args.out,
         blob_bytes: blob.len(),

@@ -8,7 +8,6 @@ use serde::Serialize;
 
 use neurosurf_trainer::caoen::{CompressedImage, compress_image, psnr, smooth_test_image};
 use neurosurf_trainer::evaluate::Precision;
-use neurosurf_trainer::io::write_atomic;
 use neurosurf_trainer::render::write_png;
 
 use super::super::output::{self, blob_scalar, comma_list};
@@ -79,11 +78,12 @@ fn read_picture(path: &Path) -> Result<image::RgbImage> {
 fn compress(args: &CompressArgs) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
     let picture = read_picture(&args.input)?;
+    neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
     let compressed = compress_image(&picture, args.keys, args.gamma, args.iterations)?;
     let blob = compressed.to_blob(scalar)?;
     // Measure what a reader of the blob gets (the words rounded to the scalar).
     let decoded = CompressedImage::from_blob(&blob, &args.out)?.decode();
-    write_atomic(&args.out, &blob)?;
+    neurosurf_trainer::blob::write_checked(&args.out, &blob)?;
     let report = CompressReport {
         out: &args.out,
         width: picture.width(),

@@ -14,14 +14,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Subcommand, ValueEnum};
-use neurosurf_core::caoen::{Blending, CaoEnModel, DEFAULT_KEY_POINTS, Domain};
+use neurosurf_core::caoen::{Blending, Domain};
 use serde::Serialize;
 
 use neurosurf_trainer::caoen::{
     self, CaoEnNetwork, fit_shape, fit_sharpness, from_key_points, rms_error,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
-use neurosurf_trainer::io::{read_rows, write_atomic, write_mesh, write_textured_obj};
+use neurosurf_trainer::io::{read_rows, write_mesh, write_textured_obj};
 
 use super::output::{self, blob_scalar, comma_list, wrote_blob};
 
@@ -213,6 +213,7 @@ fn fit(args: &FitArgs) -> Result<()> {
     }
     let (keys, targets) = keys_and_targets(&rows, m)
         .with_context(|| format!("cannot read key points from {}", args.points.display()))?;
+    neurosurf_trainer::caoen::check_key_count(keys.len(), &args.points.display().to_string())?;
     let built = from_key_points(
         domain,
         blending,
@@ -229,17 +230,10 @@ fn fit(args: &FitArgs) -> Result<()> {
         (false, false) => fit_sharpness(&built, &on_domain, &targets, &args.fit_sharpness)?.0,
     };
     let blob = caoen::to_blob(&network, scalar, b"neurosurf caoen fit")?;
-    // What the firmware, eval and sim load: the core's default capacity.
-    CaoEnModel::<f32>::from_blob(&blob).map_err(|e| {
-        anyhow::anyhow!(
-            "{} key points: the core (and the firmware) hold at most {DEFAULT_KEY_POINTS}: {e}",
-            network.key_count()
-        )
-    })?;
     if args.mesh.is_some() && !matches!(network.source_dimension(), 3 | 4) {
         bail!("--mesh maps sphere (m = 3) and torus (m = 4) networks, this one has m = {m}");
     }
-    write_atomic(&args.out, &blob)?;
+    neurosurf_trainer::blob::write_checked(&args.out, &blob)?;
     if let Some(path) = &args.mesh {
         write_network_mesh(&network, path, 4, [48, 24])?;
     }

@@ -8,7 +8,6 @@ use serde::Serialize;
 
 use neurosurf_trainer::caoen::{self, LIGHTING_CHECK_SUBDIVISIONS, fold_lighting};
 use neurosurf_trainer::evaluate::Precision;
-use neurosurf_trainer::io::write_atomic;
 
 use super::super::output::{self, blob_scalar, comma_list, wrote_blob};
 use super::read_network;
@@ -52,7 +51,7 @@ pub fn run(args: &Args) -> Result<()> {
     let network = read_network(&args.model, "shade")?;
     let fit = fold_lighting(&network, &args.lights)?;
     let blob = caoen::to_blob(&fit.network, scalar, b"neurosurf caoen shade")?;
-    write_atomic(&args.out, &blob)?;
+    neurosurf_trainer::blob::write_checked(&args.out, &blob)?;
     let report = Report {
         out: &args.out,
         blob_bytes: blob.len(),

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use neurosurf_trainer::caoen::{self, SurfaceDistance, fit_teapot};
 use neurosurf_trainer::evaluate::Precision;
-use neurosurf_trainer::io::{data_file, read_mesh, write_atomic, write_mesh};
+use neurosurf_trainer::io::{data_file, read_mesh, write_mesh};
 use neurosurf_trainer::render::write_png;
 
 use super::super::output::{self, blob_scalar, comma_list};
@@ -77,7 +77,7 @@ pub fn run(args: &Args) -> Result<()> {
     for part in &parts {
         let blob = caoen::to_blob(&part.network, scalar, part.name.as_bytes())?;
         let path = args.out_dir.join(format!("{}.nsb", part.name));
-        write_atomic(&path, &blob)?;
+        neurosurf_trainer::blob::write_checked(&path, &blob)?;
         report.parts.push(Part {
             name: part.name,
             blob: path,

@@ -35,6 +35,7 @@
 //! ```
 
 mod blob;
+mod capacity;
 mod distance;
 mod distort;
 mod fit;
@@ -52,6 +53,7 @@ mod texture;
 mod topology;
 
 pub use blob::{from_blob, to_blob};
+pub use capacity::check_key_count;
 pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
 pub use distort::Distortion;
 pub use fit::{cube_directions, fit_shape, fit_sharpness, from_key_points, rms_error};

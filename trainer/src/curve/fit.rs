@@ -11,6 +11,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 use super::basis::{cubic_basis, locate};
+use neurosurf_core::curve::DEFAULT_CURVE_POINTS;
+
 use super::least_squares::{Affine, NormalEquations};
 use super::points::MIN_POINTS;
 use super::spline::{BSplineCurve, MIN_CONTROL_POINTS};
@@ -76,6 +78,45 @@ pub fn chord_length_parameters(ordered: &[[f64; 3]], closed: bool) -> Result<Vec
     Ok(t.into_iter().map(|l| l / length).collect())
 }
 
+/// The control points an approximation of `n` points gets by default: n/5, at least 8, at
+/// most what the spline can have (n + 2 open, n closed) and what the core holds
+/// ([`DEFAULT_CURVE_POINTS`]).
+pub fn default_control_points(n: usize, closed: bool) -> usize {
+    let most = if closed { n } else { n + 2 };
+    (n / 5).max(8).min(most).min(DEFAULT_CURVE_POINTS)
+}
+
+/// Refuses, before any training, a curve the core could not hold: `control` control points
+/// asked for with `--control`, or the n + 2 (open) or n (closed) of an interpolation through
+/// `n` points.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming the count, the core's limit and what to change.
+pub fn check_curve_capacity(
+    n: usize,
+    closed: bool,
+    control: Option<usize>,
+    interpolate: bool,
+) -> Result<()> {
+    let limit = DEFAULT_CURVE_POINTS;
+    if let Some(k) = control.filter(|&k| k > limit) {
+        return Err(Error::invalid(format!(
+            "--control {k}: the core holds at most {limit} control points; give --control \
+             {limit} or fewer"
+        )));
+    }
+    let through = if closed { n } else { n + 2 };
+    if interpolate && through > limit {
+        return Err(Error::invalid(format!(
+            "--interpolate through {n} points needs {through} control points, but the core \
+             holds at most {limit}; approximate instead (without --interpolate, --control \
+             {limit} or fewer) or give at most {} points",
+            if closed { limit } else { limit - 2 }
+        )));
+    }
+    Ok(())
+}
+
 /// Least-squares approximation of `ordered` (dimension 2 or 3) by a uniform cubic B-spline
 /// with K control points, at chord-length parameters ([`chord_length_parameters`]).
 /// Open: the ends are interpolated exactly (phantoms, see the module docs), the remaining
@@ -97,7 +138,7 @@ pub fn approximate(
     let most = if closed { n } else { n + 2 };
     let k = options
         .control_points
-        .unwrap_or_else(|| (n / 5).max(8).min(most));
+        .unwrap_or_else(|| default_control_points(n, closed));
     if !(MIN_CONTROL_POINTS..=most).contains(&k) {
         return Err(Error::invalid(format!(
             "{k} control points requested for {n} {} points: use {MIN_CONTROL_POINTS}..={most}",

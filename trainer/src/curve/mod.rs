@@ -66,8 +66,8 @@ pub use blob::{
 };
 pub use convergence::Convergence;
 pub use fit::{
-    Approximation, ApproximationOptions, approximate, chord_length_parameters, interpolate,
-    interpolation_parameter,
+    Approximation, ApproximationOptions, approximate, check_curve_capacity,
+    chord_length_parameters, default_control_points, interpolate, interpolation_parameter,
 };
 pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
 pub use kohonen::{

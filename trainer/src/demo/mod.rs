@@ -39,7 +39,7 @@ use crate::fidelity::{Fidelity, diameter};
 use crate::implicit::{
     self, FitRequest, ImplicitOptions, Outcome, Progress, TrainingSummary, TreeSpec,
 };
-use crate::io::{PlyEncoding, write_atomic, write_points_ply};
+use crate::io::{PlyEncoding, write_points_ply};
 use crate::sample::{Shape, sample_shape};
 use neurosurf_core::scalar::ScalarKind;
 
@@ -143,7 +143,7 @@ pub fn run(
         ] {
             let bytes = implicit::to_blob(&trained.network, Some(summary), scalar)?;
             let path = out_dir.join(format!("{name}-{}.nsb", scalar.name()));
-            write_atomic(&path, &bytes)?;
+            crate::blob::write_checked(&path, &bytes)?;
             blobs.push((path.clone(), bytes.len()));
             let model = LoadedModel::from_bytes(bytes, &path)?;
             let samples = model.evaluate(&held_out.positions, precision)?;

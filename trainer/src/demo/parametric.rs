@@ -17,7 +17,7 @@ use crate::curve::{
 };
 use crate::error::Result;
 use crate::evaluate::{Geometry, LoadedModel, Precision};
-use crate::io::{write_atomic, write_mesh};
+use crate::io::write_mesh;
 
 /// One parametric demo model: how well it was recovered, and how far f32 and Q16.16 are from
 /// its f64 reference.
@@ -52,7 +52,7 @@ fn store_and_measure(
     ] {
         let bytes = blob_for(scalar)?;
         let path = out_dir.join(format!("{name}-{}.nsb", scalar.name()));
-        write_atomic(&path, &bytes)?;
+        crate::blob::write_checked(&path, &bytes)?;
         files.push((path.clone(), bytes.len()));
         let model = LoadedModel::from_bytes(bytes, &path)?;
         let Some(set) = ParameterSet::covering(&model) else {
