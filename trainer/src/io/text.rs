@@ -12,9 +12,10 @@ use super::ply::read_ply_positions;
 ///
 /// A file whose extension is `.ply` (any case), or which starts with the `ply` magic line, is
 /// read as PLY: the `x y z` of its `vertex` element. Anything else is whitespace-separated
-/// text: blank lines and lines whose first non-blank character is `#` are skipped, every
-/// other line holds exactly 3 numbers (`x y z`) or 6 (`x y z nx ny nz`, the normal is
-/// ignored). An empty list is not an error.
+/// text: blank lines and lines whose first non-blank character is `#` are skipped, a first
+/// line of column names (`x y z`, `x,y,z`) is a header, and every other line holds exactly 3
+/// numbers (`x y z`) or 6 (`x y z nx ny nz`, the normal is ignored), separated by white
+/// space, commas or semicolons. An empty list is not an error.
 ///
 /// # Errors
 /// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the line (text) or
@@ -154,6 +155,7 @@ fn parse_rows(
     expected: &str,
 ) -> Result<Vec<Vec<f64>>> {
     let mut rows = Vec::new();
+    let mut first = true;
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line_no = i + 1;
         let err = |message: String| Error::format(path, format!("line {line_no}: {message}"));
@@ -162,8 +164,17 @@ fn parse_rows(
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
+        // Values are separated by white space, commas or semicolons (CSV as spreadsheets
+        // write it); a first line of names only (`x y z`, `x,y,z`) is a header.
+        let tokens: Vec<&str> = line
+            .split(|c: char| c.is_ascii_whitespace() || c == ',' || c == ';')
+            .filter(|t| !t.is_empty())
+            .collect();
+        if std::mem::take(&mut first) && is_header(&tokens) {
+            continue;
+        }
         let mut values = Vec::new();
-        for token in line.split_ascii_whitespace() {
+        for &token in &tokens {
             let value: f64 = token
                 .parse()
                 .map_err(|_| err(format!("'{token}' is not a number")))?;
@@ -180,9 +191,35 @@ fn parse_rows(
     Ok(rows)
 }
 
+/// Whether a line's tokens are column names: none is a number, each starts with a letter.
+fn is_header(tokens: &[&str]) -> bool {
+    !tokens.is_empty()
+        && tokens.iter().all(|t| {
+            t.parse::<f64>().is_err() && t.chars().next().is_some_and(|c| c.is_alphabetic())
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_header_line_and_commas_or_semicolons_are_read() {
+        let text = "x,y,z\n1,2,3\n4, 5, 6\n7;8;9\n";
+        assert_eq!(
+            parse(text).unwrap(),
+            vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]]
+        );
+        assert_eq!(
+            parse("# comment\nx y z nx ny nz\n1 2 3 0 0 1\n").unwrap(),
+            vec![[1.0, 2.0, 3.0]]
+        );
+        // Only the first line may be a header; `nan` and `inf` are numbers, not names.
+        let late = message(parse("1 2 3\nx y z\n").unwrap_err());
+        assert!(late.contains("line 2") && late.contains("'x'"), "{late}");
+        let nan = message(parse("nan 1 2\n").unwrap_err());
+        assert!(nan.contains("finite"), "{nan}");
+    }
 
     fn parse(text: &str) -> Result<Vec<[f64; 3]>> {
         parse_text_points(Path::new("q.txt"), text.as_bytes())
@@ -222,8 +259,8 @@ mod tests {
         assert!(e.contains("line 1") && e.contains("found 7"), "{e}");
         let e = message(parse("1 2 3\n0 nan 0\n").unwrap_err());
         assert!(e.contains("line 2") && e.contains("'nan'"), "{e}");
-        let e = message(parse("1,2,3\n").unwrap_err());
-        assert!(e.contains("line 1") && e.contains("'1,2,3'"), "{e}");
+        let e = message(parse("1,2,3\n4,5,z\n").unwrap_err());
+        assert!(e.contains("line 2") && e.contains("'z'"), "{e}");
         let e = message(parse_text_points(Path::new("q.txt"), b"1 2 3\n\xff 1 2\n").unwrap_err());
         assert!(e.contains("line 2") && e.contains("UTF-8"), "{e}");
     }
