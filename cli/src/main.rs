@@ -9,17 +9,17 @@ mod compare;
 mod curve;
 mod demo;
 mod eval;
+mod implicit;
 mod info;
 mod mesh;
 mod output;
-mod patch;
+mod parametric;
 mod progress;
 mod render;
 mod sample;
 mod sim;
 mod sim_bench;
 mod target;
-mod train;
 
 use std::process::ExitCode;
 
@@ -37,9 +37,10 @@ struct Cli {
 enum Command {
     /// Sample oriented control points from a built-in shape or a mesh file.
     Sample(sample::Args),
-    /// Train a model from control points and write its blob.
-    #[command(subcommand)]
-    Train(train::Command),
+    /// Implicit surfaces (Carcenac): fit a module tree, or the RBF baseline, to oriented
+    /// points and write its blob. (`implicit fit` and `implicit rbf` are the same commands.)
+    #[command(subcommand, alias = "train")]
+    Implicit(implicit::Command),
     /// Cao En surfaces (Wyvill, Cao & Trotman): fit a network to key and target points, mesh
     /// it.
     #[command(subcommand)]
@@ -50,8 +51,9 @@ enum Command {
     Curve(curve::Command),
     /// Parametric surfaces from point sets (Yumer & Kara): sample, embed, fit a surface
     /// network, tessellate, stitch patches, fill holes, bench.
-    #[command(subcommand)]
-    Patch(patch::Command),
+    /// (`patch` is the same command.)
+    #[command(subcommand, alias = "patch")]
+    Parametric(parametric::Command),
     /// Evaluate a model at query points; CSV `x,y,z,phi,gx,gy,gz` on stdout.
     ///
     /// Curves read one parameter t ∈ [0, 1] per line and print `t,x,y,z,tx,ty,tz` (position
@@ -114,10 +116,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Sample(args) => sample::run(&args),
-        Command::Train(command) => train::run(&command),
+        Command::Implicit(command) => implicit::run(&command),
         Command::Caoen(command) => caoen::run(&command),
         Command::Curve(command) => curve::run(&command),
-        Command::Patch(command) => patch::run(&command),
+        Command::Parametric(command) => parametric::run(&command),
         Command::Eval(args) => eval::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Demo(args) => demo::run(&args),

@@ -57,8 +57,8 @@ fn sample_train_eval_info_round_trip() {
         s(&points),
     ]);
     let summary = ok(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&points),
         "--out",
@@ -78,8 +78,8 @@ fn sample_train_eval_info_round_trip() {
     let again = path(dir.path(), "again.nsb");
     let status = std::process::Command::new(env!("CARGO_BIN_EXE_neurosurf"))
         .args([
-            "train",
             "implicit",
+            "fit",
             "--points",
             s(&points),
             "--out",
@@ -150,8 +150,8 @@ fn head_trains_with_its_three_features_and_warm_starts() {
     let again = path(dir.path(), "again.nsb");
     ok(&["sample", "head", "--points", "99", "--out", s(&points)]);
     let first = ok(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&points),
         "--tree",
@@ -164,8 +164,8 @@ fn head_trains_with_its_three_features_and_warm_starts() {
     assert_eq!(first["training"]["modules"].as_array().unwrap().len(), 5);
     // The same points from the trained model: almost nothing left to learn.
     let second = ok(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&points),
         "--init",
@@ -218,8 +218,8 @@ fn automatic_features_split_an_unlabelled_shape() {
     ]);
     assert!(short.contains("expected 3"), "{short}");
     let out = ok(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&points),
         "--features",
@@ -236,8 +236,8 @@ fn automatic_features_split_an_unlabelled_shape() {
     // the blob already written is kept.
     let before = fs::read(&model).unwrap();
     let err = fails(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&points),
         "--features",
@@ -253,8 +253,8 @@ fn automatic_features_split_an_unlabelled_shape() {
     assert_eq!(fs::read(&model).unwrap(), before);
     // An absurd option value is named.
     let err = fails(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&points),
         "--offset",
@@ -273,8 +273,8 @@ fn bad_inputs_get_clear_errors_and_leave_outputs_alone() {
     fs::write(&model, b"precious").unwrap();
     let train = |points: &Path| {
         fails(&[
-            "train",
             "implicit",
+            "fit",
             "--points",
             s(points),
             "--out",
@@ -349,8 +349,8 @@ fn bad_inputs_get_clear_errors_and_leave_outputs_alone() {
     let head = path(dir.path(), "head.ply");
     ok(&["sample", "head", "--points", "99", "--out", s(&head)]);
     let err = fails(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&head),
         "--tree",
@@ -363,8 +363,8 @@ fn bad_inputs_get_clear_errors_and_leave_outputs_alone() {
     let junk = path(dir.path(), "junk.nsb");
     fs::write(&junk, b"NSRF but not really").unwrap();
     let err = fails(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&head),
         "--init",
@@ -374,8 +374,8 @@ fn bad_inputs_get_clear_errors_and_leave_outputs_alone() {
     ]);
     assert!(err.contains("junk.nsb"), "{err}");
     let err = fails(&[
-        "train",
         "implicit",
+        "fit",
         "--points",
         s(&head),
         "--init",
@@ -445,4 +445,17 @@ fn info_counts_the_nodes_normalization_and_position_inputs() {
         err.contains("blob format version 1 is not supported (this core reads 2)"),
         "{err}"
     );
+}
+
+#[test]
+fn the_old_command_names_still_work() {
+    // One name per paper (`implicit`, `parametric`), the old verbs kept as aliases.
+    for args in [
+        ["train", "implicit", "--help"],
+        ["train", "rbf", "--help"],
+        ["patch", "fit", "--help"],
+    ] {
+        let help = ok(&args);
+        assert!(help.contains("Usage"), "{args:?}: {help}");
+    }
 }

@@ -1,4 +1,4 @@
-//! The RBF baseline from the command line, as a user would run it: sample → `train rbf` →
+//! The RBF baseline from the command line, as a user would run it: sample → `implicit rbf` →
 //! `info`, `eval`, `render` and `mesh` of the RBF blob, and the errors for what an RBF cannot do.
 
 mod common;
@@ -27,7 +27,7 @@ fn an_rbf_blob_trains_renders_and_meshes() {
         s(&points),
     ]);
     let summary = ok(&[
-        "train",
+        "implicit",
         "rbf",
         "--points",
         s(&points),
@@ -155,7 +155,7 @@ fn the_biharmonic_kernel_and_relative_settings_from_the_command_line() {
         s(&points),
     ]);
     let summary = ok(&[
-        "train",
+        "implicit",
         "rbf",
         "--points",
         s(&points),
@@ -176,10 +176,17 @@ fn the_biharmonic_kernel_and_relative_settings_from_the_command_line() {
         report["diagonal"].as_f64().unwrap(),
     );
     assert!((epsilon - 0.02 * diagonal).abs() < 1e-12, "{summary}");
-    let text = ok(&["train", "rbf", "--points", s(&points), "--out", s(&model)]);
+    let text = ok(&[
+        "implicit",
+        "rbf",
+        "--points",
+        s(&points),
+        "--out",
+        s(&model),
+    ]);
     assert!(text.contains("multiquadric RBF on 60 points"), "{text}");
     let e = fails(&[
-        "train",
+        "implicit",
         "rbf",
         "--points",
         s(&points),

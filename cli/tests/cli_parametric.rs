@@ -1,4 +1,4 @@
-//! `neurosurf patch …` run as a user would: sample points on a known surface, embed them, fit
+//! `neurosurf parametric …` run as a user would: sample points on a known surface, embed them, fit
 //! a surface network, tessellate it both ways, evaluate the blob on the host and on the
 //! simulated Cortex-M4F (which must print exactly what the host prints), stitch two patches
 //! and fill a hole. Bad point sets fail with a message naming the problem and write nothing.
@@ -26,7 +26,7 @@ fn points_to_network_to_meshes_and_the_target_agrees() {
         dir.path().join("wavy.nsb"),
     );
     ok(&[
-        "patch",
+        "parametric",
         "sample",
         "wavy",
         "--points",
@@ -37,7 +37,7 @@ fn points_to_network_to_meshes_and_the_target_agrees() {
         s(&points),
     ]);
     let embedded = json(&ok(&[
-        "patch",
+        "parametric",
         "embed",
         s(&points),
         "--out",
@@ -47,7 +47,7 @@ fn points_to_network_to_meshes_and_the_target_agrees() {
     assert_eq!(embedded["points"], 300);
     assert_eq!(fs::read_to_string(&uv).unwrap().lines().count(), 300);
     let fit = json(&ok(&[
-        "patch",
+        "parametric",
         "fit",
         s(&points),
         "--parameters",
@@ -73,7 +73,7 @@ fn points_to_network_to_meshes_and_the_target_agrees() {
     for (method, out, resolution) in [("coons", "grid.obj", "20"), ("delaunay", "tri.ply", "20")] {
         let mesh = dir.path().join(out);
         let report = json(&ok(&[
-            "patch",
+            "parametric",
             "tessellate",
             s(&blob),
             "--parameters",
@@ -105,7 +105,7 @@ fn points_to_network_to_meshes_and_the_target_agrees() {
     // Without parameters: the trained (u, v) box.
     let boxed = dir.path().join("box.obj");
     let report = json(&ok(&[
-        "patch",
+        "parametric",
         "tessellate",
         s(&blob),
         "--resolution",
@@ -149,7 +149,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         dir.path().join("top.obj"),
     );
     ok(&[
-        "patch",
+        "parametric",
         "sample",
         "plane",
         "--points",
@@ -158,7 +158,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         s(&points),
     ]);
     ok(&[
-        "patch",
+        "parametric",
         "fit",
         s(&points),
         "--max-neurons",
@@ -167,7 +167,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         s(&blob),
     ]);
     ok(&[
-        "patch",
+        "parametric",
         "tessellate",
         s(&blob),
         "--resolution",
@@ -194,7 +194,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
     fs::write(&bottom, lifted).unwrap();
     let stitched = dir.path().join("pillow.ply");
     let report = json(&ok(&[
-        "patch",
+        "parametric",
         "stitch",
         s(&top),
         s(&bottom),
@@ -206,7 +206,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
     assert_eq!(report["gap_after"], 0.0);
     assert!((report["gap_before"].as_f64().unwrap() - 0.05).abs() < 1e-6);
     let e = fails(&[
-        "patch",
+        "parametric",
         "stitch",
         s(&top),
         s(&bottom),
@@ -222,7 +222,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
     };
     let filled = dir.path().join("filled.obj");
     let report = json(&ok(&[
-        "patch",
+        "parametric",
         "fill-hole",
         s(&fandisk),
         "--punch",
@@ -236,7 +236,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         (Some(1), Some(true))
     );
     assert!(report["new_vertices"].as_u64().unwrap() > 5, "{report}");
-    let e = fails(&["patch", "fill-hole", s(&fandisk), "--out", s(&filled)]);
+    let e = fails(&["parametric", "fill-hole", s(&fandisk), "--out", s(&filled)]);
     assert!(e.contains("has no holes"), "{e}");
 }
 
@@ -263,7 +263,7 @@ fn bad_point_sets_fail_clearly_and_write_nothing() {
     let duplicate = write("dup.txt", grid.clone() + "2 3 0.1\n");
     let sphere = dir.path().join("sphere.txt");
     ok(&[
-        "patch",
+        "parametric",
         "sample",
         "sphere",
         "--points",
@@ -277,13 +277,13 @@ fn bad_point_sets_fail_clearly_and_write_nothing() {
         (&duplicate, "coincide"),
         (&sphere, "cannot flatten"),
     ] {
-        let e = fails(&["patch", "embed", s(points), "--out", s(&out)]);
+        let e = fails(&["parametric", "embed", s(points), "--out", s(&out)]);
         assert!(e.contains(expected), "{}: {e}", points.display());
         let blob = dir.path().join("x.nsb");
-        let e = fails(&["patch", "fit", s(points), "--out", s(&blob)]);
+        let e = fails(&["parametric", "fit", s(points), "--out", s(&blob)]);
         assert!(e.contains(expected), "{}: {e}", points.display());
         assert!(!out.exists() && !blob.exists());
     }
-    let e = fails(&["patch", "tessellate", s(&line), "--out", s(&out)]);
+    let e = fails(&["parametric", "tessellate", s(&line), "--out", s(&out)]);
     assert!(e.contains(s(&line)), "{e}");
 }

@@ -1,4 +1,4 @@
-//! `neurosurf patch`: Yumer & Kara's parametric surfaces from point sets — sample test data,
+//! `neurosurf parametric`: Yumer & Kara's parametric surfaces from point sets — sample test data,
 //! embed points in the plane, fit a surface network, tessellate it, stitch patches, fill holes,
 //! and time the pipeline (Table 2).
 //!
@@ -247,7 +247,7 @@ fn embed(args: &EmbedArgs) -> Result<()> {
 pub struct FitArgs {
     /// Points: text (`x y z` per line), PLY, or OBJ (its vertices).
     points: PathBuf,
-    /// Their parameters (`u v` per line, same order; e.g. from `patch embed`). Without it the
+    /// Their parameters (`u v` per line, same order; e.g. from `parametric embed`). Without it the
     /// points are embedded first.
     #[arg(long, value_name = "FILE")]
     parameters: Option<PathBuf>,
@@ -271,7 +271,7 @@ pub struct FitArgs {
     /// Output blob.
     #[arg(long)]
     out: PathBuf,
-    /// Also write the parameters used (`u v` per line), for `patch tessellate`.
+    /// Also write the parameters used (`u v` per line), for `parametric tessellate`.
     #[arg(long, value_name = "FILE")]
     parameters_out: Option<PathBuf>,
     /// Print the summary as JSON.

@@ -1,4 +1,4 @@
-//! `neurosurf train implicit|rbf`: control points in, blob out.
+//! `neurosurf implicit fit|rbf`: control points in, blob out.
 
 use std::path::{Path, PathBuf};
 
@@ -18,8 +18,9 @@ use super::{output, progress};
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Carcenac's modular implicit surface: a tree of small MLP modules trained by
-    /// Levenberg–Marquardt (defaults: the paper's Table 1).
-    Implicit(ImplicitArgs),
+    /// Levenberg–Marquardt (defaults: the paper's Table 1). (`implicit` is the same command.)
+    #[command(alias = "implicit")]
+    Fit(ImplicitArgs),
     /// The RBF baseline (Carcenac §9's multiquadric, or the biharmonic): Hermite-style
     /// off-surface points on both sides, lengths relative to the bounding diagonal, one dense
     /// solve; host-only model (`render` and `mesh` draw it).
@@ -166,7 +167,7 @@ pub struct RbfArgs {
 
 pub fn run(command: &Command) -> Result<()> {
     match command {
-        Command::Implicit(args) => implicit(args),
+        Command::Fit(args) => implicit(args),
         Command::Rbf(args) => rbf(args),
     }
 }
