@@ -522,17 +522,3 @@ fn svg_plots_are_written_atomically() {
     let error = write_plot(&dir.path().join("trefoil.gif"), &layers, &options).unwrap_err();
     assert!(message(error).contains(".svg or .png"));
 }
-
-/// The standard benchmark; run with `cargo test --release -p neurosurf-trainer --lib
-/// curve::tests::standard_benchmark -- --ignored --nocapture`.
-#[test]
-#[ignore = "timing, run on demand in release"]
-fn standard_benchmark() {
-    for row in benchmark(&BENCHMARK_SIZES, 0).unwrap() {
-        println!(
-            "n = {:5}, m = {:5}, {:7} presentations, {:.3} s",
-            row.points, row.neurons, row.iterations, row.seconds
-        );
-        assert!(row.seconds < 3.0, "{row:?}");
-    }
-}

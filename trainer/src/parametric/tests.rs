@@ -402,46 +402,6 @@ fn comparison_network_is_smoother_than_interpolation() {
 }
 
 #[test]
-#[ignore = "timing run: cargo test --release -p neurosurf-trainer --lib parametric::tests::benchmark_table -- --ignored --nocapture"]
-fn benchmark_table() {
-    let mesh = io::read_mesh(&io::data_file("stanford-bunny.obj").unwrap()).unwrap();
-    eprintln!(
-        "| points | source | embedding (s) | fitting (s) | total (s) | eigen it. | network | rel. RMS |"
-    );
-    for size in BENCHMARK_SIZES {
-        let options = (LleOptions::default(), TopologyOptions::default());
-        let r = match benchmark(&mesh, BACK_SEED, &[size], &options.0, &options.1) {
-            Ok(rows) => rows[0].clone(),
-            Err(e) => {
-                // Time the embedding alone, without the fold check, for the record.
-                let (points, source) = back_patch_points(&mesh, BACK_SEED, size).unwrap();
-                let start = std::time::Instant::now();
-                let unchecked = LleOptions {
-                    check_folds: false,
-                    ..options.0
-                };
-                let lle = embed_points(&points, &unchecked).map(|e| e.iterations);
-                let seconds = start.elapsed().as_secs_f64();
-                eprintln!("| {size} | {source} | {seconds:.3} | — | — | {lle:?} | error: {e} |");
-                continue;
-            }
-        };
-        eprintln!(
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {} | {}×{} | {:.2e} |",
-            r.points,
-            r.source,
-            r.embedding_seconds,
-            r.fitting_seconds,
-            r.embedding_seconds + r.fitting_seconds,
-            r.eigen_iterations,
-            r.layers,
-            r.neurons,
-            r.relative_rms_error
-        );
-    }
-}
-
-#[test]
 fn bunny_back_patch_flattens() {
     let Ok(path) = io::data_file("stanford-bunny.obj") else {
         eprintln!("stanford-bunny.obj not found: skipped");

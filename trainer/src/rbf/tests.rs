@@ -213,16 +213,6 @@ fn torus_336_fidelity() {
     assert!(report.max_residual < 1e-10);
 }
 
-/// Prints the fidelity and solve time for Carcenac's Table 5 point counts; run with
-/// `cargo test --release -p neurosurf-trainer rbf::tests::table -- --ignored --nocapture`.
-#[test]
-#[ignore = "timing table; run in release"]
-fn table() {
-    for n in [48, 96, 160, 336, 576] {
-        torus_fidelity(n);
-    }
-}
-
 #[test]
 fn rejects_bad_input() {
     let options = RbfOptions::default();
@@ -824,42 +814,4 @@ fn rbf_field_evaluates_in_parallel_with_exact_gradients() {
         );
     }
     assert!(RbfField::new(&model, 0.5).is_err());
-}
-
-/// Fits 1 500 points of the bunny and measures the surface against the scan; run with
-/// `cargo test --release -p neurosurf-trainer rbf::tests::bunny_quality -- --ignored --nocapture`.
-#[test]
-#[ignore = "timing and quality on the bunny; run in release"]
-fn bunny_quality() {
-    use crate::quality::{Truth, two_sided};
-    use crate::render::{DEFAULT_RBF_INFLATE, RbfField};
-
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/stanford-bunny.obj");
-    let mesh = crate::io::read_mesh(&path).unwrap();
-    let truth = Truth::from_mesh(&mesh).unwrap();
-    let points = crate::sample::sample_mesh(&mesh, 1500, 1).unwrap();
-    for kernel in [RbfKernel::Multiquadric, RbfKernel::Biharmonic] {
-        let options = RbfOptions {
-            kernel,
-            ..RbfOptions::default()
-        };
-        let (model, report) = fit(&points, &options).unwrap();
-        println!("bunny 1500 {kernel:?}: {report:?}");
-        let field = RbfField::new(&model, DEFAULT_RBF_INFLATE).unwrap();
-        let start = std::time::Instant::now();
-        let measured = two_sided(&field, &truth, 128, 64).unwrap();
-        println!(
-            "  scan vertices → RBF surface: median {:.4} % of D, p90 {:.4} %, max {:.3} %; \
-             RBF surface → scan: median {:.4} %, max {:.3} %; normals {:.2}°; {} pieces; \
-             measured in {:.1} s\n  {measured:?}",
-            measured.truth_to_model.median_percent,
-            measured.truth_to_model.p90_percent,
-            measured.truth_to_model.max_percent,
-            measured.model_to_truth.median_percent,
-            measured.model_to_truth.max_percent,
-            measured.normal_median_degrees,
-            measured.mesh.components,
-            start.elapsed().as_secs_f64()
-        );
-    }
 }

@@ -561,18 +561,6 @@ pub(crate) fn normal_equations(
     (normal, gradient)
 }
 
-/// Fastest of `reps` runs of `f`, in milliseconds (for timing probes; the machine is shared).
-#[cfg(test)]
-pub(crate) fn best_ms(reps: usize, mut f: impl FnMut()) -> f64 {
-    (0..reps)
-        .map(|_| {
-            let t = std::time::Instant::now();
-            f();
-            t.elapsed().as_secs_f64() * 1e3
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -735,46 +723,5 @@ mod tests {
             a[0] = 0.0;
             assert!(!cholesky(&mut a, 4, fma));
         }
-    }
-
-    #[test]
-    #[ignore = "timing probe"]
-    fn normal_equations_probe() {
-        let (ns, p) = (2304, 136);
-        let (j, e) = sample_jacobian(ns, p);
-        let mut sums = NormalEquations::new(p);
-        let ms = best_ms(200, || {
-            sums.clear();
-            sums.add_jacobian(&j, &e);
-            sums.finish();
-        });
-        eprintln!(
-            "JᵀJ {ns}×{p}: {ms:.3} ms, {:.2} GFMA/s (lower triangle)",
-            (ns * p * (p + 1) / 2) as f64 / ms * 1e-6
-        );
-        let a: Vec<f64> = (0..p * p)
-            .map(|k| sums.gram(k / p, k % p) / ns as f64)
-            .collect();
-        let mut l = vec![0.0; p * p];
-        let b = vec![1.0; p];
-        let mut x = vec![0.0; p];
-        let ms_copy = best_ms(2000, || {
-            l.copy_from_slice(&a);
-            for i in 0..p {
-                l[i * p + i] += 1e-3;
-            }
-        });
-        let ms = best_ms(2000, || {
-            l.copy_from_slice(&a);
-            for i in 0..p {
-                l[i * p + i] += 1e-3;
-            }
-            assert!(cholesky(&mut l, p, sums.fma));
-        });
-        let ms_solve = best_ms(2000, || cholesky_solve(&l, p, &b, &mut x));
-        eprintln!(
-            "copy {ms_copy:.3} ms, cholesky {:.3} ms, solve {ms_solve:.3} ms",
-            ms - ms_copy
-        );
     }
 }
