@@ -5,6 +5,7 @@
 //! firmware's flash, RAM and stack.
 
 use neurosurf_trainer::geometry::vector::inner;
+use neurosurf_trainer::io::write_atomic;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -45,6 +46,12 @@ pub struct Args {
     /// Print JSON instead of the tables.
     #[arg(long)]
     json: bool,
+    /// Write the report as Markdown to this file (`docs/performance/target.md`).
+    #[arg(long, value_name = "FILE")]
+    markdown: Option<PathBuf>,
+    /// With `--markdown`: write nothing, fail unless the file matches this run.
+    #[arg(long, requires = "markdown")]
+    check: bool,
 }
 
 /// A model to measure: its blob for each scalar, its evaluation points (or parameters), and
@@ -158,7 +165,28 @@ pub fn run(args: &Args) -> Result<()> {
     if args.json {
         return output::json(&bench);
     }
-    print(&bench);
+    if let Some(path) = &args.markdown {
+        let text = report(&bench, true);
+        if args.check {
+            let committed = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            if committed != text {
+                anyhow::bail!(
+                    "{} does not match this run; regenerate it with `neurosurf sim-bench \
+                     --markdown {}` and commit it (a change of instruction counts or stack \
+                     is a change of the core or the firmware)",
+                    path.display(),
+                    path.display()
+                );
+            }
+            println!("{} matches this run", path.display());
+            return Ok(());
+        }
+        write_atomic(path, text.as_bytes())?;
+        println!("wrote {}", path.display());
+        return Ok(());
+    }
+    print!("{}", report(&bench, false));
     Ok(())
 }
 
@@ -416,11 +444,29 @@ fn ratios(rows: &[Row]) -> Vec<Ratio> {
         .collect()
 }
 
-fn print(bench: &Bench) {
-    println!(
-        "cost of one evaluation on the simulated Cortex-M4F ({}), {POINTS} points (or parameters) per run\n",
+/// The report: the cost table, the Q16.16 ÷ f32 ratios and the firmware's footprint, as
+/// aligned text or (for `--markdown`, a page of `docs/performance/`) Markdown.
+fn report(bench: &Bench, markdown: bool) -> String {
+    let render = |t: &Table| {
+        if markdown {
+            t.to_markdown()
+        } else {
+            t.to_text()
+        }
+    };
+    let mut out = String::new();
+    if markdown {
+        out.push_str(
+            "# The core on the simulated Cortex-M4F\n\nWritten by `neurosurf sim-bench --markdown \
+             docs/performance/target.md`; `scripts/test.sh` checks that the file matches a fresh \
+             run (instruction counts are exact and repeatable). ",
+        );
+    }
+    out.push_str(&format!(
+        "Cost of one evaluation on the simulated Cortex-M4F ({}), {POINTS} points (or parameters) \
+         per run.\n\n",
         bench.machine
-    );
+    ));
     let mut table = Table::new([
         ("model", Align::Left),
         ("scalar", Align::Left),
@@ -443,7 +489,7 @@ fn print(bench: &Bench) {
             r.stack_bytes.to_string(),
         ]);
     }
-    print!("{table}");
+    out.push_str(&render(&table));
     let mut ratios = Table::new([
         ("model", Align::Left),
         ("op", Align::Left),
@@ -458,17 +504,18 @@ fn print(bench: &Bench) {
             format!("{:.2}", r.q16_over_f32),
         ]);
     }
-    println!();
-    print!("{ratios}");
+    out.push('\n');
+    out.push_str(&render(&ratios));
     let f = &bench.footprint;
-    println!(
-        "\nfirmware: flash {} of {} bytes ({:.1} %), static RAM {} of {} bytes ({:.1} %); \
-         the stack column is each run's high-water mark",
+    out.push_str(&format!(
+        "\nFirmware: flash {} of {} bytes ({:.1} %), static RAM {} of {} bytes ({:.1} %); \
+         the stack column is each run's high-water mark.\n",
         f.flash_bytes,
         f.flash_budget,
         100.0 * f.flash_bytes as f64 / f.flash_budget as f64,
         f.static_ram_bytes,
         f.ram_budget,
         100.0 * f.static_ram_bytes as f64 / f.ram_budget as f64
-    );
+    ));
+    out
 }

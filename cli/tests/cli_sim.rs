@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{fails, ok};
+use common::{fails, neurosurf, ok};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -304,5 +304,19 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
     let footprint = &bench["footprint"];
     assert!(
         footprint["flash_bytes"].as_u64().unwrap() < footprint["flash_budget"].as_u64().unwrap()
+    );
+}
+
+/// `docs/performance/target.md` is what `sim-bench` measures now: instruction counts and
+/// stack on the target are exact, so any difference is a change of the core or the firmware,
+/// to be regenerated and committed with it.
+#[test]
+fn the_committed_target_table_matches_a_fresh_run() {
+    let table = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/performance/target.md");
+    let out = neurosurf(&["sim-bench", "--markdown", s(&table), "--check"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
     );
 }
