@@ -10,7 +10,7 @@ use std::path::Path;
 use neurosurf_core::BlobError;
 use neurosurf_core::blob::ModelKind;
 use neurosurf_core::curve::{self as core_curve, CurvePayload, SurfacePayload};
-use neurosurf_core::scalar::{Q16, ScalarKind};
+use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use serde::{Deserialize, Serialize};
 
 use super::spline::{BSplineCurve, BSplineSurface};
@@ -63,7 +63,7 @@ pub struct DecodedSurface {
 ///
 /// # Errors
 /// [`Error::InvalidInput`] when the curve is invalid, a coordinate cannot be stored in
-/// `scalar` (Q16.16 holds ±32 767), or the core would not load the result (more control
+/// `scalar` (the core loads Q16.16 values up to ±1024), or the core would not load the result (more control
 /// points than its default capacity of [`core_curve::DEFAULT_CURVE_POINTS`]).
 pub fn curve_to_blob(
     curve: &BSplineCurve,
@@ -183,9 +183,26 @@ pub fn surface_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedSurface> {
 }
 
 fn encode_control(control: &[[f64; 3]], scalar: ScalarKind) -> Result<Vec<u8>> {
+    // What the core accepts of a stored parameter in this scalar (Q16.16: ±1024, so that its
+    // accumulators provably cannot overflow).
+    let limit = match scalar {
+        ScalarKind::Q16_16 => f64::from(<Q16 as Scalar>::MAX_PARAMETER),
+        _ => f64::from(<f32 as Scalar>::MAX_PARAMETER),
+    };
+    let largest = control.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut out = Vec::with_capacity(control.len() * 12);
     for (index, point) in control.iter().enumerate() {
         for &c in point {
+            if c.is_finite() && c.abs() > limit {
+                return Err(Error::invalid(format!(
+                    "control point {index} {point:?} has a coordinate beyond ±{limit}, the \
+                     largest {} value the core loads (the largest here is {largest:.4e}); store \
+                     it as f32 (--scalar f32), or scale the points by at most {:.4e} \
+                     before fitting",
+                    scalar.name(),
+                    limit / largest
+                )));
+            }
             let word = scalar.encode(c).ok_or_else(|| {
                 Error::invalid(format!(
                     "control point {index} {point:?} cannot be stored as {}",
@@ -298,11 +315,26 @@ mod tests {
 
     #[test]
     fn coordinates_outside_q16_and_over_capacity_curves_are_refused_clearly() {
-        let mut far = curve();
-        far.control[2][0] = 40_000.0;
-        let error = curve_to_blob(&far, None, ScalarKind::Q16_16).unwrap_err();
-        assert!(error.to_string().contains("control point 2"), "{error}");
-        assert!(curve_to_blob(&far, None, ScalarKind::F32).is_ok());
+        for beyond in [1_500.0, 40_000.0] {
+            let mut far = curve();
+            far.control[2][0] = beyond;
+            let error = curve_to_blob(&far, None, ScalarKind::Q16_16)
+                .unwrap_err()
+                .to_string();
+            // The coordinate, the limit and both fixes are named.
+            for part in [
+                "control point 2",
+                "±1024",
+                "--scalar f32",
+                "scale the points",
+            ] {
+                assert!(error.contains(part), "{part}: {error}");
+            }
+            assert!(curve_to_blob(&far, None, ScalarKind::F32).is_ok());
+        }
+        let mut edge = curve();
+        edge.control[2][0] = 1_024.0;
+        assert!(curve_to_blob(&edge, None, ScalarKind::Q16_16).is_ok());
 
         let long = BSplineCurve {
             dimension: 3,
