@@ -1,5 +1,8 @@
 //! Running the `neurosurf` binary from tests.
 
+// Each test file uses a subset of these helpers.
+#![allow(dead_code)]
+
 use std::process::{Command, Output};
 
 /// Runs `neurosurf` with `args`.

@@ -1,0 +1,155 @@
+//! Bad input, command by command, from one table: every command that reads a file is given a
+//! missing file, an empty file, bytes that are not its format, and (where it reads numbers)
+//! a NaN and a degenerate point set. Each must fail with exit code 1, an `error:` line that
+//! names the file, no panic, and no output written (an existing output is kept).
+
+mod common;
+
+use std::fs;
+use std::path::Path;
+
+use common::neurosurf;
+
+/// A command reading `{in}` and writing `{out}` (when it writes a file).
+struct Command {
+    args: &'static [&'static str],
+    /// Whether it reads numbers as text (NaN and degenerate inputs apply).
+    text_points: bool,
+}
+
+const COMMANDS: &[Command] = &[
+    Command {
+        args: &["sample", "{in}", "--points", "50", "--out", "{out}"],
+        text_points: false,
+    },
+    Command {
+        args: &["implicit", "fit", "--points", "{in}", "--out", "{out}"],
+        text_points: false,
+    },
+    Command {
+        args: &["implicit", "rbf", "--points", "{in}", "--out", "{out}"],
+        text_points: false,
+    },
+    Command {
+        args: &["caoen", "fit", "{in}", "--out", "{out}"],
+        text_points: true,
+    },
+    Command {
+        args: &[
+            "caoen", "fit-mesh", "{in}", "--keys", "20", "--out", "{out}",
+        ],
+        text_points: false,
+    },
+    Command {
+        args: &[
+            "caoen", "image", "compress", "{in}", "--keys", "16", "--out", "{out}",
+        ],
+        text_points: false,
+    },
+    Command {
+        args: &["curve", "fit", "{in}", "--out", "{out}"],
+        text_points: true,
+    },
+    Command {
+        args: &["curve", "surface", "{in}", "--out", "{out}"],
+        text_points: true,
+    },
+    Command {
+        args: &["parametric", "embed", "{in}", "--out", "{out}"],
+        text_points: true,
+    },
+    Command {
+        args: &["parametric", "fit", "{in}", "--out", "{out}"],
+        text_points: true,
+    },
+    Command {
+        args: &["info", "{in}"],
+        text_points: false,
+    },
+    Command {
+        args: &["mesh", "{in}", "--out", "{out}"],
+        text_points: false,
+    },
+    Command {
+        args: &["render", "{in}", "--out", "{out}"],
+        text_points: false,
+    },
+    Command {
+        args: &["compare", "{in}"],
+        text_points: false,
+    },
+    Command {
+        args: &["parametric", "tessellate", "{in}", "--out", "{out}"],
+        text_points: false,
+    },
+];
+
+/// Runs `command` on `input` and checks that it fails cleanly; `case` names the input.
+fn refused(command: &Command, input: &Path, out: &Path, case: &str) {
+    fs::write(out, b"precious").unwrap();
+    let args: Vec<String> = command
+        .args
+        .iter()
+        .map(|a| {
+            a.replace("{in}", input.to_str().unwrap())
+                .replace("{out}", out.to_str().unwrap())
+        })
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let output = neurosurf(&args);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let what = format!("{case}: neurosurf {}", command.args.join(" "));
+    assert_eq!(output.status.code(), Some(1), "{what} exit: {stderr}");
+    assert!(stderr.starts_with("error: "), "{what}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{what}: {stderr}");
+    let name = input.file_name().unwrap().to_str().unwrap();
+    assert!(
+        stderr.contains(name),
+        "{what} does not name {name}: {stderr}"
+    );
+    assert_eq!(
+        fs::read(out).unwrap(),
+        b"precious",
+        "{what} touched its output"
+    );
+}
+
+#[test]
+fn every_command_refuses_bad_files_by_name_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.bin");
+    for (index, command) in COMMANDS.iter().enumerate() {
+        // The file extension some readers dispatch on.
+        let ext = match command.args[0] {
+            "sample" => "obj",
+            "implicit" => "ply",
+            "caoen" if command.args[1] == "fit-mesh" => "obj",
+            "caoen" if command.args[1] == "image" => "png",
+            "info" | "mesh" | "render" | "compare" => "nsb",
+            "parametric" if command.args[1] == "tessellate" => "nsb",
+            _ => "txt",
+        };
+        let missing = dir.path().join(format!("missing-{index}.{ext}"));
+        refused(command, &missing, &out, "a missing file");
+        let empty = dir.path().join(format!("empty-{index}.{ext}"));
+        fs::write(&empty, b"").unwrap();
+        refused(command, &empty, &out, "an empty file");
+        let garbage = dir.path().join(format!("garbage-{index}.{ext}"));
+        fs::write(&garbage, b"\x00\x01not this format\xff\xfe 1 2\n").unwrap();
+        refused(command, &garbage, &out, "garbage");
+        if command.text_points {
+            let nan = dir.path().join(format!("nan-{index}.txt"));
+            let mut text = String::new();
+            for i in 0..40 {
+                let t = f64::from(i) * 0.3;
+                text.push_str(&format!("{} {} {}\n", t.cos(), t.sin(), 0.1 * t));
+            }
+            text.push_str("0.5 nan 0.1\n");
+            fs::write(&nan, text).unwrap();
+            refused(command, &nan, &out, "a NaN");
+            let same = dir.path().join(format!("same-{index}.txt"));
+            fs::write(&same, "0.5 0.5 0.5\n".repeat(40)).unwrap();
+            refused(command, &same, &out, "forty copies of one point");
+        }
+    }
+}
