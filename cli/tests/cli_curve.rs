@@ -303,3 +303,44 @@ fn curves_beyond_the_core_are_refused_before_training_and_large_sets_fit_by_defa
     assert_eq!(fit["control_points"], 512, "{fit}");
     assert!(model.exists());
 }
+
+#[test]
+fn spline_surfaces_beyond_the_core_are_refused_before_training() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("wavy.txt");
+    ok(&[
+        "parametric",
+        "sample",
+        "wavy",
+        "--points",
+        "200",
+        "--out",
+        s(&points),
+    ]);
+    let out = dir.path().join("s.nsb");
+    let error = fails(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--control",
+        "33,32",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        error.contains("--control 33,32") && error.contains("1056") && error.contains("1024"),
+        "{error}"
+    );
+    assert!(!out.exists());
+    // 32 × 32 is exactly what the core holds.
+    ok(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--control",
+        "32,32",
+        "--out",
+        s(&out),
+    ]);
+    assert!(out.exists());
+}

@@ -287,3 +287,35 @@ fn bad_point_sets_fail_clearly_and_write_nothing() {
     let e = fails(&["parametric", "tessellate", s(&line), "--out", s(&out)]);
     assert!(e.contains(s(&line)), "{e}");
 }
+
+#[test]
+fn network_sizes_beyond_the_core_are_refused_before_fitting() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("wavy.txt");
+    ok(&[
+        "parametric",
+        "sample",
+        "wavy",
+        "--points",
+        "200",
+        "--out",
+        s(&points),
+    ]);
+    let out = dir.path().join("n.nsb");
+    for (flag, value, limit) in [("--max-neurons", "33", "32"), ("--max-layers", "5", "4")] {
+        let error = fails(&[
+            "parametric",
+            "fit",
+            s(&points),
+            flag,
+            value,
+            "--out",
+            s(&out),
+        ]);
+        assert!(
+            error.contains(flag) && error.contains(value) && error.contains(limit),
+            "{error}"
+        );
+    }
+    assert!(!out.exists());
+}

@@ -70,6 +70,15 @@ pub struct SurfaceFit {
 /// As [`train_map`] and the least-squares fit (bad control counts or smoothing, a singular
 /// system).
 pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<SurfaceFit> {
+    let (u, v) = (options.control_u, options.control_v);
+    let limit = neurosurf_core::curve::DEFAULT_SURFACE_POINTS;
+    if u.saturating_mul(v) > limit {
+        return Err(Error::invalid(format!(
+            "--control {u},{v} asks for {} control points, but the core holds at most {limit}; \
+             give U·V ≤ {limit} (for example --control 32,32)",
+            u.saturating_mul(v)
+        )));
+    }
     let (map, map_report) = train_map(points, &options.map)?;
     let mut parameters = map_parameters(points, &map)?;
     let fit = |parameters: &[[f64; 2]]| {
