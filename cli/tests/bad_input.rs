@@ -153,3 +153,131 @@ fn every_command_refuses_bad_files_by_name_and_writes_nothing() {
         }
     }
 }
+
+/// Numeric options at 0, negative and 10⁹: each is refused by name (or by the argument parser
+/// as not a number), without a panic and without writing.
+#[test]
+fn absurd_option_values_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let torus = dir.path().join("torus.ply");
+    let ok = neurosurf(&[
+        "sample",
+        "torus",
+        "--points",
+        "96",
+        "--out",
+        torus.to_str().unwrap(),
+    ]);
+    assert!(ok.status.success());
+    let model = dir.path().join("torus.nsb");
+    let fitted = neurosurf(&[
+        "implicit",
+        "fit",
+        "--points",
+        torus.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(fitted.status.success());
+    let ring = dir.path().join("ring.txt");
+    let text: String = (0..200)
+        .map(|i| {
+            let t = f64::from(i) * 0.0314;
+            format!("{} {}\n", t.cos(), t.sin())
+        })
+        .collect();
+    fs::write(&ring, text).unwrap();
+    let spot = format!("{}/../data/spot.obj", env!("CARGO_MANIFEST_DIR"));
+    let out = dir.path().join("out.bin");
+    let (torus, model, ring) = (
+        torus.to_str().unwrap(),
+        model.to_str().unwrap(),
+        ring.to_str().unwrap(),
+    );
+    // (command with {v} for the value, the option named in the error)
+    let table: &[(&[&str], &str)] = &[
+        (
+            &["sample", "torus", "--points", "{v}", "--out", "{out}"],
+            "point",
+        ),
+        (
+            &[
+                "implicit",
+                "fit",
+                "--points",
+                torus,
+                "--features",
+                "{v}",
+                "--out",
+                "{out}",
+            ],
+            "features",
+        ),
+        (
+            &["mesh", model, "--resolution", "{v}", "--out", "{out}"],
+            "resolution",
+        ),
+        (
+            &["render", model, "--size", "{v},{v}", "--out", "{out}"],
+            "size",
+        ),
+        (
+            &[
+                "caoen", "fit-mesh", &spot, "--keys", "{v}", "--out", "{out}",
+            ],
+            "key",
+        ),
+        (
+            &["curve", "fit", ring, "--control", "{v}", "--out", "{out}"],
+            "control",
+        ),
+        (
+            &[
+                "caoen", "image", "sample", "--size", "{v},{v}", "--out", "{out}",
+            ],
+            "size",
+        ),
+    ];
+    for (args, named) in table {
+        for value in ["0", "-1", "1000000000"] {
+            fs::write(&out, b"precious").unwrap();
+            let args: Vec<String> = args
+                .iter()
+                .map(|a| {
+                    a.replace("{v}", value)
+                        .replace("{out}", out.to_str().unwrap())
+                })
+                .collect();
+            let args: Vec<&str> = args.iter().map(String::as_str).collect();
+            let output = neurosurf(&args);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            let what = format!("neurosurf {}", args.join(" "));
+            assert!(!output.status.success(), "{what} succeeded");
+            assert!(!stderr.contains("panicked"), "{what}: {stderr}");
+            assert!(stderr.starts_with("error"), "{what}: {stderr}");
+            // A negative value is the parser's error (it names the argument); the others name
+            // the option or the quantity it sets.
+            if value != "-1" {
+                assert!(
+                    stderr.contains(named),
+                    "{what} does not name {named}: {stderr}"
+                );
+            }
+            assert_eq!(
+                fs::read(&out).unwrap(),
+                b"precious",
+                "{what} touched its output"
+            );
+        }
+    }
+    // An output in a folder that does not exist.
+    let nowhere = dir.path().join("missing folder").join("torus.obj");
+    let output = neurosurf(&["mesh", model, "--out", nowhere.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success()
+            && stderr.contains("missing folder")
+            && stderr.contains("does not exist"),
+        "{stderr}"
+    );
+}

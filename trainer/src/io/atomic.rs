@@ -9,8 +9,9 @@ use crate::error::{Error, Result};
 /// Writes `bytes` to `path` atomically.
 ///
 /// # Errors
-/// [`Error::Io`] naming `path` when the directory is not writable or the rename fails; the
-/// previous content of `path`, if any, is then untouched.
+/// [`Error::InvalidInput`] naming `path` when its folder does not exist; [`Error::Io`] naming
+/// `path` when the folder is not writable or the rename fails. The previous content of
+/// `path`, if any, is then untouched.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
 }
@@ -28,6 +29,13 @@ pub fn write_atomic_with(
         _ => Path::new("."),
     };
     let io = |e| Error::io(path, e);
+    if !dir.is_dir() {
+        return Err(Error::invalid(format!(
+            "{}: the folder {} does not exist; create it or write somewhere else",
+            path.display(),
+            dir.display()
+        )));
+    }
     let mut tmp = tempfile::Builder::new()
         .prefix(".neurosurf-")
         .suffix(".tmp")
@@ -46,6 +54,17 @@ pub fn write_atomic_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_missing_folder_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("no such folder").join("out.bin");
+        let message = write_atomic(&path, b"x").unwrap_err().to_string();
+        assert!(
+            message.contains("no such folder") && message.contains("does not exist"),
+            "{message}"
+        );
+    }
 
     #[test]
     fn replaces_content_and_leaves_no_temporaries() {
