@@ -1,6 +1,6 @@
 //! Bad input, command by command, from one table: every command that reads a file is given a
 //! missing file, an empty file, bytes that are not its format, and (where it reads numbers)
-//! a NaN and a degenerate point set. Each must fail with exit code 1, an `error:` line that
+//! a NaN, a short line, and degenerate point sets (40 and 10⁶ copies of one point). Each must fail with exit code 1, an `error:` line that
 //! names the file, no panic, and no output written (an existing output is kept).
 
 mod common;
@@ -150,6 +150,39 @@ fn every_command_refuses_bad_files_by_name_and_writes_nothing() {
             let same = dir.path().join(format!("same-{index}.txt"));
             fs::write(&same, "0.5 0.5 0.5\n".repeat(40)).unwrap();
             refused(command, &same, &out, "forty copies of one point");
+            let million = dir.path().join(format!("million-{index}.txt"));
+            fs::write(&million, "0.5 0.5 0.5\n".repeat(1_000_000)).unwrap();
+            refused(command, &million, &out, "a million copies of one point");
+            let short = dir.path().join(format!("short-{index}.txt"));
+            fs::write(&short, "1 2 3\n4 5\n6 7 8\n").unwrap();
+            refused(command, &short, &out, "a short line");
+            // Magnitudes of 1e30: a fit in f32 is what a user expects; anything else must
+            // be a named error, never a panic.
+            let huge = dir.path().join(format!("huge-{index}.txt"));
+            let text: String = (0..60)
+                .map(|i| {
+                    let t = f64::from(i) * 0.1;
+                    format!("{} {} {}\n", 1e30 * t.cos(), 1e30 * t.sin(), 1e29 * t)
+                })
+                .collect();
+            fs::write(&huge, text).unwrap();
+            let args: Vec<String> = command
+                .args
+                .iter()
+                .map(|a| {
+                    a.replace("{in}", huge.to_str().unwrap())
+                        .replace("{out}", out.to_str().unwrap())
+                })
+                .collect();
+            let args: Vec<&str> = args.iter().map(String::as_str).collect();
+            let output = neurosurf(&args);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(
+                output.status.success() || stderr.starts_with("error: "),
+                "1e30 coordinates: neurosurf {}: {stderr}",
+                args.join(" ")
+            );
+            assert!(!stderr.contains("panicked"), "{stderr}");
         }
     }
 }
