@@ -84,9 +84,8 @@ const COMMANDS: &[Command] = &[
     },
 ];
 
-/// Runs `command` on `input` and checks that it fails cleanly; `case` names the input.
-fn refused(command: &Command, input: &Path, out: &Path, case: &str) {
-    fs::write(out, b"precious").unwrap();
+/// Runs `command` with `{in}` and `{out}` replaced; returns the arguments and the output.
+fn run_with(command: &Command, input: &Path, out: &Path) -> (Vec<String>, std::process::Output) {
     let args: Vec<String> = command
         .args
         .iter()
@@ -95,10 +94,17 @@ fn refused(command: &Command, input: &Path, out: &Path, case: &str) {
                 .replace("{out}", out.to_str().unwrap())
         })
         .collect();
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let output = neurosurf(&args);
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let output = neurosurf(&refs);
+    (args, output)
+}
+
+/// Runs `command` on `input` and checks that it fails cleanly; `case` names the input.
+fn refused(command: &Command, input: &Path, out: &Path, case: &str) {
+    fs::write(out, b"precious").unwrap();
+    let (args, output) = run_with(command, input, out);
     let stderr = String::from_utf8_lossy(&output.stderr);
-    let what = format!("{case}: neurosurf {}", command.args.join(" "));
+    let what = format!("{case}: neurosurf {}", args.join(" "));
     assert_eq!(output.status.code(), Some(1), "{what} exit: {stderr}");
     assert!(stderr.starts_with("error: "), "{what}: {stderr}");
     assert!(!stderr.contains("panicked"), "{what}: {stderr}");
@@ -166,16 +172,7 @@ fn every_command_refuses_bad_files_by_name_and_writes_nothing() {
                 })
                 .collect();
             fs::write(&huge, text).unwrap();
-            let args: Vec<String> = command
-                .args
-                .iter()
-                .map(|a| {
-                    a.replace("{in}", huge.to_str().unwrap())
-                        .replace("{out}", out.to_str().unwrap())
-                })
-                .collect();
-            let args: Vec<&str> = args.iter().map(String::as_str).collect();
-            let output = neurosurf(&args);
+            let (args, output) = run_with(command, &huge, &out);
             let stderr = String::from_utf8_lossy(&output.stderr);
             assert!(
                 output.status.success() || stderr.starts_with("error: "),

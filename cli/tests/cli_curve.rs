@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{fails, ok};
+use common::{fails, ok, wavy_points};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -308,15 +308,7 @@ fn curves_beyond_the_core_are_refused_before_training_and_large_sets_fit_by_defa
 fn spline_surfaces_beyond_the_core_are_refused_before_training() {
     let dir = tempfile::tempdir().unwrap();
     let points = dir.path().join("wavy.txt");
-    ok(&[
-        "parametric",
-        "sample",
-        "wavy",
-        "--points",
-        "200",
-        "--out",
-        s(&points),
-    ]);
+    wavy_points(&points, 200);
     let out = dir.path().join("s.nsb");
     let error = fails(&[
         "curve",

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{fails, ok};
+use common::{fails, ok, wavy_points};
 use std::fs;
 use std::path::Path;
 
@@ -292,15 +292,7 @@ fn bad_point_sets_fail_clearly_and_write_nothing() {
 fn network_sizes_beyond_the_core_are_refused_before_fitting() {
     let dir = tempfile::tempdir().unwrap();
     let points = dir.path().join("wavy.txt");
-    ok(&[
-        "parametric",
-        "sample",
-        "wavy",
-        "--points",
-        "200",
-        "--out",
-        s(&points),
-    ]);
+    wavy_points(&points, 200);
     let out = dir.path().join("n.nsb");
     for (flag, value, limit) in [("--max-neurons", "33", "32"), ("--max-layers", "5", "4")] {
         let error = fails(&[

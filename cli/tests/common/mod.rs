@@ -33,3 +33,17 @@ pub fn fails(args: &[&str]) -> String {
     );
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
+
+/// Samples `count` points of the wavy test surface (`parametric sample wavy`) into `path`.
+pub fn wavy_points(path: &std::path::Path, count: usize) {
+    let count = count.to_string();
+    ok(&[
+        "parametric",
+        "sample",
+        "wavy",
+        "--points",
+        &count,
+        "--out",
+        path.to_str().expect("utf-8 path"),
+    ]);
+}
