@@ -171,10 +171,16 @@ pub fn run(args: &Args) -> Result<()> {
             let committed = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read {}", path.display()))?;
             if committed != text {
+                let first_difference = committed
+                    .lines()
+                    .zip(text.lines())
+                    .find(|(old, new)| old != new)
+                    .map(|(old, new)| format!("\n  committed: {old}\n  this run:  {new}"))
+                    .unwrap_or_else(|| "\n  (one is a prefix of the other)".into());
                 anyhow::bail!(
                     "{} does not match this run; regenerate it with `neurosurf sim-bench \
                      --markdown {}` and commit it (a change of instruction counts or stack \
-                     is a change of the core or the firmware)",
+                     is a change of the core or the firmware){first_difference}",
                     path.display(),
                     path.display()
                 );

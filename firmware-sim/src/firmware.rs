@@ -24,6 +24,19 @@ pub struct Footprint {
     pub ram_budget: u64,
 }
 
+/// A `--remap-path-prefix` flag as a TOML string, mapping `from` to `to`.
+fn remap(from: &Path, to: &str) -> String {
+    let flag = format!("--remap-path-prefix={}={to}", from.display());
+    format!("\"{}\"", flag.replace('\\', "\\\\").replace('"', "\\\""))
+}
+
+/// Cargo's home (its registry sources are compiled into the firmware).
+fn cargo_home() -> Option<PathBuf> {
+    std::env::var_os("CARGO_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|home| Path::new(&home).join(".cargo")))
+}
+
 /// The built firmware: its ELF and what the runner needs from it.
 #[derive(Clone, Debug)]
 pub struct Firmware {
@@ -66,6 +79,17 @@ impl Firmware {
                 command.env_remove(key.as_ref());
             }
         }
+        // Paths end up in the image (panic locations of dependencies); without remapping, the
+        // flash size and the committed instruction table would depend on where the repository
+        // and cargo's registry happen to live.
+        let mut remaps = vec![remap(root, "/neurosurf")];
+        if let Some(home) = cargo_home() {
+            remaps.push(remap(&home, "/cargo"));
+        }
+        command.arg("--config").arg(format!(
+            "target.thumbv7em-none-eabihf.rustflags=[{}]",
+            remaps.join(", ")
+        ));
         command
             .env("RUSTC", &toolchain.rustc)
             .env("RUSTC_BOOTSTRAP", "1")
