@@ -299,19 +299,7 @@ struct FitReport<'a> {
 fn fit(args: &FitArgs) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
     // What the core holds, checked before any embedding or fitting.
-    use neurosurf_core::parametric::{MAX_HIDDEN_LAYERS, MAX_NEURONS};
-    if !(1..=MAX_HIDDEN_LAYERS).contains(&args.max_layers) {
-        bail!(
-            "--max-layers {}: the core evaluates 1 to {MAX_HIDDEN_LAYERS} hidden layers",
-            args.max_layers
-        );
-    }
-    if !(1..=MAX_NEURONS).contains(&args.max_neurons) {
-        bail!(
-            "--max-neurons {}: the core evaluates 1 to {MAX_NEURONS} neurons per layer",
-            args.max_neurons
-        );
-    }
+    neurosurf_trainer::parametric::check_capacity(args.max_layers, args.max_neurons)?;
     let points = read_points(&args.points)?;
     let start = Instant::now();
     let parameters = match &args.parameters {

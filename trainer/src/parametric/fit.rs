@@ -39,6 +39,7 @@ pub fn fit_network(
     parameters: &[[f64; 2]],
     options: &TopologyOptions,
 ) -> Result<SurfaceFit> {
+    super::check_capacity(options.max_layers, options.max_neurons)?;
     if points.len() != parameters.len() {
         return Err(Error::invalid(format!(
             "{} points but {} parameter pairs",

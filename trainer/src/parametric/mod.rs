@@ -45,6 +45,7 @@ mod activation;
 mod bench;
 mod blob;
 mod boundary;
+mod capacity;
 mod compare;
 mod coons;
 mod eigen;
@@ -81,6 +82,7 @@ pub use bench::{
 };
 pub use blob::{DecodedNetwork, NetworkSummary, network_from_blob, network_to_blob};
 pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
+pub use capacity::{check_capacity, largest_parameter_count};
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
     Bezier, CoonsBoundary, bezier_point, coons_boundary, coons_grid, coons_point, fit_bezier,
