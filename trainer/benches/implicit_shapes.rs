@@ -11,52 +11,20 @@
 //! slices (red: model inside where the points say outside, blue the reverse), `--body 50` for
 //! the demo's body and its animation frame by frame instead.
 
+mod shapes;
+
 use std::time::Instant;
 
 use neurosurf_core::scalar::ScalarKind;
 use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions};
 use neurosurf_trainer::io::{Mesh, data_file, read_mesh};
 use neurosurf_trainer::quality::{
-    MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, grown_bounds, signed_distance_mesh,
-    two_sided,
+    MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, grown_bounds, two_sided,
 };
 use neurosurf_trainer::rbf::{self, RbfOptions};
-use neurosurf_trainer::render::{
-    Aabb, CoreField, DEFAULT_BOX_SIZE, DEFAULT_INFLATE, DEFAULT_RBF_INFLATE, RbfField, Region,
-};
+use neurosurf_trainer::render::{DEFAULT_RBF_INFLATE, RbfField};
 use neurosurf_trainer::sample::sample_mesh;
-
-fn analytic_mesh(distance: impl Fn([f64; 3]) -> f64 + Sync, half: [f64; 3]) -> Mesh {
-    let bounds = Aabb {
-        lo: half.map(|h| -h),
-        hi: half,
-    };
-    signed_distance_mesh(distance, bounds, 160).expect("mesh")
-}
-
-fn torus(p: [f64; 3], c: [f64; 3], big: f64, small: f64) -> f64 {
-    let q = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
-    ((q[0] * q[0] + q[1] * q[1]).sqrt() - big).hypot(q[2]) - small
-}
-
-fn double_torus() -> Mesh {
-    analytic_mesh(
-        |p| torus(p, [-0.9, 0.0, 0.0], 1.0, 0.35).min(torus(p, [0.9, 0.0, 0.0], 1.0, 0.35)),
-        [2.4, 1.5, 0.5],
-    )
-}
-
-fn rounded_cube() -> Mesh {
-    analytic_mesh(
-        |p| {
-            let q = p.map(|v| v.abs() - 0.8);
-            let outside = q.map(|v| v.max(0.0));
-            (outside[0].hypot(outside[1]).hypot(outside[2])) + q[0].max(q[1]).max(q[2]).min(0.0)
-                - 0.2
-        },
-        [1.2; 3],
-    )
-}
+use shapes::{double_torus, measure_core, rounded_cube};
 
 struct Case {
     name: &'static str,
@@ -167,14 +135,6 @@ fn slices(
     img.save(path).expect("png");
 }
 
-/// `blob` (of `network`) measured as a user runs it: in the core, in f32, inside the leaf boxes
-/// `mesh` and `render` search.
-fn measure_core(blob: &[u8], network: &implicit::ImplicitNetwork, truth: &Truth) -> TwoSided {
-    let regions = Region::of_network(network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE);
-    let field = CoreField::new(blob, regions).expect("the core loads the blob");
-    two_sided(&field, truth, MEASURE_RESOLUTION, STRAY_RESOLUTION).expect("measure")
-}
-
 /// The demo's body, cold in the rest pose, then `frames − 1` animation frames each warm from
 /// the previous one, every frame measured against its true body (meshed from its signed
 /// distance).
@@ -221,12 +181,7 @@ fn body_animation(frames: usize) {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let value = |flag: &str| shapes::flag(&args, flag);
     let filter: Vec<String> = value("--case")
         .map(|c| c.split(',').map(String::from).collect())
         .unwrap_or_default();
