@@ -10,6 +10,7 @@ step() { printf '\n==> %s\n' "$*"; }
 step "format"
 cargo fmt --all --check
 cargo fmt --manifest-path firmware-sim/firmware/Cargo.toml --check
+cargo fmt --manifest-path examples/cortex-m/Cargo.toml --check
 step "lints"
 cargo clippy --workspace --all-targets -- -D warnings
 step "docs"

@@ -6,7 +6,7 @@ use std::process::Command;
 use neurosurf_sim_protocol::{REGION_START_SYMBOL, REGION_STOP_SYMBOL};
 use object::{Object, ObjectSection, ObjectSymbol, SectionFlags};
 
-use crate::{SimError, Toolchain};
+use crate::{SimError, TARGET_TRIPLE, Toolchain};
 
 /// Where RAM starts on the target (Cortex-M SRAM region).
 const RAM_ORIGIN: u64 = 0x2000_0000;
@@ -53,8 +53,8 @@ pub struct Firmware {
 }
 
 impl Firmware {
-    /// Builds the firmware under repository `root` with the Debian toolchain (a no-op when
-    /// nothing changed: cargo caches it in `target/firmware`) and reads the result.
+    /// Builds the simulator's firmware under repository `root` (see [`build_elf`]; cargo caches
+    /// it in `target/firmware`) and reads the result.
     ///
     /// # Errors
     /// [`SimError::Build`] with the compiler output; [`SimError::Elf`] when the result lacks
@@ -62,49 +62,7 @@ impl Firmware {
     pub fn build(toolchain: &Toolchain, root: &Path) -> Result<Self, SimError> {
         let source = root.join("firmware-sim/firmware");
         let target_dir = root.join("target/firmware");
-        let mut command = Command::new(&toolchain.cargo);
-        command
-            .args(["build", "--release", "--quiet"])
-            .current_dir(&source);
-        // The host build's environment (rustup's toolchain, the test harness's CARGO_* and
-        // flags) must not leak into the Debian toolchain's cross build.
-        for (key, _) in std::env::vars_os() {
-            let key = key.to_string_lossy();
-            let leaks = (key.starts_with("CARGO") && key != "CARGO_HOME")
-                || key.starts_with("RUSTUP")
-                || key.starts_with("RUSTC")
-                || key.starts_with("RUSTFLAGS")
-                || key.starts_with("RUSTDOC");
-            if leaks {
-                command.env_remove(key.as_ref());
-            }
-        }
-        // Paths end up in the image (panic locations of dependencies); without remapping, the
-        // flash size and the committed instruction table would depend on where the repository
-        // and cargo's registry happen to live.
-        let mut remaps = vec![remap(root, "/neurosurf")];
-        if let Some(home) = cargo_home() {
-            remaps.push(remap(&home, "/cargo"));
-        }
-        command.arg("--config").arg(format!(
-            "target.thumbv7em-none-eabihf.rustflags=[{}]",
-            remaps.join(", ")
-        ));
-        command
-            .env("RUSTC", &toolchain.rustc)
-            .env("RUSTC_BOOTSTRAP", "1")
-            .env("CARGO_TARGET_DIR", &target_dir);
-        let output = command.output().map_err(|e| SimError::Build {
-            what: "the firmware",
-            output: format!("cannot run {}: {e}", toolchain.cargo.display()),
-        })?;
-        if !output.status.success() {
-            return Err(SimError::Build {
-                what: "the firmware",
-                output: String::from_utf8_lossy(&output.stderr).into_owned(),
-            });
-        }
-        let elf = target_dir.join("thumbv7em-none-eabihf/release/neurosurf-firmware");
+        let elf = build_elf(toolchain, root, &source, &target_dir, "neurosurf-firmware")?;
         let memory = std::fs::read_to_string(source.join("memory.x"))
             .map_err(SimError::io(source.join("memory.x")))?;
         Self::read(&elf, &memory)
@@ -163,6 +121,66 @@ impl Firmware {
             bytes: std::sync::Arc::new(bytes),
         })
     }
+}
+
+/// Builds the firmware crate in `source` (a cargo workspace of its own whose
+/// `.cargo/config.toml` names the target, the linker and `build-std`) in release with the
+/// Debian toolchain into `target_dir`, and returns the ELF of its binary `binary`. A no-op when
+/// nothing changed. The repository `root` and cargo's home are remapped out of the image
+/// (to `/neurosurf` and `/cargo`), so it does not depend on where they are.
+///
+/// # Errors
+/// [`SimError::Build`] with the compiler output.
+pub fn build_elf(
+    toolchain: &Toolchain,
+    root: &Path,
+    source: &Path,
+    target_dir: &Path,
+    binary: &str,
+) -> Result<PathBuf, SimError> {
+    let mut command = Command::new(&toolchain.cargo);
+    command
+        .args(["build", "--release", "--quiet"])
+        .current_dir(source);
+    // The host build's environment (rustup's toolchain, the test harness's CARGO_* and
+    // flags) must not leak into the Debian toolchain's cross build.
+    for (key, _) in std::env::vars_os() {
+        let key = key.to_string_lossy();
+        let leaks = (key.starts_with("CARGO") && key != "CARGO_HOME")
+            || key.starts_with("RUSTUP")
+            || key.starts_with("RUSTC")
+            || key.starts_with("RUSTFLAGS")
+            || key.starts_with("RUSTDOC");
+        if leaks {
+            command.env_remove(key.as_ref());
+        }
+    }
+    // Paths end up in the image (panic locations of dependencies); without remapping, the
+    // flash size and the committed instruction table would depend on where the repository
+    // and cargo's registry happen to live.
+    let mut remaps = vec![remap(root, "/neurosurf")];
+    if let Some(home) = cargo_home() {
+        remaps.push(remap(&home, "/cargo"));
+    }
+    command.arg("--config").arg(format!(
+        "target.{TARGET_TRIPLE}.rustflags=[{}]",
+        remaps.join(", ")
+    ));
+    command
+        .env("RUSTC", &toolchain.rustc)
+        .env("RUSTC_BOOTSTRAP", "1")
+        .env("CARGO_TARGET_DIR", target_dir);
+    let output = command.output().map_err(|e| SimError::Build {
+        what: "the firmware",
+        output: format!("cannot run {}: {e}", toolchain.cargo.display()),
+    })?;
+    if !output.status.success() {
+        return Err(SimError::Build {
+            what: "the firmware",
+            output: String::from_utf8_lossy(&output.stderr).into_owned(),
+        });
+    }
+    Ok(target_dir.join(TARGET_TRIPLE).join("release").join(binary))
 }
 
 /// The `LENGTH` of `region` in a `memory.x` (`1M`, `192K` or plain bytes).

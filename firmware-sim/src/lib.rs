@@ -12,7 +12,9 @@
 //! - [`Simulator`]: one QEMU run per [`Job`] — writes the blob and the points, launches
 //!   `qemu-system-arm -M mps2-an386` under a time limit, decodes the defmt log with
 //!   `defmt-decoder`, and returns the raw result words with the instruction count of every
-//!   evaluation (a TCG plugin, [`plugin`]).
+//!   evaluation (a TCG plugin, [`plugin`]);
+//! - [`build_elf`] and [`run_program`]: the same build and QEMU run for any firmware crate that
+//!   needs no request, such as the example in `examples/cortex-m/`, returning its defmt log.
 //!
 //! ```no_run
 //! use neurosurf_firmware_sim::{Job, Simulator};
@@ -29,12 +31,14 @@ mod error;
 mod firmware;
 mod log;
 pub mod plugin;
+mod qemu;
 mod simulator;
 mod toolchain;
 
 pub use error::SimError;
-pub use firmware::{Firmware, Footprint};
+pub use firmware::{Firmware, Footprint, build_elf};
 pub use neurosurf_sim_protocol::{Mode, Op, Status};
+pub use qemu::run_program;
 pub use simulator::{Job, Run, Simulator};
 pub use toolchain::Toolchain;
 

@@ -1,8 +1,7 @@
 //! One simulated run: files in, QEMU under a time limit, files and counts out.
 
-use std::io::Read;
+use std::ffi::OsString;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -13,9 +12,8 @@ use neurosurf_sim_protocol::{
     MAX_ARITY, MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE, RequestHeader, ResultTrailer,
     Status,
 };
-use wait_timeout::ChildExt;
 
-use crate::{Firmware, SimError, TARGET_MACHINE, Toolchain, log, plugin};
+use crate::{Firmware, SimError, Toolchain, log, plugin, qemu};
 
 /// Environment variable naming a file that receives the instruction profile of each run
 /// (the heaviest translation blocks by executed instructions; overwritten per run).
@@ -208,15 +206,7 @@ impl Simulator {
         let toolchain = Toolchain::find(root)?;
         let firmware = Firmware::build(&toolchain, root)?;
         let plugin = plugin::build(&toolchain, root)?;
-        let table = Table::parse(&firmware.bytes)
-            .map_err(|e| SimError::Elf {
-                path: firmware.elf.clone(),
-                reason: format!("defmt table: {e}"),
-            })?
-            .ok_or_else(|| SimError::Elf {
-                path: firmware.elf.clone(),
-                reason: "no defmt table".into(),
-            })?;
+        let table = log::table(&firmware.elf, &firmware.bytes)?;
         Ok(Simulator {
             toolchain,
             firmware,
@@ -282,74 +272,42 @@ impl Simulator {
         // A development aid: with NEUROSURF_SIM_PROFILE=FILE the plugin also lists the
         // heaviest translation blocks, and its log is copied to FILE.
         let profile_copy = std::env::var_os(PROFILE_VARIABLE).map(PathBuf::from);
-        let mut child = Command::new(&self.toolchain.qemu)
-            .args(["-M", TARGET_MACHINE, "-cpu", "cortex-m4"])
-            .args(["-display", "none", "-serial", "null", "-monitor", "none"])
-            .args(["-semihosting-config", "enable=on,target=native"])
-            .arg("-plugin")
-            .arg(format!(
-                "{},start={:#x},stop={:#x}{}",
-                self.plugin.display(),
-                self.firmware.region_start,
-                self.firmware.region_stop,
-                if profile_copy.is_some() {
-                    ",profile=1"
-                } else {
-                    ""
-                }
-            ))
-            .args(["-d", "plugin", "-D"])
-            .arg(&plugin_log)
-            .arg("-kernel")
-            .arg(&self.firmware.elf)
-            .current_dir(dir.path())
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(SimError::io(&self.toolchain.qemu))?;
-        // Drain the pipes while QEMU runs so a chatty target cannot block on them.
-        let drain = |pipe: Option<Box<dyn Read + Send>>| {
-            std::thread::spawn(move || {
-                let mut bytes = Vec::new();
-                if let Some(mut pipe) = pipe {
-                    let _ = pipe.read_to_end(&mut bytes);
-                }
-                bytes
-            })
-        };
-        let stdout = drain(
-            child
-                .stdout
-                .take()
-                .map(|p| Box::new(p) as Box<dyn Read + Send>),
+        let plugin = format!(
+            "{},start={:#x},stop={:#x}{}",
+            self.plugin.display(),
+            self.firmware.region_start,
+            self.firmware.region_stop,
+            if profile_copy.is_some() {
+                ",profile=1"
+            } else {
+                ""
+            }
         );
-        let stderr = drain(
-            child
-                .stderr
-                .take()
-                .map(|p| Box::new(p) as Box<dyn Read + Send>),
-        );
+        let extra: [OsString; 6] = [
+            "-plugin".into(),
+            plugin.into(),
+            "-d".into(),
+            "plugin".into(),
+            "-D".into(),
+            plugin_log.clone().into(),
+        ];
         let limit = job
             .time_limit
             .unwrap_or(Duration::from_secs(30) + Duration::from_millis(job.count() as u64));
-        let waited = child
-            .wait_timeout(limit)
-            .map_err(SimError::io(&self.toolchain.qemu))?;
-        let status = match waited {
-            Some(status) => status,
-            None => {
-                let _ = child.kill();
-                let _ = child.wait();
-                let log = log::decode(&self.table, &stdout.join().unwrap_or_default());
-                return Err(SimError::Timeout {
-                    seconds: limit.as_secs(),
-                    log,
-                });
-            }
+        let finished = qemu::run(
+            &self.toolchain.qemu,
+            &self.firmware.elf,
+            dir.path(),
+            &extra,
+            limit,
+        )?;
+        let log = log::decode(&self.table, &finished.stdout);
+        let Some(status) = finished.status else {
+            return Err(SimError::Timeout {
+                seconds: limit.as_secs(),
+                log,
+            });
         };
-        let log = log::decode(&self.table, &stdout.join().unwrap_or_default());
-        let stderr = String::from_utf8_lossy(&stderr.join().unwrap_or_default()).into_owned();
         let code = status.code().unwrap_or(-1);
         let firmware_failure = |message: String| SimError::Firmware {
             code,
@@ -366,13 +324,9 @@ impl Simulator {
             }
             Some(other) => return Err(firmware_failure(other.describe().to_string())),
             None => {
-                return Err(firmware_failure(format!(
-                    "QEMU failed{}",
-                    if stderr.is_empty() {
-                        String::new()
-                    } else {
-                        format!(": {}", stderr.trim())
-                    }
+                return Err(firmware_failure(qemu::with_stderr(
+                    "QEMU failed",
+                    &finished.stderr,
                 )));
             }
         }
