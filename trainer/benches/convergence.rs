@@ -6,7 +6,8 @@
 //! model measured as a user runs it (its blob in the core, in f32).
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench convergence`, with after `--`: `--seeds 10`
-//! for fewer seeds per row (at most the row's own count), `--out FILE` to write the table.
+//! for fewer seeds per row (at most the row's own count), `--rows 1,3` for some rows, `--out
+//! FILE` to write the table (relative to the workspace). Each seed's figures go to stderr.
 
 mod shapes;
 
@@ -124,7 +125,15 @@ fn main() {
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     print!("{table}");
-    for row in rows() {
+    let chosen: Option<Vec<usize>> = value("--rows").map(|v| {
+        v.split(',')
+            .map(|r| r.parse().expect("--rows 1,3"))
+            .collect()
+    });
+    for (index, row) in rows().into_iter().enumerate() {
+        if chosen.as_ref().is_some_and(|c| !c.contains(&(index + 1))) {
+            continue;
+        }
         let seeds = most_seeds.map_or(row.seeds, |n| n.min(row.seeds));
         let mut tally = Tally::default();
         for seed in 1..=seeds {
@@ -148,6 +157,15 @@ fn main() {
             tally.seconds.push(start.elapsed().as_secs_f64());
             let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
             let m = measure_core(&blob, &trained.network, &row.truth);
+            eprintln!(
+                "{} seed {seed}: {}, {:.4} % / {:.4} %, {} stray sign changes, {} pieces",
+                row.name,
+                trained.summary.outcome(),
+                m.truth_to_model.median_percent,
+                m.model_to_truth.median_percent,
+                m.stray.sign_changes,
+                m.mesh.components
+            );
             tally.add(seed, trained.summary.outcome(), &m);
         }
         let line = format!(
@@ -169,7 +187,7 @@ fn main() {
         print!("{line}");
         table.push_str(&line);
     }
-    if let Some(path) = value("--out") {
+    if let Some(path) = value("--out").map(|p| shapes::in_workspace(&p)) {
         let command = args[1..].join(" ");
         let text = format!(
             "# Convergence over seeds\n\nWritten by `cargo bench -p neurosurf-trainer --bench \
@@ -183,6 +201,6 @@ fn main() {
             rayon::current_num_threads(),
         );
         std::fs::write(&path, text).expect("write --out");
-        eprintln!("wrote {path}");
+        eprintln!("wrote {}", path.display());
     }
 }

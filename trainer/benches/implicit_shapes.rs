@@ -200,7 +200,7 @@ fn main() {
     } else {
         shapes(&filter, &seeds, rbf, to_diagonal, &value);
     }
-    if let Some(path) = value("--out") {
+    if let Some(path) = value("--out").map(|p| shapes::in_workspace(&p)) {
         let command = args[1..].join(" ");
         let text = format!(
             "# {}\n\nWritten by `cargo bench -p neurosurf-trainer \
@@ -219,7 +219,7 @@ fn main() {
             TABLE.lock().expect("table").as_str()
         );
         std::fs::write(&path, text).expect("write --out");
-        eprintln!("wrote {path}");
+        eprintln!("wrote {}", path.display());
     }
 }
 

@@ -67,3 +67,9 @@ pub fn flag(args: &[String], name: &str) -> Option<String> {
         .and_then(|i| args.get(i + 1))
         .cloned()
 }
+
+/// `path` relative to the workspace root (cargo runs benches in the package's folder).
+pub fn in_workspace(path: &str) -> std::path::PathBuf {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    root.join(path)
+}
