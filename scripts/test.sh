@@ -19,7 +19,6 @@ step "core with its optional features (defmt, serde)"
 cargo check -p neurosurf-core --features defmt,serde --quiet
 step "firmware for the simulated Cortex-M4F (core for thumbv7em-none-eabihf: no std, no heap)"
 firmware-sim/scripts/setup.sh >/dev/null
-(cd firmware-sim/firmware && RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
-    CARGO_TARGET_DIR=../../target/firmware /usr/bin/cargo build --quiet --release)
+cargo run --quiet -p neurosurf-firmware-sim --example build_firmware
 step "tests"
 cargo test --workspace
