@@ -70,11 +70,18 @@ struct Tally {
     worst_model_to_truth: (f64, u64),
     worst_stray: (usize, u64),
     worst_pieces: (usize, u64),
+    largest_error: (f64, u64),
     seconds: Vec<f64>,
 }
 
 impl Tally {
-    fn add(&mut self, seed: u64, outcome: Outcome, m: &neurosurf_trainer::quality::TwoSided) {
+    fn add(
+        &mut self,
+        seed: u64,
+        outcome: Outcome,
+        error: f64,
+        m: &neurosurf_trainer::quality::TwoSided,
+    ) {
         self.seeds += 1;
         match outcome {
             Outcome::Converged => self.converged += 1,
@@ -86,6 +93,7 @@ impl Tally {
                 *slot = (v, seed);
             }
         };
+        worse(&mut self.largest_error, error);
         worse(
             &mut self.worst_truth_to_model,
             m.truth_to_model.median_percent,
@@ -94,10 +102,10 @@ impl Tally {
             &mut self.worst_model_to_truth,
             m.model_to_truth.median_percent,
         );
-        if m.stray.sign_changes >= self.worst_stray.0 {
+        if m.stray.sign_changes > self.worst_stray.0 {
             self.worst_stray = (m.stray.sign_changes, seed);
         }
-        if m.mesh.components >= self.worst_pieces.0 {
+        if m.mesh.components > self.worst_pieces.0 {
             self.worst_pieces = (m.mesh.components, seed);
         }
     }
@@ -116,13 +124,22 @@ impl Tally {
     }
 }
 
+/// A count and the first seed that reached it ("0" alone when no seed counted any).
+fn with_seed((count, seed): (usize, u64)) -> String {
+    if count == 0 {
+        "0".into()
+    } else {
+        format!("{count} (seed {seed})")
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let value = |flag: &str| shapes::flag(&args, flag);
     let most_seeds: Option<u64> = value("--seeds").map(|v| v.parse().expect("--seeds N"));
     let mut table = String::from(
-        "| shape | seeds | converged | stalled | at the iteration cap | median time | worst truth → model median | worst model → truth median | most stray sign changes | most mesh pieces |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| shape | seeds | converged | stalled | at the iteration cap | median time | largest final E_s | worst truth → model median | worst model → truth median | most stray sign changes | most mesh pieces |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     print!("{table}");
     let chosen: Option<Vec<usize>> = value("--rows").map(|v| {
@@ -166,29 +183,43 @@ fn main() {
                 m.stray.sign_changes,
                 m.mesh.components
             );
-            tally.add(seed, trained.summary.outcome(), &m);
+            let error = trained
+                .summary
+                .modules
+                .iter()
+                .map(|module| module.lm.error)
+                .fold(0.0, f64::max);
+            tally.add(seed, trained.summary.outcome(), error, &m);
         }
         let line = format!(
-            "| {} | 1–{seeds} | {} | {} | {} | {:.2} s | {:.4} % (seed {}) | {:.4} % (seed {}) | {} (seed {}) | {} (seed {}) |\n",
+            "| {} | 1–{seeds} | {} | {} | {} | {:.2} s | {:.2e} (seed {}) | {:.4} % (seed {}) | {:.4} % (seed {}) | {} | {} |\n",
             row.name,
             tally.share(tally.converged),
             tally.share(tally.stalled),
             tally.share(tally.capped),
             tally.median_seconds(),
+            tally.largest_error.0,
+            tally.largest_error.1,
             tally.worst_truth_to_model.0,
             tally.worst_truth_to_model.1,
             tally.worst_model_to_truth.0,
             tally.worst_model_to_truth.1,
-            tally.worst_stray.0,
-            tally.worst_stray.1,
-            tally.worst_pieces.0,
-            tally.worst_pieces.1,
+            with_seed(tally.worst_stray),
+            match tally.worst_pieces {
+                (0 | 1, _) => "1".to_string(),
+                most => with_seed(most),
+            },
         );
         print!("{line}");
         table.push_str(&line);
     }
     if let Some(path) = value("--out").map(|p| shapes::in_workspace(&p)) {
-        let command = args[1..].join(" ");
+        let command: Vec<&str> = args[1..]
+            .iter()
+            .map(String::as_str)
+            .filter(|a| *a != "--bench")
+            .collect();
+        let command = command.join(" ");
         let text = format!(
             "# Convergence over seeds\n\nWritten by `cargo bench -p neurosurf-trainer --bench \
              convergence -- {command}` on {} threads. Each seed draws its own sample and \
