@@ -51,6 +51,7 @@ mod error;
 pub mod implicit;
 mod lanes;
 mod math;
+pub mod model;
 pub mod parametric;
 pub mod scalar;
 

@@ -446,6 +446,46 @@ fn sharpness_check(word: &[u8], stored: ScalarKind, blending: Blending) -> Optio
     }
 }
 
+impl<S: Scalar, const K: usize> crate::model::Model<S> for CaoEnModel<S, K> {
+    const KIND: ModelKind = ModelKind::CaoEn;
+
+    fn load_blob(&mut self, blob: &[u8]) -> Result<(), BlobError> {
+        self.load(blob)
+    }
+
+    fn input_len(&self) -> usize {
+        self.source_dimension()
+    }
+
+    fn output_len(&self, full: bool) -> usize {
+        self.target_dimension() + if full { 3 } else { 0 }
+    }
+
+    fn evaluate(&self, input: &[S], full: bool, out: &mut [S]) {
+        let x: [S; MAX_SOURCE_DIMENSION] = crate::model::point(input);
+        let p = self.target_dimension();
+        let (outputs, normal) = if full && p == 3 {
+            let point = self.eval_normal(&x);
+            let mut outputs = [S::ZERO; MAX_TARGET_DIMENSION];
+            crate::model::write(&mut outputs, point.position);
+            (outputs, point.normal)
+        } else {
+            (
+                self.eval::<MAX_SOURCE_DIMENSION, MAX_TARGET_DIMENSION>(&x),
+                None,
+            )
+        };
+        let normal = full.then(|| crate::model::normal_or_zero(normal));
+        crate::model::write(
+            out,
+            outputs
+                .into_iter()
+                .take(p)
+                .chain(normal.into_iter().flatten()),
+        );
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::indexing_slicing)]
 mod tests {

@@ -265,3 +265,29 @@ fn combine<S: Scalar>(start: [S; 3], weights: [S; 3], differences: &[[S; 3]; 3])
 pub(crate) fn at<S: Scalar>(v: &[S; 3], axis: usize) -> S {
     v.get(axis).copied().unwrap_or(S::ZERO)
 }
+
+impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineCurve<S, C> {
+    const KIND: ModelKind = ModelKind::Curve;
+
+    fn load_blob(&mut self, blob: &[u8]) -> Result<(), BlobError> {
+        self.load(blob)
+    }
+
+    fn input_len(&self) -> usize {
+        1
+    }
+
+    fn output_len(&self, full: bool) -> usize {
+        if full { 6 } else { 3 }
+    }
+
+    fn evaluate(&self, input: &[S], full: bool, out: &mut [S]) {
+        let [t] = crate::model::point(input);
+        if full {
+            let p = self.eval(t);
+            crate::model::write(out, p.position.into_iter().chain(p.tangent));
+        } else {
+            crate::model::write(out, self.position(t));
+        }
+    }
+}

@@ -354,3 +354,30 @@ fn unit_cross<S: Scalar>(a: [S; 3], b: [S; 3]) -> Option<[S; 3]> {
 fn at_index(v: &[usize; 4], k: usize) -> usize {
     v.get(k).copied().unwrap_or(0)
 }
+
+impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineSurface<S, C> {
+    const KIND: ModelKind = ModelKind::SplineSurface;
+
+    fn load_blob(&mut self, blob: &[u8]) -> Result<(), BlobError> {
+        self.load(blob)
+    }
+
+    fn input_len(&self) -> usize {
+        2
+    }
+
+    fn output_len(&self, full: bool) -> usize {
+        if full { 6 } else { 3 }
+    }
+
+    fn evaluate(&self, input: &[S], full: bool, out: &mut [S]) {
+        let uv = crate::model::point(input);
+        let position = self.position(uv);
+        if full {
+            let normal = crate::model::normal_or_zero(self.normal(uv));
+            crate::model::write(out, position.into_iter().chain(normal));
+        } else {
+            crate::model::write(out, position);
+        }
+    }
+}

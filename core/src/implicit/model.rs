@@ -371,3 +371,29 @@ fn build_tree<const M: usize>(
     }
     Ok(())
 }
+
+impl<S: Scalar, const P: usize, const M: usize> crate::model::Model<S> for ImplicitModel<S, P, M> {
+    const KIND: ModelKind = ModelKind::Implicit;
+
+    fn load_blob(&mut self, blob: &[u8]) -> Result<(), BlobError> {
+        self.load(blob)
+    }
+
+    fn input_len(&self) -> usize {
+        3
+    }
+
+    fn output_len(&self, full: bool) -> usize {
+        if full { 4 } else { 1 }
+    }
+
+    fn evaluate(&self, input: &[S], full: bool, out: &mut [S]) {
+        let x = crate::model::point(input);
+        if full {
+            let fg = self.field_gradient(x);
+            crate::model::write(out, [fg.value].into_iter().chain(fg.gradient));
+        } else {
+            crate::model::write(out, [self.field(x)]);
+        }
+    }
+}

@@ -212,3 +212,30 @@ pub fn parameter_count(hidden: &[u8]) -> usize {
     }
     count
 }
+
+impl<S: Scalar, const P: usize> crate::model::Model<S> for SurfaceNetworkModel<S, P> {
+    const KIND: ModelKind = ModelKind::SurfaceNetwork;
+
+    fn load_blob(&mut self, blob: &[u8]) -> Result<(), BlobError> {
+        self.load(blob)
+    }
+
+    fn input_len(&self) -> usize {
+        2
+    }
+
+    fn output_len(&self, full: bool) -> usize {
+        if full { 6 } else { 3 }
+    }
+
+    fn evaluate(&self, input: &[S], full: bool, out: &mut [S]) {
+        let uv = crate::model::point(input);
+        if full {
+            let p = self.eval(uv);
+            let normal = crate::model::normal_or_zero(p.normal);
+            crate::model::write(out, p.position.into_iter().chain(normal));
+        } else {
+            crate::model::write(out, self.position(uv));
+        }
+    }
+}
