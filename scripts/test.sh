@@ -11,6 +11,7 @@ step "format"
 cargo fmt --all --check
 cargo fmt --manifest-path firmware-sim/firmware/Cargo.toml --check
 cargo fmt --manifest-path examples/cortex-m/Cargo.toml --check
+cargo fmt --manifest-path fuzz/libfuzzer/Cargo.toml --check
 step "lints"
 cargo clippy --workspace --all-targets -- -D warnings
 step "docs"
@@ -22,3 +23,7 @@ firmware-sim/scripts/setup.sh >/dev/null
 cargo run --quiet -p neurosurf-firmware-sim --example build_firmware
 step "tests"
 cargo test --workspace
+step "coverage-guided fuzz smoke run: every model kind, 30 s from the committed corpus"
+mkdir -p target
+fuzz/libfuzzer/run.sh 30 >target/fuzz-smoke.log 2>&1 || { tail -n 60 target/fuzz-smoke.log; exit 1; }
+tail -n 6 target/fuzz-smoke.log
