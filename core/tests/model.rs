@@ -12,18 +12,18 @@ use neurosurf_core::model::{self, MAX_OUTPUTS, Model, ModelVisitor};
 use neurosurf_core::parametric::SurfaceNetworkModel;
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 
+/// The blobs in `fuzz/corpus/`, by file name.
 fn corpus() -> Vec<(String, Vec<u8>)> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus");
-    let mut blobs: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
+    let mut names: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
-        .map(|e| {
-            let path = e.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(path).unwrap())
-        })
+        .map(|e| e.unwrap().path())
         .collect();
-    blobs.sort();
-    blobs
+    names.sort();
+    names
+        .into_iter()
+        .map(|path| (path.display().to_string(), std::fs::read(&path).unwrap()))
+        .collect()
 }
 
 /// Inputs in each model's domain and beyond it.

@@ -2,14 +2,17 @@
 # Coverage-guided fuzzing of every model kind's loader and evaluation (libFuzzer through
 # libfuzzer-sys, on rustup's stable toolchain: the instrumentation flags are stable).
 #
-#   fuzz/libfuzzer/run.sh SECONDS [JOBS]
+#   fuzz/libfuzzer/run.sh [blob|readers] SECONDS [JOBS]
 #
-# Starts from the committed corpus (fuzz/corpus/, blobs the trainer wrote) and keeps what it
-# finds in target/fuzz/corpus; a crash (a panic) is written to target/fuzz/artifacts and fails
-# the run. scripts/test.sh runs a short smoke run; longer campaigns are documented in
+# `blob` (the default) fuzzes every model kind's loader and evaluation from the committed
+# corpus fuzz/corpus/ (blobs the trainer wrote); `readers` fuzzes the trainer's file readers
+# from fuzz/corpus-readers/. What it finds is kept in target/fuzz/<target>/corpus; a crash (a
+# panic) is written to target/fuzz/<target>/artifacts and fails the run. scripts/test.sh runs a short smoke run; longer campaigns are documented in
 # fuzz/README.md.
 set -euo pipefail
 cd "$(dirname "$0")"
+target=blob
+if [ "${1:-}" = blob ] || [ "${1:-}" = readers ]; then target=$1; shift; fi
 seconds=${1:-60}
 jobs=${2:-1}
 root=$(cd ../.. && pwd)
@@ -19,8 +22,8 @@ if ! command -v c++ >/dev/null; then
     "${sudo[@]}" apt-get update -qq
     "${sudo[@]}" apt-get install -y -qq --no-install-recommends g++
 fi
-out="$root/target/fuzz"
-export CARGO_TARGET_DIR="$out/build"
+export CARGO_TARGET_DIR="$root/target/fuzz/build"
+out="$root/target/fuzz/$target"
 export RUSTFLAGS="--cfg fuzzing -Cpasses=sancov-module \
  -Cllvm-args=-sanitizer-coverage-level=4 \
  -Cllvm-args=-sanitizer-coverage-inline-8bit-counters \
@@ -28,13 +31,15 @@ export RUSTFLAGS="--cfg fuzzing -Cpasses=sancov-module \
  -Cllvm-args=-sanitizer-coverage-trace-compares"
 # An explicit --target keeps the instrumentation out of build scripts and proc macros.
 host=$(rustc -vV | sed -n 's/^host: //p')
-cargo build --quiet --release --bin blob --target "$host"
+features=()
+if [ "$target" = readers ]; then features=(--features readers); fi
+cargo build --quiet --release --bin "$target" --target "$host" "${features[@]}"
 mkdir -p "$out/corpus" "$out/artifacts"
-seeds=$(cd ../corpus && pwd)
+if [ "$target" = readers ]; then seeds=$(cd ../corpus-readers && pwd); else seeds=$(cd ../corpus && pwd); fi
 # With JOBS > 1, libFuzzer writes each job's log (fuzz-N.log) to the working folder.
 cd "$out"
 parallel=()
 if [ "$jobs" -gt 1 ]; then parallel=(-jobs="$jobs" -workers="$jobs"); fi
-"$CARGO_TARGET_DIR/$host/release/blob" "$out/corpus" "$seeds" "${parallel[@]}" \
+"$CARGO_TARGET_DIR/$host/release/$target" "$out/corpus" "$seeds" "${parallel[@]}" \
     -max_total_time="$seconds" -timeout=5 \
     -artifact_prefix="$out/artifacts/" -print_final_stats=1

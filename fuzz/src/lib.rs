@@ -8,13 +8,41 @@
 //! payload length and the CRC repaired, so that mutations reach the payload decoders and the
 //! model validation instead of stopping at the CRC.
 //!
-//! `fuzz/libfuzzer/` drives it coverage-guided (see its README); the workspace test
+//! [`readers::read`] does the same for the trainer's file readers.
+//!
+//! `fuzz/libfuzzer/` drives them coverage-guided (see its README); the workspace test
 //! `fuzz/tests/corpus.rs` runs it over the committed corpus `fuzz/corpus/` and seeded
 //! mutations of it.
+
+#[cfg(feature = "readers")]
+pub mod readers;
 
 use neurosurf_core::blob::{self, HEADER_LEN, TRAILER_LEN};
 use neurosurf_core::model::{self, MAX_INPUTS, MAX_OUTPUTS, Model, ModelVisitor};
 use neurosurf_core::scalar::{Scalar, ScalarKind};
+
+/// The files of a corpus folder of this crate (`corpus`, `corpus-readers`), by name.
+///
+/// # Panics
+/// When the folder or a file cannot be read.
+pub fn corpus(folder: &str) -> Vec<(String, Vec<u8>)> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(folder);
+    let entries = std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    let mut files: Vec<(String, Vec<u8>)> = entries
+        .map(|entry| {
+            let path = entry.expect("a corpus entry").path();
+            let name = path
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            (name, bytes)
+        })
+        .collect();
+    files.sort();
+    files
+}
 
 /// What the harness did with one input.
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]

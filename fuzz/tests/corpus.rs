@@ -2,23 +2,11 @@
 //! kind, f32 and Q16.16) and seeded mutations of it: every corpus blob loads as its kind, and
 //! no mutation panics. The coverage-guided campaign runs the same harness (`fuzz/libfuzzer/`).
 
-use std::collections::BTreeSet;
-use std::path::Path;
-
 use neurosurf_core::blob::{self, ModelKind};
+use std::collections::BTreeSet;
 
 fn corpus() -> Vec<(String, Vec<u8>)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
-    let mut blobs: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-        .map(|entry| {
-            let path = entry.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(&path).unwrap())
-        })
-        .collect();
-    blobs.sort();
-    blobs
+    neurosurf_fuzz::corpus("corpus")
 }
 
 #[test]

@@ -68,16 +68,9 @@ struct CompressReport<'a> {
     psnr_db: f64,
 }
 
-/// Reads a picture as 8-bit RGB.
-fn read_picture(path: &Path) -> Result<image::RgbImage> {
-    Ok(image::open(path)
-        .with_context(|| format!("cannot read the picture {}", path.display()))?
-        .to_rgb8())
-}
-
 fn compress(args: &CompressArgs) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
-    let picture = read_picture(&args.input)?;
+    let picture = neurosurf_trainer::io::read_picture(&args.input)?;
     neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
     let compressed = compress_image(&picture, args.keys, args.gamma, args.iterations)?;
     let blob = compressed.to_blob(scalar)?;
@@ -141,7 +134,7 @@ fn decompress(args: &DecompressArgs) -> Result<()> {
     let compressed = CompressedImage::from_blob(&bytes, &args.blob)?;
     let picture = compressed.decode();
     let psnr_db = match &args.reference {
-        Some(path) => Some(psnr(&read_picture(path)?, &picture)?),
+        Some(path) => Some(psnr(&neurosurf_trainer::io::read_picture(path)?, &picture)?),
         None => None,
     };
     write_png(&args.out, &picture)?;

@@ -1,5 +1,5 @@
 //! Files in and out: PLY (ascii and binary, via `ply-rs-bw`), OBJ (read via `tobj`), binary STL
-//! (written), whitespace point lists; atomic writes.
+//! (written), whitespace point lists, PNG pictures (read); atomic writes.
 //!
 //! Readers name the file, and where known the line, element, vertex or property, in every
 //! [`Error::Format`]; writers go through [`write_atomic_with`] so a failed write never leaves
@@ -11,6 +11,7 @@ mod atomic;
 mod data;
 mod mesh;
 mod obj;
+mod picture;
 mod ply;
 mod stl;
 mod text;
@@ -19,6 +20,7 @@ pub use atomic::{write_atomic, write_atomic_with};
 pub use data::{DATA_VARIABLE, data_dir, data_file};
 pub use mesh::{EdgeReport, Mesh, read_mesh, write_mesh};
 pub use obj::{TextureCoordinates, write_textured_obj};
+pub use picture::read_picture;
 pub use ply::{PlyEncoding, read_points, write_mesh_ply, write_points_ply};
 pub use text::{
     MAX_PARAMETERS, read_parameters, read_query_points, read_rows, read_scattered_points,
