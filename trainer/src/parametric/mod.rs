@@ -98,6 +98,7 @@ pub use hole::{HoleFill, HoleOptions, fill_hole, point_triangle_distance, punch_
 pub use laplacian::cotangent_laplacian;
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
 pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};
+pub use packed::{LaneRecord, PackedNetwork};
 pub use picture::wireframe;
 pub use pipeline::{ReconstructOptions, Reconstruction, Tessellation, reconstruct};
 pub use planar::{

@@ -230,40 +230,4 @@ mod tests {
                 .is_none()
         );
     }
-
-    /// The LLE matrix of a 100 × 100 grid on a wavy sheet (10 000 points, k = 10): times of
-    /// its assembly, compression and shifted Cholesky factorization.
-    #[test]
-    #[ignore = "timing run: cargo test --release -p neurosurf-trainer --lib parametric::sparse::tests::lle_matrix_timing -- --ignored --nocapture"]
-    fn lle_matrix_timing() {
-        use crate::parametric::{embedding_matrix, reconstruction_weights};
-        let points: Vec<[f64; 3]> = (0..10_000)
-            .map(|k| {
-                let (u, v) = ((k % 100) as f64 / 99.0, (k / 100) as f64 / 99.0);
-                [u, v, 0.1 * (6.0 * u).sin() * (4.0 * v).cos()]
-            })
-            .collect();
-        let diagonal = crate::parametric::neighbors::check_points(&points, 11).unwrap();
-        let neighbors =
-            crate::parametric::neighbors::nearest_neighbors(&points, 10, diagonal).unwrap();
-        let weights = reconstruction_weights(&points, &neighbors, 1e-3).unwrap();
-        let timed = |f: &mut dyn FnMut()| {
-            let start = std::time::Instant::now();
-            f();
-            start.elapsed().as_secs_f64() * 1e3
-        };
-        let mut m = SymmetricMatrix::new(0);
-        let assemble = timed(&mut || m = embedding_matrix(&neighbors, &weights));
-        let mut compressed = None;
-        let compress = timed(&mut || compressed = Some(m.compress().unwrap()));
-        let shifted = compressed.unwrap().with_diagonal_added(1e-9).unwrap();
-        let factor = timed(&mut || assert!(shifted.cholesky().is_ok()));
-        eprintln!(
-            "| 10 000-point LLE matrix ({} entries) | ms |",
-            m.entries.len()
-        );
-        eprintln!("| triplets (embedding_matrix) | {assemble:.1} |");
-        eprintln!("| compress | {compress:.1} |");
-        eprintln!("| Cholesky of M + σI | {factor:.1} |");
-    }
 }
