@@ -3,16 +3,17 @@
 
 mod parametric;
 mod precision;
+mod through_core;
 
 use std::path::Path;
 
 use neurosurf_core::blob::{self, ModelKind};
-use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
-use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+use neurosurf_core::scalar::ScalarKind;
 
 use crate::caoen::{self, CaoEnNetwork};
 use crate::curve::{DecodedCurve, DecodedSurface, curve_from_blob, surface_from_blob};
 use crate::error::{Error, Result};
+use through_core::core_outputs;
 
 use crate::implicit::{self, DecodedImplicit};
 use crate::parametric::{DecodedNetwork, network_from_blob};
@@ -174,11 +175,20 @@ impl LoadedModel {
             (LoadedModel::Implicit { decoded, .. }, Precision::F64) => {
                 Ok(points.iter().map(|&p| decoded.network.eval(p)).collect())
             }
-            (LoadedModel::Implicit { bytes, .. }, Precision::F32) => {
-                evaluate_core::<f32>(bytes, points)
-            }
-            (LoadedModel::Implicit { bytes, .. }, Precision::Q16) => {
-                evaluate_core::<Q16>(bytes, points)
+            (LoadedModel::Implicit { bytes, .. }, Precision::F32 | Precision::Q16) => {
+                let points: Vec<Vec<f64>> = points.iter().map(|p| p.to_vec()).collect();
+                Ok(
+                    core_outputs(bytes, ModelKind::Implicit, precision, &points)?
+                        .into_iter()
+                        .map(|o| {
+                            let at = |k: usize| o.derivative.get(k).copied().unwrap_or(0.0);
+                            (
+                                o.value.first().copied().unwrap_or(0.0),
+                                [at(0), at(1), at(2)],
+                            )
+                        })
+                        .collect(),
+                )
             }
             (LoadedModel::Rbf(model), Precision::F64) => {
                 Ok(points.iter().map(|&p| model.field_gradient(p)).collect())
@@ -198,26 +208,4 @@ impl LoadedModel {
             ))),
         }
     }
-}
-
-/// Runs the core's batch evaluation in scalar `S` (points rounded to `S`, saturating).
-fn evaluate_core<S: Scalar>(bytes: &[u8], points: &[[f64; 3]]) -> Result<Vec<Sample>> {
-    let model = ImplicitModel::<S>::from_blob(bytes).map_err(|e| {
-        Error::invalid(format!(
-            "the core cannot load this model in {}: {e}",
-            S::KIND.name()
-        ))
-    })?;
-    let inputs: Vec<[S; 3]> = points
-        .iter()
-        .map(|p| p.map(|c| S::from_f32_saturating(c as f32)))
-        .collect();
-    let mut out = vec![FieldGradient::<S>::default(); inputs.len()];
-    model
-        .field_gradient_batch(&inputs, &mut out)
-        .map_err(|e| Error::invalid(format!("batch evaluation: {e}")))?;
-    Ok(out
-        .iter()
-        .map(|fg| (fg.value.to_f64(), fg.gradient.map(S::to_f64)))
-        .collect())
 }

@@ -3,11 +3,7 @@
 //! shape's unit normal)
 //! at parameters, in `f64` (the trainer's reference) or through the core in `f32` or Q16.16.
 
-use neurosurf_core::caoen::{CaoEnModel, CaoEnPoint, MAX_SOURCE_DIMENSION, MAX_TARGET_DIMENSION};
-use neurosurf_core::curve::{BSplineCurve, BSplineSurface, CurvePoint};
-use neurosurf_core::parametric::{SurfaceNetworkModel, SurfaceNetworkPoint};
-use neurosurf_core::scalar::{Q16, Scalar};
-
+use super::through_core::core_outputs;
 use super::{LoadedModel, Precision};
 use crate::error::{Error, Result};
 
@@ -78,6 +74,19 @@ impl LoadedModel {
             .collect();
         let at = |p: &[f64], k: usize| p.get(k).copied().unwrap_or(0.0);
         match (self, precision) {
+            (
+                LoadedModel::Curve { bytes, .. }
+                | LoadedModel::SplineSurface { bytes, .. }
+                | LoadedModel::SurfaceNetwork { bytes, .. }
+                | LoadedModel::CaoEn { bytes, .. },
+                Precision::F32 | Precision::Q16,
+            ) => Ok(core_outputs(bytes, self.kind(), precision, &rounded)?
+                .into_iter()
+                .map(|o| Geometry {
+                    output: o.value,
+                    direction: std::array::from_fn(|k| o.derivative.get(k).copied().unwrap_or(0.0)),
+                })
+                .collect()),
             (LoadedModel::Curve { decoded, .. }, Precision::F64) => Ok(rounded
                 .iter()
                 .map(|p| {
@@ -85,12 +94,6 @@ impl LoadedModel {
                     geometry(decoded.curve.point(t), decoded.curve.tangent(t))
                 })
                 .collect()),
-            (LoadedModel::Curve { bytes, .. }, Precision::F32) => {
-                curve_core::<f32>(bytes, &rounded)
-            }
-            (LoadedModel::Curve { bytes, .. }, Precision::Q16) => {
-                curve_core::<Q16>(bytes, &rounded)
-            }
             (LoadedModel::SplineSurface { decoded, .. }, Precision::F64) => Ok(rounded
                 .iter()
                 .map(|p| {
@@ -99,12 +102,6 @@ impl LoadedModel {
                     geometry(s.point(u, v), s.normal(u, v).unwrap_or([0.0; 3]))
                 })
                 .collect()),
-            (LoadedModel::SplineSurface { bytes, .. }, Precision::F32) => {
-                surface_core::<f32>(bytes, &rounded)
-            }
-            (LoadedModel::SplineSurface { bytes, .. }, Precision::Q16) => {
-                surface_core::<Q16>(bytes, &rounded)
-            }
             (LoadedModel::SurfaceNetwork { decoded, .. }, Precision::F64) => Ok(rounded
                 .iter()
                 .map(|p| {
@@ -112,12 +109,6 @@ impl LoadedModel {
                     geometry(point.position, point.normal())
                 })
                 .collect()),
-            (LoadedModel::SurfaceNetwork { bytes, .. }, Precision::F32) => {
-                network_core::<f32>(bytes, &rounded)
-            }
-            (LoadedModel::SurfaceNetwork { bytes, .. }, Precision::Q16) => {
-                network_core::<Q16>(bytes, &rounded)
-            }
             (LoadedModel::CaoEn { decoded, .. }, Precision::F64) => {
                 let network = &decoded.network;
                 let m = network.source_dimension();
@@ -132,12 +123,6 @@ impl LoadedModel {
                     })
                     .collect())
             }
-            (LoadedModel::CaoEn { bytes, .. }, Precision::F32) => {
-                caoen_core::<f32>(bytes, &rounded)
-            }
-            (LoadedModel::CaoEn { bytes, .. }, Precision::Q16) => {
-                caoen_core::<Q16>(bytes, &rounded)
-            }
             _ => Err(Error::invalid(format!(
                 "a {} model has a field, not a parametric geometry",
                 self.kind().name()
@@ -151,112 +136,4 @@ fn geometry(position: [f64; 3], direction: [f64; 3]) -> Geometry {
         output: position.to_vec(),
         direction,
     }
-}
-
-fn load_error(what: &str, scalar: &str, error: impl std::fmt::Display) -> Error {
-    Error::invalid(format!(
-        "the core cannot load this {what} in {scalar}: {error}"
-    ))
-}
-
-/// Coordinate `k` of a parameter point in `S` (0 when missing), as the target decodes it.
-fn coordinate<S: Scalar>(p: &[f64], k: usize) -> S {
-    S::from_f32_saturating(p.get(k).copied().unwrap_or(0.0) as f32)
-}
-
-fn batch_error(e: impl std::fmt::Display) -> Error {
-    Error::invalid(format!("batch evaluation: {e}"))
-}
-
-/// The core's batch evaluation of a curve in `S`.
-fn curve_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
-    let curve =
-        BSplineCurve::<S>::from_blob(bytes).map_err(|e| load_error("curve", S::KIND.name(), e))?;
-    let t: Vec<S> = parameters.iter().map(|p| coordinate(p, 0)).collect();
-    let mut out = vec![CurvePoint::<S>::default(); t.len()];
-    curve.eval_batch(&t, &mut out).map_err(batch_error)?;
-    Ok(out
-        .iter()
-        .map(|p| geometry(p.position.map(S::to_f64), p.tangent.map(S::to_f64)))
-        .collect())
-}
-
-/// The core's batch evaluation of a spline surface in `S`.
-fn surface_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
-    let surface = BSplineSurface::<S>::from_blob(bytes)
-        .map_err(|e| load_error("spline surface", S::KIND.name(), e))?;
-    let uv: Vec<[S; 2]> = parameters
-        .iter()
-        .map(|p| [coordinate(p, 0), coordinate(p, 1)])
-        .collect();
-    let mut positions = vec![[S::ZERO; 3]; uv.len()];
-    let mut normals = vec![None; uv.len()];
-    surface
-        .position_batch(&uv, &mut positions)
-        .and_then(|()| surface.normal_batch(&uv, &mut normals))
-        .map_err(batch_error)?;
-    Ok(positions
-        .iter()
-        .zip(&normals)
-        .map(|(p, n)| geometry(p.map(S::to_f64), n.unwrap_or([S::ZERO; 3]).map(S::to_f64)))
-        .collect())
-}
-
-/// The core's batch evaluation of a surface network in `S`: position and unit normal.
-fn network_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
-    let network = SurfaceNetworkModel::<S>::from_blob(bytes)
-        .map_err(|e| load_error("surface network", S::KIND.name(), e))?;
-    let uv: Vec<[S; 2]> = parameters
-        .iter()
-        .map(|p| [coordinate(p, 0), coordinate(p, 1)])
-        .collect();
-    let mut points = vec![SurfaceNetworkPoint::<S>::default(); uv.len()];
-    network.eval_batch(&uv, &mut points).map_err(batch_error)?;
-    Ok(points
-        .iter()
-        .map(|p| {
-            geometry(
-                p.position.map(S::to_f64),
-                p.normal.unwrap_or([S::ZERO; 3]).map(S::to_f64),
-            )
-        })
-        .collect())
-}
-
-/// The core's batch evaluation of a Cao En network in `S`, with the widest source and
-/// target the core supports (what the target's firmware runs; extra coordinates are 0).
-fn caoen_core<S: Scalar>(bytes: &[u8], parameters: &[Vec<f64>]) -> Result<Vec<Geometry>> {
-    let network = Box::new(
-        CaoEnModel::<S>::from_blob(bytes)
-            .map_err(|e| load_error("Cao En network", S::KIND.name(), e))?,
-    );
-    let p = network.target_dimension();
-    let x: Vec<[S; MAX_SOURCE_DIMENSION]> = parameters
-        .iter()
-        .map(|point| std::array::from_fn(|k| coordinate(point, k)))
-        .collect();
-    // As the firmware does: one pass with the Jacobian for a shape (p = 3: position and
-    // normal), one without for other networks (no normal).
-    if p == 3 {
-        let mut points = vec![CaoEnPoint::<S>::default(); x.len()];
-        network
-            .eval_normal_batch(&x, &mut points)
-            .map_err(batch_error)?;
-        return Ok(points
-            .iter()
-            .map(|point| Geometry {
-                output: point.position.iter().map(|v| v.to_f64()).collect(),
-                direction: point.normal.unwrap_or([S::ZERO; 3]).map(S::to_f64),
-            })
-            .collect());
-    }
-    let mut outputs = vec![[S::ZERO; MAX_TARGET_DIMENSION]; x.len()];
-    network.eval_batch(&x, &mut outputs).map_err(batch_error)?;
-    Ok(outputs
-        .iter()
-        .map(|y| Geometry {
-            output: y.iter().take(p).map(|v| v.to_f64()).collect(),
-            direction: [0.0; 3],
-        })
-        .collect())
 }
