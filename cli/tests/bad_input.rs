@@ -310,4 +310,26 @@ fn absurd_option_values_are_refused_by_name() {
             && stderr.contains("does not exist"),
         "{stderr}"
     );
+    // Outputs that cannot be written: an existing folder, and a path under a file.
+    let folder = dir.path().join("a folder");
+    fs::create_dir(&folder).unwrap();
+    for unwritable in [folder.clone(), out.join("torus.obj")] {
+        let path = unwritable.to_str().unwrap();
+        for command in [
+            vec!["mesh", model, "--out", path],
+            vec!["implicit", "fit", "--points", torus, "--out", path],
+        ] {
+            let output = neurosurf(&command);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(
+                !output.status.success()
+                    && !stderr.contains("panicked")
+                    && stderr.starts_with("error")
+                    && stderr.contains(path),
+                "{command:?}: {stderr}"
+            );
+        }
+    }
+    assert!(folder.is_dir());
+    assert_eq!(fs::read(&out).unwrap(), b"precious");
 }
