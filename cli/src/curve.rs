@@ -181,6 +181,7 @@ struct FitReport<'a> {
 
 fn fit(args: &FitArgs) -> Result<()> {
     let scalar = blob_scalar(args.blob.scalar)?;
+    neurosurf_trainer::io::check_output(&args.blob.out)?;
     let (dimension, raw) = read_scattered_points(&args.points)?;
     let points = CurvePoints::new(dimension, raw)
         .with_context(|| format!("cannot fit a curve to {}", args.points.display()))?;
@@ -376,6 +377,7 @@ struct SurfaceReport<'a> {
 
 fn surface(args: &SurfaceArgs) -> Result<()> {
     let scalar = blob_scalar(args.blob.scalar)?;
+    neurosurf_trainer::io::check_output(&args.blob.out)?;
     let (dimension, raw) = read_scattered_points(&args.points)?;
     if dimension != 3 {
         anyhow::bail!(

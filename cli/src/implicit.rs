@@ -188,6 +188,7 @@ struct ImplicitSummary<'a> {
 }
 
 fn implicit(args: &ImplicitArgs) -> Result<()> {
+    neurosurf_trainer::io::check_output(&args.out)?;
     let points = read_points(&args.points)?;
     let init = args.init.as_deref().map(read_init).transpose()?;
     let mut options = ImplicitOptions {
@@ -300,6 +301,7 @@ struct RbfSummary<'a> {
 }
 
 fn rbf(args: &RbfArgs) -> Result<()> {
+    neurosurf_trainer::io::check_output(&args.out)?;
     let points = read_points(&args.points)?.validated()?;
     let options = RbfOptions {
         kernel: match args.kernel {

@@ -298,6 +298,7 @@ struct FitReport<'a> {
 
 fn fit(args: &FitArgs) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
+    neurosurf_trainer::io::check_output(&args.out)?;
     // What the core holds, checked before any embedding or fitting.
     neurosurf_trainer::parametric::check_capacity(args.max_layers, args.max_neurons)?;
     let points = read_points(&args.points)?;

@@ -45,6 +45,7 @@ struct Report<'a> {
 
 pub fn run(args: &Args) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
+    neurosurf_trainer::io::check_output(&args.out)?;
     let mesh = read_mesh(&args.mesh)?;
     let map = spherical_parameterization(&mesh)?;
     neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;

@@ -70,6 +70,7 @@ struct CompressReport<'a> {
 
 fn compress(args: &CompressArgs) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
+    neurosurf_trainer::io::check_output(&args.out)?;
     let picture = neurosurf_trainer::io::read_picture(&args.input)?;
     neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
     let compressed = compress_image(&picture, args.keys, args.gamma, args.iterations)?;

@@ -197,6 +197,7 @@ fn keys_and_targets(rows: &[Vec<f64>], m: usize) -> Result<KeysAndTargets> {
 
 fn fit(args: &FitArgs) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
+    neurosurf_trainer::io::check_output(&args.out)?;
     let (domain, default_m) = match args.domain {
         DomainArg::Sphere => (Domain::Sphere, 3),
         DomainArg::Torus => (Domain::Torus, 4),

@@ -48,6 +48,7 @@ struct Report<'a> {
 
 pub fn run(args: &Args) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
+    neurosurf_trainer::io::check_output(&args.out)?;
     let network = read_network(&args.model, "shade")?;
     let fit = fold_lighting(&network, &args.lights)?;
     let blob = caoen::to_blob(&fit.network, scalar, b"neurosurf caoen shade")?;

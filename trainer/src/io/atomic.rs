@@ -16,6 +16,44 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
 }
 
+/// The folder `path` is written into.
+fn folder(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// Checks that `path` can be an output before any work is done for it: its folder exists and
+/// it is not itself a folder. Commands call it first, so that a typo costs no training.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming `path` and what to change.
+pub fn check_output(path: &Path) -> Result<()> {
+    let dir = folder(path);
+    if dir.is_file() {
+        return Err(Error::invalid(format!(
+            "{}: {} is a file, not a folder; write somewhere else",
+            path.display(),
+            dir.display()
+        )));
+    }
+    if !dir.is_dir() {
+        return Err(Error::invalid(format!(
+            "{}: the folder {} does not exist; create it or write somewhere else",
+            path.display(),
+            dir.display()
+        )));
+    }
+    if path.is_dir() {
+        return Err(Error::invalid(format!(
+            "{} is a folder; name a file to write",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Streams output into `path` atomically: `fill` writes into a buffered temporary file.
 ///
 /// # Errors
@@ -24,18 +62,9 @@ pub fn write_atomic_with(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    check_output(path)?;
+    let dir = folder(path);
     let io = |e| Error::io(path, e);
-    if !dir.is_dir() {
-        return Err(Error::invalid(format!(
-            "{}: the folder {} does not exist; create it or write somewhere else",
-            path.display(),
-            dir.display()
-        )));
-    }
     let mut builder = tempfile::Builder::new();
     builder.prefix(".neurosurf-").suffix(".tmp");
     // A temporary file is private (0600); the output is an ordinary file, readable as the
@@ -56,6 +85,23 @@ pub fn write_atomic_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn outputs_that_cannot_be_written_are_named_before_any_work() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("file");
+        std::fs::write(&file, b"x").unwrap();
+        check_output(&dir.path().join("new.nsb")).unwrap();
+        check_output(&file).unwrap();
+        let folder = check_output(dir.path()).unwrap_err().to_string();
+        assert!(folder.contains("is a folder"), "{folder}");
+        let under = check_output(&file.join("x.nsb")).unwrap_err().to_string();
+        assert!(under.contains("is a file, not a folder"), "{under}");
+        let missing = check_output(&dir.path().join("no/x.nsb"))
+            .unwrap_err()
+            .to_string();
+        assert!(missing.contains("does not exist"), "{missing}");
+    }
 
     #[cfg(unix)]
     #[test]

@@ -16,7 +16,7 @@ mod ply;
 mod stl;
 mod text;
 
-pub use atomic::{write_atomic, write_atomic_with};
+pub use atomic::{check_output, write_atomic, write_atomic_with};
 pub use data::{DATA_VARIABLE, data_dir, data_file};
 pub use mesh::{EdgeReport, Mesh, read_mesh, write_mesh};
 pub use obj::{TextureCoordinates, write_textured_obj};
