@@ -23,6 +23,21 @@ use super::write_atomic_with;
 /// duplicating shared ones; to avoid that the reader hides `o`/`g` statements from tobj (one
 /// model) and prepends one synthetic polygon `f 1 2 … n` through all `n` vertices, which fixes
 /// the numbering, and is then dropped.
+/// Blanks the `/vt/vn` part of every index of a face or line statement, in place.
+fn blank_attribute_indices(line: &mut [u8]) {
+    let mut in_attributes = false;
+    for byte in line.iter_mut() {
+        if byte.is_ascii_whitespace() {
+            in_attributes = false;
+        } else if *byte == b'/' {
+            in_attributes = true;
+        }
+        if in_attributes {
+            *byte = b' ';
+        }
+    }
+}
+
 pub(crate) fn read_obj_mesh(path: &Path) -> Result<Mesh> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     parse_obj(path, bytes)
@@ -41,6 +56,9 @@ fn parse_obj(path: &Path, mut bytes: Vec<u8>) -> Result<Mesh> {
             Some("v") => vertices += 1,
             // Same length, so no copy: `o name` becomes the comment `# name`.
             Some("o" | "g") => line[start] = b'#',
+            // Only positions are read: `7/3/2` becomes `7    `, so texture and normal indices
+            // (which tobj mishandles when they are out of range) never reach it.
+            Some("f" | "l") => blank_attribute_indices(line),
             _ => {}
         }
     }
@@ -223,6 +241,17 @@ mod tests {
             }
             other => panic!("expected a format error, got {other:?}"),
         }
+    }
+
+    #[test]
+    fn texture_and_normal_indices_out_of_range_are_ignored() {
+        // Found by fuzzing: tobj overflowed on the negative texture index −10.
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-1 2/-10 3/99/-7\nf 1//5 3//-9 2\n";
+        let mesh = parse(text).unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 1]]);
+        // Vertex indices are still checked.
+        let error = message(parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/2 2 -9\n").unwrap_err());
+        assert!(!error.is_empty());
     }
 
     #[test]
