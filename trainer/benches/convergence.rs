@@ -214,12 +214,7 @@ fn main() {
         table.push_str(&line);
     }
     if let Some(path) = value("--out").map(|p| shapes::in_workspace(&p)) {
-        let command: Vec<&str> = args[1..]
-            .iter()
-            .map(String::as_str)
-            .filter(|a| *a != "--bench")
-            .collect();
-        let command = command.join(" ");
+        let command = shapes::arguments(&args);
         let text = format!(
             "# Convergence over seeds\n\nWritten by `cargo bench -p neurosurf-trainer --bench \
              convergence -- {command}` on {} threads. Each seed draws its own sample and \

@@ -201,12 +201,7 @@ fn main() {
         shapes(&filter, &seeds, rbf, to_diagonal, &value);
     }
     if let Some(path) = value("--out").map(|p| shapes::in_workspace(&p)) {
-        let command: Vec<&str> = args[1..]
-            .iter()
-            .map(String::as_str)
-            .filter(|a| *a != "--bench")
-            .collect();
-        let command = command.join(" ");
+        let command = shapes::arguments(&args);
         let text = format!(
             "# {}\n\nWritten by `cargo bench -p neurosurf-trainer \
              --bench implicit_shapes -- {command}` on {} threads. Distances are medians in % of \

@@ -73,3 +73,15 @@ pub fn in_workspace(path: &str) -> std::path::PathBuf {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     root.join(path)
 }
+
+/// The bench's own arguments as typed after `--` (cargo adds `--bench`), for the "written by"
+/// line of an `--out` file.
+pub fn arguments(args: &[String]) -> String {
+    let own: Vec<&str> = args
+        .iter()
+        .skip(1)
+        .map(String::as_str)
+        .filter(|a| *a != "--bench")
+        .collect();
+    own.join(" ")
+}
