@@ -178,6 +178,8 @@ struct ImplicitSummary<'a> {
     blob_bytes: usize,
     scalar: &'static str,
     parameters: usize,
+    /// Sign guards added where the network alone had the wrong sign away from the data.
+    guards: usize,
     converged: bool,
     /// How the training ended: converged, stalled at E_s = …, or cut by the iteration cap.
     outcome: String,
@@ -237,6 +239,7 @@ fn implicit(args: &ImplicitArgs) -> Result<()> {
         blob_bytes: bytes.len(),
         scalar: args.scalar.kind().name(),
         parameters: trained.network.params().len(),
+        guards: trained.network.guards().len(),
         converged: summary.converged(),
         outcome: summary.outcome().to_string(),
         iterations: summary.iterations(),
@@ -270,6 +273,12 @@ fn implicit(args: &ImplicitArgs) -> Result<()> {
         );
     }
     println!("training {}", summary.outcome());
+    if report.guards > 0 {
+        println!(
+            "{} sign guards fix the field's sign where the network had it wrong away from the points",
+            report.guards
+        );
+    }
     if !summary.outcome().settled() {
         eprintln!(
             "warning: a module ran into the iteration cap ({}); raise --max-iterations",

@@ -33,6 +33,8 @@ struct Info<'a> {
     tree: Option<String>,
     modules: Option<usize>,
     leaves: Option<usize>,
+    /// Implicit models: sign guards added to the root's output.
+    guards: Option<usize>,
     /// Multiply–accumulates of one field evaluation and of one field+gradient evaluation.
     macs: Option<(usize, usize)>,
     centers: Option<usize>,
@@ -61,6 +63,7 @@ pub fn run(args: &Args) -> Result<()> {
                 tree: Some(net.tree().to_string()),
                 modules: Some(net.module_count()),
                 leaves: Some(net.subtree_leaves(net.root()).len()),
+                guards: Some(net.guards().len()),
                 macs,
                 training: decoded.metadata.as_ref().and_then(|m| m.summary.as_ref()),
                 ..Info::default()
@@ -191,6 +194,9 @@ pub fn run(args: &Args) -> Result<()> {
             info.modules.unwrap_or(0),
             info.leaves.unwrap_or(0)
         );
+    }
+    if let Some(guards) = info.guards.filter(|&g| g > 0) {
+        println!("  sign guards  {guards}");
     }
     if let Some(control) = &info.control {
         println!("  control      {control}");

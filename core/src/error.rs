@@ -40,6 +40,8 @@ pub enum Quantity {
     /// The code of a parametric surface network's activation (the valid maximum is reported
     /// as expected).
     Activation,
+    /// Sign guards of an implicit model.
+    Guards,
 }
 
 impl fmt::Display for Quantity {
@@ -59,6 +61,7 @@ impl fmt::Display for Quantity {
             Quantity::Domain => "source domain code",
             Quantity::Layers => "hidden layer count",
             Quantity::Activation => "activation code",
+            Quantity::Guards => "sign guard count",
         })
     }
 }

@@ -1,5 +1,6 @@
 //! Evaluation of Φ, ∇Φ and the unit normal: a recursive walk over the module tree.
 
+use super::guard;
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::{ImplicitModel, ModuleEntry};
 use super::width::{at_width, width};
@@ -94,7 +95,22 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
     /// Φ at `L` points at once.
     #[inline]
     pub(crate) fn field_lanes<const L: usize>(&self, points: &[[S; 3]; L]) -> [S; L] {
-        at_width!(self.model.width, self.field_at::<L>(points))
+        let mut values = at_width!(self.model.width, self.field_at::<L>(points));
+        let guards = self.guards();
+        if !guards.is_empty() {
+            guard::add_values(guards, points, &mut values);
+        }
+        values
+    }
+
+    /// The guards this view adds: the model's for the root, none for a subtree.
+    #[inline]
+    pub(crate) fn guards(&self) -> &[S] {
+        if self.module == self.model.root() {
+            self.model.guard_parameters()
+        } else {
+            &[]
+        }
     }
 
     /// Φ at `L` points with layers of capacity `N` (see [`width`]).

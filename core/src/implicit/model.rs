@@ -3,6 +3,7 @@
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
+use super::guard::{GUARD_LEN, MAX_GUARDS, split_tree};
 use super::layout::{MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout};
 use crate::blob::{self, ModelKind};
 use crate::error::{BlobError, Quantity};
@@ -19,10 +20,12 @@ pub const DEFAULT_MODULES: usize = 64;
 pub struct ImplicitPayload<'a> {
     /// Hidden width N of every module.
     pub width: u8,
-    /// Module kinds in post-order ([`ModuleKind::code`]).
+    /// Module kinds in post-order ([`ModuleKind::code`]), then one
+    /// [`GUARD_CODE`](super::GUARD_CODE) per sign guard.
     #[serde(borrow)]
     pub tree: &'a [u8],
-    /// All parameters in [`ModuleLayout`](super::ModuleLayout) order, 4 little-endian bytes each in the blob's
+    /// All parameters in [`ModuleLayout`](super::ModuleLayout) order, then
+    /// [`GUARD_LEN`](super::GUARD_LEN) per guard; 4 little-endian bytes each in the blob's
     /// scalar kind.
     #[serde(borrow)]
     pub parameters: &'a [u8],
@@ -96,6 +99,8 @@ pub struct ImplicitModel<
     pub(crate) width: usize,
     pub(crate) modules: Vec<ModuleEntry, M>,
     pub(crate) parameters: Vec<S, P>,
+    /// Where the guards' parameters start (the modules' parameter count).
+    pub(crate) guards_offset: usize,
     pub(crate) stored_as: ScalarKind,
 }
 
@@ -108,6 +113,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             width: 0,
             modules: Vec::new(),
             parameters: Vec::new(),
+            guards_offset: 0,
             stored_as: S::KIND,
         }
     }
@@ -175,6 +181,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         self.width = 0;
         self.modules.clear();
         self.parameters.clear();
+        self.guards_offset = 0;
         self.stored_as = S::KIND;
     }
 
@@ -193,11 +200,21 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                 found: width,
             });
         }
-        build_tree(&mut self.modules, payload.tree, width)?;
-        let needed = self
+        // The modules, then the guards: one code each, after the last module.
+        let (tree, guards) = split_tree(payload.tree)?;
+        if guards > MAX_GUARDS {
+            return Err(BlobError::CapacityExceeded {
+                what: Quantity::Guards,
+                needed: guards,
+                capacity: MAX_GUARDS,
+            });
+        }
+        build_tree(&mut self.modules, tree, width)?;
+        let module_parameters = self
             .modules
             .last()
             .map_or(0, |m| m.offset + ModuleLayout::new(m.kind, width).len);
+        let needed = module_parameters + GUARD_LEN * guards;
         let word = stored.stored_bytes();
         let found = payload.parameters.len() / word;
         if !payload.parameters.len().is_multiple_of(word) || found != needed {
@@ -231,7 +248,17 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                     capacity: P,
                 })?;
         }
+        // A guard's inverse radius must be positive: its support is then a ball.
+        let guard_parameters = self.parameters.get(module_parameters..).unwrap_or(&[]);
+        for (guard, params) in guard_parameters.chunks_exact(GUARD_LEN).enumerate() {
+            if !params.get(3).is_some_and(|rho| *rho > S::ZERO) {
+                return Err(BlobError::ParameterOutOfRange {
+                    index: module_parameters + GUARD_LEN * guard + 3,
+                });
+            }
+        }
         self.width = width;
+        self.guards_offset = module_parameters;
         self.stored_as = stored;
         Ok(())
     }
@@ -254,7 +281,17 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             .count()
     }
 
-    /// Total stored parameters.
+    /// Number of sign guards ([`super::guard`]).
+    pub fn guard_count(&self) -> usize {
+        (self.parameters.len() - self.guards_offset.min(self.parameters.len())) / GUARD_LEN
+    }
+
+    /// The guards' parameters, [`GUARD_LEN`] each.
+    pub(crate) fn guard_parameters(&self) -> &[S] {
+        self.parameters.get(self.guards_offset..).unwrap_or(&[])
+    }
+
+    /// Total stored parameters (guards included).
     pub fn parameter_count(&self) -> usize {
         self.parameters.len()
     }

@@ -15,6 +15,7 @@
 //! allocated beyond that.
 
 use super::eval::{FieldGradient, ModuleView, normalized_input};
+use super::guard;
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
 use super::width::{at_width, width};
@@ -38,7 +39,17 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         &self,
         points: &[[S; 3]; L],
     ) -> [FieldGradient<S>; L] {
-        at_width!(self.model.width, self.field_gradient_at::<L>(points))
+        let mut results = at_width!(self.model.width, self.field_gradient_at::<L>(points));
+        let guards = self.guards();
+        if !guards.is_empty() {
+            let mut values = results.map(|r| r.value);
+            let mut gradients = results.map(|r| r.gradient);
+            guard::add_values_gradients(guards, points, &mut values, &mut gradients);
+            for ((result, value), gradient) in results.iter_mut().zip(values).zip(gradients) {
+                *result = FieldGradient { value, gradient };
+            }
+        }
+        results
     }
 
     /// Φ and ∇Φ at `L` points with layers of capacity `N` (see [`width`]).

@@ -7,14 +7,15 @@
 //! right tree.
 
 use neurosurf_core::blob::ModelKind;
-use neurosurf_core::implicit::{ImplicitPayload, ModuleKind};
+use neurosurf_core::implicit::guard::split_tree;
+use neurosurf_core::implicit::{GUARD_CODE, GUARD_LEN, ImplicitPayload, MAX_GUARDS, ModuleKind};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use std::path::Path;
 
 use neurosurf_core::BlobError;
 use serde::{Deserialize, Serialize};
 
-use super::network::ImplicitNetwork;
+use super::network::{Guard, ImplicitNetwork};
 use super::train::TrainingSummary;
 use crate::blob::encode;
 use crate::error::{Error, Result};
@@ -60,8 +61,13 @@ pub fn to_blob(
             )));
         }
     };
-    let mut parameters = Vec::with_capacity(network.params().len() * 4);
-    for (index, &value) in network.params().iter().enumerate() {
+    let guards: Vec<f64> = network
+        .guards()
+        .iter()
+        .flat_map(|g| g.parameters())
+        .collect();
+    let mut parameters = Vec::with_capacity((network.params().len() + guards.len()) * 4);
+    for (index, &value) in network.params().iter().chain(&guards).enumerate() {
         let word = scalar
             .encode(value)
             .filter(|_| value.abs() <= limit)
@@ -79,7 +85,18 @@ pub fn to_blob(
     };
     let metadata = postcard::to_allocvec(&metadata)
         .map_err(|e| Error::invalid(format!("cannot encode the model metadata: {e}")))?;
-    let tree: Vec<u8> = network.kinds().iter().map(|k| k.code()).collect();
+    if network.guards().len() > MAX_GUARDS {
+        return Err(Error::invalid(format!(
+            "{} sign guards; the core loads at most {MAX_GUARDS}",
+            network.guards().len()
+        )));
+    }
+    let tree: Vec<u8> = network
+        .kinds()
+        .iter()
+        .map(|k| k.code())
+        .chain(network.guards().iter().map(|_| GUARD_CODE))
+        .collect();
     let width = u8::try_from(network.width())
         .map_err(|_| Error::invalid(format!("width {} does not fit", network.width())))?;
     let payload = ImplicitPayload {
@@ -110,8 +127,9 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
             scalar: stored_as,
         }));
     }
-    let mut kinds = Vec::with_capacity(payload.tree.len());
-    for (module, &code) in payload.tree.iter().enumerate() {
+    let (tree, guard_count) = split_tree(payload.tree).map_err(rejected)?;
+    let mut kinds = Vec::with_capacity(tree.len());
+    for (module, &code) in tree.iter().enumerate() {
         kinds.push(ModuleKind::from_code(code).ok_or(rejected(BlobError::InvalidTree { module }))?);
     }
     if !payload.parameters.len().is_multiple_of(4) {
@@ -135,6 +153,21 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
         }
         params.push(value);
     }
+    let guard_params = params.split_off(params.len().saturating_sub(GUARD_LEN * guard_count));
+    let guards: Vec<Guard> = guard_params
+        .chunks_exact(GUARD_LEN)
+        .map(|g| Guard {
+            center: [g[0], g[1], g[2]],
+            inverse_radius: g[3],
+            amplitude: g[4],
+        })
+        .collect();
+    if guards.len() != guard_count || guards.iter().any(|g| g.inverse_radius <= 0.0) {
+        return Err(Error::format(
+            path,
+            "the sign guards' parameters are missing or have a radius that is not positive",
+        ));
+    }
     let metadata: Option<ImplicitMetadata> = postcard::from_bytes(payload.metadata).ok();
     let leaf_features = match &metadata {
         Some(m) if m.leaf_features.len() == kinds.len() => m.leaf_features.clone(),
@@ -154,7 +187,8 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
     };
     let network =
         ImplicitNetwork::from_parts(usize::from(payload.width), kinds, leaf_features, params)
-            .map_err(|e| Error::format(path, format!("not a valid implicit model: {e}")))?;
+            .map_err(|e| Error::format(path, format!("not a valid implicit model: {e}")))?
+            .with_guards(guards);
     Ok(DecodedImplicit {
         network,
         metadata,

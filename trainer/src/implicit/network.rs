@@ -2,7 +2,7 @@
 //! evaluation of Φ and ∇Φ (independent of the core's implementation).
 
 use neurosurf_core::implicit::{
-    MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN,
+    GUARD_LEN, MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN,
 };
 
 use super::jacobian::{HiddenJet, InputJet, MAX_INPUTS, Tape, TrainedLayout, forward};
@@ -20,6 +20,39 @@ pub struct ImplicitNetwork {
     offsets: Vec<usize>,
     lefts: Vec<usize>,
     params: Vec<f64>,
+    guards: Vec<Guard>,
+}
+
+/// A sign guard (see `neurosurf_core::implicit::guard`): adds
+/// a·(1 − ρ²|x − c|²)³ to Φ inside the ball of radius 1/ρ around c.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Guard {
+    /// The centre c.
+    pub center: [f64; 3],
+    /// The inverse radius ρ (> 0).
+    pub inverse_radius: f64,
+    /// The amplitude a: positive inside the surface, negative outside.
+    pub amplitude: f64,
+}
+
+impl Guard {
+    /// The guard's value and gradient at `x`, as the core computes them.
+    pub fn eval(&self, x: [f64; 3]) -> (f64, [f64; 3]) {
+        let d = [0, 1, 2].map(|k| (x[k] - self.center[k]) * self.inverse_radius);
+        let t2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if d.iter().any(|v| v.abs() >= 1.0) || t2 >= 1.0 {
+            return (0.0, [0.0; 3]);
+        }
+        let u = 1.0 - t2;
+        let s = -6.0 * self.amplitude * self.inverse_radius * u * u;
+        (self.amplitude * u * u * u, d.map(|v| s * v))
+    }
+
+    /// This guard in the parameters the core stores: c, ρ, a.
+    pub fn parameters(&self) -> [f64; GUARD_LEN] {
+        let [x, y, z] = self.center;
+        [x, y, z, self.inverse_radius, self.amplitude]
+    }
 }
 
 impl ImplicitNetwork {
@@ -100,6 +133,7 @@ impl ImplicitNetwork {
             offsets,
             lefts,
             params,
+            guards: Vec::new(),
         })
     }
 
@@ -290,8 +324,27 @@ impl ImplicitNetwork {
         (tape.value, tape.gradient)
     }
 
-    /// Φ and ∇Φ of the whole model.
+    /// Φ and ∇Φ of the whole model: the root's output plus every guard.
     pub fn eval(&self, x: [f64; 3]) -> (f64, [f64; 3]) {
-        self.eval_module(self.root(), x)
+        let (mut value, mut gradient) = self.eval_module(self.root(), x);
+        for guard in &self.guards {
+            let (v, g) = guard.eval(x);
+            value += v;
+            for k in 0..3 {
+                gradient[k] += g[k];
+            }
+        }
+        (value, gradient)
+    }
+
+    /// The sign guards added to the root's output.
+    pub fn guards(&self) -> &[Guard] {
+        &self.guards
+    }
+
+    /// This network with `guards` in place of its own.
+    pub fn with_guards(mut self, guards: Vec<Guard>) -> Self {
+        self.guards = guards;
+        self
     }
 }

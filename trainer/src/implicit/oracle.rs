@@ -12,6 +12,9 @@ use crate::error::{Error, Result};
 
 /// Neighbours used to estimate each point's area.
 const AREA_NEIGHBOURS: usize = 8;
+/// Radius of each control point's tangent disk in [`Oracle::disk_distance`], as a fraction of
+/// its gap: about one sample spacing, so that neighbouring disks close the surface.
+const DISK_RADIUS: f64 = 0.5;
 
 /// The control points as an inside/outside and distance oracle.
 #[derive(Debug)]
@@ -98,6 +101,32 @@ impl Oracle {
     pub fn surface_distance(&self, q: [f64; 3]) -> (usize, f64) {
         let (i, d) = self.nearest(q);
         (i, d - self.gaps[i])
+    }
+
+    /// An estimate of the distance from `q` to the sampled surface: the distance to the
+    /// nearest of the disks of radius gap/2 that lie in the tangent planes of
+    /// the 8 control points nearest to `q`. Along a normal it is the height
+    /// above the tangent plane, where [`Oracle::surface_distance`] subtracts a whole gap. Where
+    /// the samples are sparse it can overestimate (the surface may pass between the disks);
+    /// callers pair it with the winding number. Also returns the nearest control point.
+    pub fn disk_distance(&self, q: [f64; 3]) -> (usize, f64) {
+        let k = NonZeroUsize::new(AREA_NEIGHBOURS).unwrap_or(NonZeroUsize::MIN);
+        let found = self
+            .tree
+            .query(&q)
+            .nearest_n::<SquaredEuclidean<f64>>(k)
+            .execute();
+        let mut best = f64::INFINITY;
+        for f in &found {
+            let i = f.item as usize;
+            let (p, n) = (self.positions[i], self.normals[i]);
+            let v = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+            let height = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
+            let along = (f.distance - height * height).max(0.0).sqrt();
+            let beyond = (along - DISK_RADIUS * self.gaps[i]).max(0.0);
+            best = best.min(height.hypot(beyond));
+        }
+        (found.first().map_or(0, |f| f.item as usize), best)
     }
 
     /// The control points.

@@ -16,8 +16,9 @@ use serde::{Deserialize, Serialize};
 use super::capacity::check_capacity;
 use super::constraints::{OffSurface, SampleBox, SignPoint, off_surface, sign_points};
 use super::frame::{Frame, MODEL_DIAGONAL};
+use super::guards::place_guards;
 use super::jacobian::{MAX_INPUTS, TrainedLayout};
-use super::network::ImplicitNetwork;
+use super::network::{Guard, ImplicitNetwork};
 use super::normalize::Normalization;
 use super::options::ImplicitOptions;
 use super::oracle::Oracle;
@@ -25,6 +26,7 @@ use super::problem::{ModuleData, ModuleProblem, ValueGoal};
 use super::tree::TreeSpec;
 use crate::error::{Error, Result};
 use crate::points::PointSet;
+use crate::render::{Aabb, DEFAULT_INFLATE, Region};
 use crate::solve::{LmReport, StopReason, levenberg_marquardt};
 
 /// Outcome of one leaf's training: module index, its box, its weights, its report.
@@ -353,7 +355,22 @@ pub fn train(
             reports[i] = Some(report);
         }
     }
-    let network = in_frame(&network, |n| frame.normalization_to_world(n));
+    let guards = place_guards(
+        &network,
+        &setting.oracle,
+        &searched_box(&network, &model.positions, options.box_size),
+        MODEL_DIAGONAL,
+    );
+    let network = in_frame(&network, |n| frame.normalization_to_world(n)).with_guards(
+        guards
+            .iter()
+            .map(|g| Guard {
+                center: frame.to_world(g.center),
+                inverse_radius: g.inverse_radius / frame.scale,
+                amplitude: g.amplitude,
+            })
+            .collect(),
+    );
 
     let modules: Vec<ModuleReport> = reports.into_iter().flatten().collect();
     let cold_iterations = match init {
@@ -369,6 +386,27 @@ pub fn train(
         frame,
     };
     Ok(Trained { network, summary })
+}
+
+/// What the mesher searches: the points' bounding box grown by a tenth per side and every
+/// leaf box, inflated as rendering inflates it.
+fn searched_box(network: &ImplicitNetwork, positions: &[[f64; 3]], box_size: f64) -> Aabb {
+    let mut bounds = Aabb {
+        lo: positions[0],
+        hi: positions[0],
+    };
+    for p in positions {
+        bounds = bounds.union(&Aabb { lo: *p, hi: *p });
+    }
+    let pad = [0, 1, 2].map(|k| 0.1 * (bounds.hi[k] - bounds.lo[k]));
+    bounds = Aabb {
+        lo: [0, 1, 2].map(|k| bounds.lo[k] - pad[k]),
+        hi: [0, 1, 2].map(|k| bounds.hi[k] + pad[k]),
+    };
+    for region in Region::of_network(network, box_size, DEFAULT_INFLATE) {
+        bounds = bounds.union(&region.bounds);
+    }
+    bounds
 }
 
 /// The largest |Φ| a sign point asks for, in the model frame where the slope is s.

@@ -1,0 +1,376 @@
+//! Placing sign guards (`neurosurf_core::implicit::guard`) where a trained network has the
+//! wrong sign away from its data.
+//!
+//! A grid over everything the mesher searches (the points' bounding box grown by a tenth and
+//! every leaf box, inflated as rendering inflates it) is checked point by point: farther than
+//! [`GUARD_CLEARANCE`] of the diagonal from the sampled surface ([`Oracle::disk_distance`]),
+//! does Φ have the sign of the points' winding number? Every wrong grid point is then covered
+//! by a guard: the farthest uncovered one becomes a centre; its radius reaches to within the
+//! clearance of the surface and stops short of every grid point near the surface or on the
+//! other side; its amplitude outweighs, twice over, Φ at every wrong point it covers. A
+//! guard's ball therefore lies on one side of the surface and only adds the sign that side
+//! already has, and near the data Φ is the network's own.
+//!
+//! The check is as good as the winding number and the distance estimate: with very sparse
+//! points (a spacing of several percent of the diagonal) both are uncertain near the surface,
+//! which is why nothing closer than the clearance is touched.
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use neurosurf_core::implicit::MAX_GUARDS;
+use rayon::prelude::*;
+
+use neurosurf_core::implicit::{ImplicitModel, LANES};
+use neurosurf_core::scalar::ScalarKind;
+
+use super::blob::to_blob;
+use super::network::{Guard, ImplicitNetwork};
+use super::oracle::Oracle;
+use crate::render::Aabb;
+
+/// How far a guard's support keeps from the sampled surface, and how far from it the grid is
+/// checked, as a fraction of the bounding diagonal.
+pub const GUARD_CLEARANCE: f64 = 0.02;
+/// Grid cells along the longest side of the checked box.
+pub const GUARD_RESOLUTION: usize = 96;
+/// A guard covers the wrong grid points within this fraction of its radius.
+const COVER: f64 = 0.7;
+/// A guard outweighs Φ at the wrong points it covers by this factor.
+const MARGIN: f64 = 2.0;
+
+/// The checked grid: `counts` points per axis from `lo`, `step` apart.
+struct Grid {
+    lo: [f64; 3],
+    step: f64,
+    counts: [usize; 3],
+}
+
+impl Grid {
+    fn over(domain: &Aabb) -> Option<Grid> {
+        let side = (0..3)
+            .map(|k| domain.hi[k] - domain.lo[k])
+            .fold(0.0, f64::max);
+        let step = side / GUARD_RESOLUTION as f64;
+        (step > 0.0 && step.is_finite()).then(|| Grid {
+            lo: domain.lo,
+            step,
+            counts: [0, 1, 2].map(|k| ((domain.hi[k] - domain.lo[k]) / step).ceil() as usize + 1),
+        })
+    }
+
+    fn len(&self) -> usize {
+        self.counts.iter().product()
+    }
+
+    fn point(&self, i: usize) -> [f64; 3] {
+        let [nx, ny, _] = self.counts;
+        let index = [i % nx, (i / nx) % ny, i / (nx * ny)];
+        [0, 1, 2].map(|k| self.lo[k] + self.step * index[k] as f64)
+    }
+}
+
+/// The guards that give `network` the winding number's sign at every grid point of `domain`
+/// farther than [`GUARD_CLEARANCE`]·`diagonal` from the points of `oracle` (at most
+/// [`MAX_GUARDS`], farthest first).
+pub fn place_guards(
+    network: &ImplicitNetwork,
+    oracle: &Oracle,
+    domain: &Aabb,
+    diagonal: f64,
+) -> Vec<Guard> {
+    let Some(grid) = Grid::over(domain) else {
+        return Vec::new();
+    };
+    let clearance = GUARD_CLEARANCE * diagonal;
+    let distance: Vec<f64> = (0..grid.len())
+        .into_par_iter()
+        .map(|i| oracle.disk_distance(grid.point(i)).1)
+        .collect();
+    // Only where a guard of positive radius fits: one cell beyond the clearance.
+    let far: Vec<bool> = distance
+        .iter()
+        .map(|&d| d >= clearance + grid.step)
+        .collect();
+    let phi = field(network, &grid, &far);
+    let inside = sides(oracle, &grid, &far);
+    let wrong: Vec<usize> = (0..grid.len())
+        .filter(|&i| far[i] && inside[i].is_some_and(|s| (phi[i] > 0.0) != s))
+        .collect();
+    if std::env::var("GUARD_DEBUG").is_ok() {
+        let nf = far.iter().filter(|&&f| f).count();
+        let wi = wrong.iter().filter(|&&i| inside[i] == Some(true)).count();
+        eprintln!("far {nf} wrong {} (inside {wi})", wrong.len());
+        for &i in wrong.iter().take(8) {
+            let p = grid.point(i);
+            eprintln!(
+                "  {p:?} d {:.3} phi {:.3} w {:.3} net {:.3}",
+                distance[i],
+                phi[i],
+                oracle.winding(p),
+                network.eval(p).0
+            );
+        }
+    }
+    if wrong.is_empty() {
+        return Vec::new();
+    }
+    // What no guard's ball may hold: points near the surface, and far points not clearly on
+    // its side.
+    let tree_of = |keep: &dyn Fn(usize) -> bool| {
+        let points: Vec<[f64; 3]> = (0..grid.len())
+            .filter(|&i| keep(i))
+            .map(|i| grid.point(i))
+            .collect();
+        (!points.is_empty())
+            .then(|| ImmutableKdTree::<f64, 3>::new_from_slice(&points).ok())
+            .flatten()
+    };
+    let near = tree_of(&|i| distance[i] < clearance);
+    let sides_trees = [
+        tree_of(&|i| far[i] && inside[i] != Some(false)),
+        tree_of(&|i| far[i] && inside[i] != Some(true)),
+    ];
+    let nearest = |tree: &Option<ImmutableKdTree<f64, 3>>, p: &[f64; 3]| {
+        tree.as_ref().map_or(f64::INFINITY, |t| {
+            t.query(p)
+                .nearest_one::<SquaredEuclidean<f64>>()
+                .execute()
+                .distance
+                .sqrt()
+        })
+    };
+    let positions: Vec<[f64; 3]> = wrong.iter().map(|&i| grid.point(i)).collect();
+    let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&positions) else {
+        return Vec::new();
+    };
+    let mut order: Vec<usize> = (0..wrong.len()).collect();
+    order.sort_by(|&a, &b| distance[wrong[b]].total_cmp(&distance[wrong[a]]));
+    let mut covered = vec![false; wrong.len()];
+    let mut guards = Vec::new();
+    for w in order {
+        if covered[w] {
+            continue;
+        }
+        if guards.len() == MAX_GUARDS {
+            break;
+        }
+        let (i, centre) = (wrong[w], positions[w]);
+        // The side the guard sits on: the opposite of the network's sign there.
+        let side = inside[i] == Some(true);
+        let blocked =
+            nearest(&near, &centre).min(nearest(&sides_trees[usize::from(side)], &centre));
+        let radius = (distance[i] - clearance).min(0.95 * blocked);
+        if radius.is_nan() || radius <= 0.0 {
+            continue;
+        }
+        let reach = COVER * radius;
+        let found = tree
+            .query(&centre)
+            .within::<SquaredEuclidean<f64>>(reach * reach)
+            .unsorted()
+            .execute();
+        let mut need = 0.0_f64;
+        for f in found {
+            let j = f.item as usize;
+            if inside[wrong[j]] != Some(side) {
+                continue;
+            }
+            covered[j] = true;
+            let u = 1.0 - f.distance / (radius * radius);
+            need = need.max(MARGIN * phi[wrong[j]].abs() / (u * u * u));
+        }
+        let magnitude = need.max(f64::EPSILON);
+        guards.push(Guard {
+            center: centre,
+            inverse_radius: 1.0 / radius,
+            amplitude: if side { magnitude } else { -magnitude },
+        });
+    }
+    guards
+}
+
+/// Φ at the `far` grid points (0 elsewhere): through the core in `f32`, in batches, when the
+/// network makes a blob; else the `f64` network.
+fn field(network: &ImplicitNetwork, grid: &Grid, far: &[bool]) -> Vec<f64> {
+    let indices: Vec<usize> = (0..grid.len()).filter(|&i| far[i]).collect();
+    let model = to_blob(network, None, ScalarKind::F32)
+        .ok()
+        .and_then(|blob| ImplicitModel::<f32>::from_blob(&blob).ok().map(Box::new));
+    let values: Vec<f64> = indices
+        .par_chunks(LANES * 64)
+        .flat_map_iter(|chunk| {
+            let points: Vec<[f64; 3]> = chunk.iter().map(|&i| grid.point(i)).collect();
+            let values: Vec<f64> = match &model {
+                Some(model) => {
+                    let points: Vec<[f32; 3]> =
+                        points.iter().map(|p| p.map(|v| v as f32)).collect();
+                    let mut out = vec![0.0_f32; points.len()];
+                    match model.field_batch(&points, &mut out) {
+                        Ok(()) => out.into_iter().map(f64::from).collect(),
+                        Err(_) => points.iter().map(|_| 0.0).collect(),
+                    }
+                }
+                None => points.iter().map(|&p| network.eval(p).0).collect(),
+            };
+            values
+        })
+        .collect();
+    let mut phi = vec![0.0; grid.len()];
+    for (&i, v) in indices.iter().zip(values) {
+        phi[i] = v;
+    }
+    phi
+}
+
+/// Winding numbers below this are clearly outside, and above one minus this clearly inside;
+/// between, a point's side is unknown and no guard covers it.
+const CLEAR_WINDING: f64 = 0.3;
+
+/// The side of each `far` grid point by the winding number: `Some(true)` inside, `Some(false)`
+/// outside, `None` when the winding number is not clear. It is computed exactly on every
+/// second grid point along each axis; a far point between them takes their side when all
+/// eight agree clearly (a feature thin enough to slip between them would have no far points
+/// inside), else it is computed exactly too.
+fn sides(oracle: &Oracle, grid: &Grid, far: &[bool]) -> Vec<Option<bool>> {
+    let side = |w: f64| {
+        if w > 1.0 - CLEAR_WINDING {
+            Some(true)
+        } else if w < CLEAR_WINDING {
+            Some(false)
+        } else {
+            None
+        }
+    };
+    let [nx, ny, nz] = grid.counts;
+    let coarse = [nx, ny, nz].map(|n| n.div_ceil(2));
+    let coarse_index = |c: [usize; 3]| c[0] + coarse[0] * (c[1] + coarse[1] * c[2]);
+    let coarse_sides: Vec<Option<bool>> = (0..coarse.iter().product::<usize>())
+        .into_par_iter()
+        .map(|i| {
+            let c = [
+                i % coarse[0],
+                (i / coarse[0]) % coarse[1],
+                i / (coarse[0] * coarse[1]),
+            ];
+            let p = [0, 1, 2].map(|k| grid.lo[k] + grid.step * (2 * c[k]) as f64);
+            side(oracle.winding(p))
+        })
+        .collect();
+    (0..grid.len())
+        .into_par_iter()
+        .map(|i| {
+            if !far[i] {
+                return None;
+            }
+            let f = [i % nx, (i / nx) % ny, i / (nx * ny)];
+            let lo = f.map(|v| v / 2);
+            let hi = [0, 1, 2].map(|k| (f[k].div_ceil(2)).min(coarse[k] - 1));
+            let mut agreed: Option<Option<bool>> = None;
+            for c in [0, 1, 2, 3, 4, 5, 6, 7] {
+                let pick = |k: usize| if c >> k & 1 == 0 { lo[k] } else { hi[k] };
+                let s = coarse_sides[coarse_index([pick(0), pick(1), pick(2)])];
+                match agreed {
+                    None => agreed = Some(s),
+                    Some(a) if a == s => {}
+                    Some(_) => {
+                        agreed = Some(None);
+                        break;
+                    }
+                }
+            }
+            match agreed.flatten() {
+                Some(s) => Some(s),
+                None => side(oracle.winding(grid.point(i))),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::implicit::tests::torus_points;
+    use crate::implicit::{ImplicitOptions, Trained, TreeSpec, train};
+    use crate::points::PointSet;
+
+    /// `count` torus points and a one-leaf network trained on them.
+    fn torus(count: usize, seed: u64) -> (PointSet, Trained) {
+        let points = torus_points(count, seed);
+        let trained = train(
+            &points,
+            &TreeSpec::Leaf(0),
+            &ImplicitOptions::default(),
+            None,
+            &|_| {},
+        )
+        .expect("training");
+        (points, trained)
+    }
+
+    /// A torus network with a blob grown on purpose (a guard of the wrong sign, outside the
+    /// torus above its hole): placing guards must remove the blob and leave the field near
+    /// the points untouched.
+    #[test]
+    fn guards_remove_a_blob_and_leave_the_surface_alone() {
+        let (points, trained) = torus(400, 3);
+        let blob = Guard {
+            center: [0.0, 0.0, 0.8],
+            inverse_radius: 1.0 / 0.3,
+            amplitude: 5.0,
+        };
+        let broken = trained.network.clone().with_guards(vec![blob]);
+        assert!(broken.eval(blob.center).0 > 0.0, "the blob is there");
+        let oracle = Oracle::new(&points.positions, &points.normals).expect("oracle");
+        let domain = Aabb {
+            lo: [-1.8, -1.8, -1.2],
+            hi: [1.8, 1.8, 1.2],
+        };
+        let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
+        let added = place_guards(&broken, &oracle, &domain, diagonal);
+        assert!(!added.is_empty());
+        let fixed = broken
+            .clone()
+            .with_guards([vec![blob], added.clone()].concat());
+        // The blob is gone: outside everywhere on a line through it.
+        for k in 0..=20 {
+            let p = [0.0, 0.0, 0.5 + 0.03 * f64::from(k)];
+            assert!(fixed.eval(p).0 < 0.0, "{p:?}: {}", fixed.eval(p).0);
+        }
+        // No added guard reaches a control point or its off-surface points.
+        for (p, n) in points.positions.iter().zip(&points.normals) {
+            for offset in [-0.01, 0.0, 0.01] {
+                let q = [0, 1, 2].map(|k| p[k] + offset * diagonal * n[k]);
+                for g in &added {
+                    assert_eq!(g.eval(q).0, 0.0, "{g:?} reaches {q:?}");
+                }
+            }
+        }
+        // Guards keep to their side: every added guard's centre is outside, like the blob.
+        assert!(added.iter().all(|g| g.amplitude < 0.0), "{added:?}");
+    }
+
+    /// Guards go into the blob and come back; the core adds them as the network does.
+    #[test]
+    fn guards_survive_the_blob_and_the_core_adds_them() {
+        let (_, trained) = torus(200, 5);
+        let guard = Guard {
+            center: [0.25, 0.0, 0.75],
+            inverse_radius: 4.0,
+            amplitude: -2.0,
+        };
+        let network = trained.network.with_guards(vec![guard]);
+        let bytes = to_blob(&network, None, ScalarKind::F32).expect("blob");
+        let back =
+            crate::implicit::from_blob(&bytes, std::path::Path::new("test.nsb")).expect("decode");
+        assert_eq!(back.network.guards().len(), 1);
+        let core = ImplicitModel::<f32>::from_blob(&bytes).expect("the core loads it");
+        assert_eq!(core.guard_count(), 1);
+        for p in [[0.25, 0.0, 0.75], [0.3, 0.1, 0.7], [1.0, 0.0, 0.0]] {
+            let expected = network.eval(p).0;
+            let got = f64::from(core.field(p.map(|v| v as f32)));
+            assert!(
+                (got - expected).abs() < 1e-4,
+                "{p:?}: {got} against {expected}"
+            );
+        }
+    }
+}
