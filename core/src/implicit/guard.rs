@@ -27,13 +27,17 @@ pub const MAX_GUARDS: usize = 256;
 /// Splits a blob's tree bytes into the modules and the number of guards after them.
 ///
 /// # Errors
-/// [`BlobError::InvalidTree`] for a module code after a guard.
+/// [`BlobError::InvalidTree`] for a module code after a guard, or guards without a module.
 pub fn split_tree(tree: &[u8]) -> Result<(&[u8], usize), BlobError> {
     let modules = tree
         .iter()
         .position(|&code| code == GUARD_CODE)
         .unwrap_or(tree.len());
     let (modules_part, guards) = tree.split_at(modules);
+    if modules == 0 && !guards.is_empty() {
+        // Guards without a module to guard.
+        return Err(BlobError::InvalidTree { module: 0 });
+    }
     match guards.iter().position(|&code| code != GUARD_CODE) {
         Some(wrong) => Err(BlobError::InvalidTree {
             module: modules + wrong,
