@@ -25,7 +25,9 @@ use neurosurf_core::scalar::ScalarKind;
 use super::blob::to_blob;
 use super::network::{Guard, ImplicitNetwork};
 use super::oracle::Oracle;
+use crate::quality::component_labels;
 use crate::render::Aabb;
+use crate::render::{CoreField, Region, extract_mesh};
 
 /// How far a guard's support keeps from the sampled surface, and how far from it the grid is
 /// checked, as a fraction of the bounding diagonal.
@@ -36,6 +38,14 @@ pub const GUARD_RESOLUTION: usize = 96;
 const COVER: f64 = 0.7;
 /// A guard outweighs Φ at the wrong points it covers by this factor.
 const MARGIN: f64 = 2.0;
+/// Far from the data Φ must be at least this many cells' worth of the slope on its side
+/// (Φ ≈ s·d near a zero crossing at distance d).
+const FAR_PUSH: f64 = 0.5;
+
+/// Φ as seen from a side: positive when it has that side's sign.
+fn toward(inside: bool, phi: f64) -> f64 {
+    if inside { phi } else { -phi }
+}
 
 /// The checked grid: `counts` points per axis from `lo`, `step` apart.
 struct Grid {
@@ -76,11 +86,15 @@ pub fn place_guards(
     oracle: &Oracle,
     domain: &Aabb,
     diagonal: f64,
+    slope: f64,
 ) -> Vec<Guard> {
     let Some(grid) = Grid::over(domain) else {
         return Vec::new();
     };
     let clearance = GUARD_CLEARANCE * diagonal;
+    // Φ this close to zero far from the data means a zero crossing within half a cell: a
+    // piece too small for the grid to see.
+    let push = FAR_PUSH * slope * grid.step;
     let distance: Vec<f64> = (0..grid.len())
         .into_par_iter()
         .map(|i| oracle.disk_distance(grid.point(i)).1)
@@ -93,23 +107,8 @@ pub fn place_guards(
     let phi = field(network, &grid, &far);
     let inside = sides(oracle, &grid, &far);
     let wrong: Vec<usize> = (0..grid.len())
-        .filter(|&i| far[i] && inside[i].is_some_and(|s| (phi[i] > 0.0) != s))
+        .filter(|&i| far[i] && inside[i].is_some_and(|s| toward(s, phi[i]) < push))
         .collect();
-    if std::env::var("GUARD_DEBUG").is_ok() {
-        let nf = far.iter().filter(|&&f| f).count();
-        let wi = wrong.iter().filter(|&&i| inside[i] == Some(true)).count();
-        eprintln!("far {nf} wrong {} (inside {wi})", wrong.len());
-        for &i in wrong.iter().take(8) {
-            let p = grid.point(i);
-            eprintln!(
-                "  {p:?} d {:.3} phi {:.3} w {:.3} net {:.3}",
-                distance[i],
-                phi[i],
-                oracle.winding(p),
-                network.eval(p).0
-            );
-        }
-    }
     if wrong.is_empty() {
         return Vec::new();
     }
@@ -176,7 +175,8 @@ pub fn place_guards(
             }
             covered[j] = true;
             let u = 1.0 - f.distance / (radius * radius);
-            need = need.max(MARGIN * phi[wrong[j]].abs() / (u * u * u));
+            let deficit = push - toward(side, phi[wrong[j]]);
+            need = need.max(MARGIN * deficit.max(0.0) / (u * u * u));
         }
         let magnitude = need.max(f64::EPSILON);
         guards.push(Guard {
@@ -186,6 +186,104 @@ pub fn place_guards(
         });
     }
     guards
+}
+
+/// Cells along the longest side of the mesh [`guard_stray_pieces`] checks: the resolution
+/// `neurosurf mesh` uses by default.
+pub const PIECE_RESOLUTION: usize = 96;
+/// A piece of the zero set is stray when none of its vertices comes within this fraction of
+/// the diagonal of a control point (the off-surface offset: the network fits the points far
+/// more closely than that).
+pub const PIECE_SUPPORT: f64 = 0.01;
+/// A stray piece's guard reaches at least this many times past the piece's farthest vertex.
+const PIECE_REACH: f64 = 1.1;
+
+/// Guards for the stray pieces of `network`'s zero set: meshed at [`PIECE_RESOLUTION`] within
+/// `regions`, every piece none of whose vertices comes within [`PIECE_SUPPORT`] of the
+/// diagonal of a control point gets one guard at its centroid, on the side the winding number
+/// gives there, reaching past the whole piece but not within [`PIECE_SUPPORT`] of the points,
+/// and strong enough to push Φ to its side by `push` at the piece's vertices, its centroid
+/// and the points between. Pieces no such guard fits are left alone.
+pub fn guard_stray_pieces(
+    network: &ImplicitNetwork,
+    oracle: &Oracle,
+    regions: Vec<Region>,
+    diagonal: f64,
+    push: f64,
+) -> Vec<Guard> {
+    let Ok(blob) = to_blob(network, None, ScalarKind::F32) else {
+        return Vec::new();
+    };
+    let Ok(field) = CoreField::new(&blob, regions) else {
+        return Vec::new();
+    };
+    let Ok(extracted) = extract_mesh(&field, PIECE_RESOLUTION, &|_, _| {}) else {
+        return Vec::new();
+    };
+    let mesh = extracted.mesh;
+    let (labels, count) = component_labels(&mesh);
+    if count <= 1 {
+        return Vec::new();
+    }
+    let support = PIECE_SUPPORT * diagonal;
+    let mut pieces: Vec<Vec<[f64; 3]>> = vec![Vec::new(); count];
+    let mut supported = vec![false; count];
+    for (p, &label) in mesh.positions.iter().zip(&labels) {
+        let Some(piece) = pieces.get_mut(label as usize) else {
+            continue;
+        };
+        piece.push(*p);
+        if oracle.nearest(*p).1 <= support {
+            supported[label as usize] = true;
+        }
+    }
+    let mut guards = Vec::new();
+    for (piece, _) in pieces
+        .iter()
+        .zip(&supported)
+        .filter(|(p, s)| !**s && !p.is_empty())
+    {
+        let n = piece.len() as f64;
+        let centre = [0, 1, 2].map(|k| piece.iter().map(|p| p[k]).sum::<f64>() / n);
+        let winding = oracle.winding(centre);
+        let side = if winding > 1.0 - CLEAR_WINDING {
+            true
+        } else if winding < CLEAR_WINDING {
+            false
+        } else {
+            continue;
+        };
+        let reach = piece
+            .iter()
+            .map(|p| distance(*p, centre))
+            .fold(0.0, f64::max);
+        let radius = oracle.nearest(centre).1 - support;
+        if radius <= PIECE_REACH * reach.max(f64::EPSILON) {
+            continue;
+        }
+        let sign = if side { 1.0 } else { -1.0 };
+        let mut need = 0.0_f64;
+        let probes = piece
+            .iter()
+            .flat_map(|p| [*p, [0, 1, 2].map(|k| 0.5 * (p[k] + centre[k]))])
+            .chain([centre]);
+        for q in probes {
+            let t = distance(q, centre) / radius;
+            let u = 1.0 - t * t;
+            let deficit = push - toward(side, network.eval(q).0);
+            need = need.max(MARGIN * deficit.max(0.0) / (u * u * u));
+        }
+        guards.push(Guard {
+            center: centre,
+            inverse_radius: 1.0 / radius,
+            amplitude: sign * need.max(f64::EPSILON),
+        });
+    }
+    guards
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
 /// Φ at the `far` grid points (0 elsewhere): through the core in `f32`, in batches, when the
@@ -325,7 +423,7 @@ mod tests {
             hi: [1.8, 1.8, 1.2],
         };
         let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
-        let added = place_guards(&broken, &oracle, &domain, diagonal);
+        let added = place_guards(&broken, &oracle, &domain, diagonal, 5.0);
         assert!(!added.is_empty());
         let fixed = broken
             .clone()
@@ -372,5 +470,43 @@ mod tests {
                 "{p:?}: {got} against {expected}"
             );
         }
+    }
+
+    /// A small blob just off the surface, nearer than the grid check looks, is a piece of the
+    /// mesh no control point supports: it gets a guard, and the mesh is one piece again.
+    #[test]
+    fn a_stray_piece_near_the_surface_gets_a_guard() {
+        let (points, trained) = torus(400, 3);
+        let blob = Guard {
+            center: [1.0, 0.0, 0.53],
+            inverse_radius: 1.0 / 0.05,
+            amplitude: 3.0,
+        };
+        let broken = trained.network.clone().with_guards(vec![blob]);
+        let oracle = Oracle::new(&points.positions, &points.normals).expect("oracle");
+        let half = [1.8, 1.8, 1.2];
+        let regions = || {
+            let normalization = crate::implicit::Normalization {
+                center: [0.0; 3],
+                matrix: [0, 1, 2]
+                    .map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+            };
+            Region::new(normalization, 2.0, 1.0)
+                .into_iter()
+                .collect::<Vec<_>>()
+        };
+        let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
+        let pieces = |network: &ImplicitNetwork| {
+            let blob = to_blob(network, None, ScalarKind::F32).expect("blob");
+            let field = CoreField::new(&blob, regions()).expect("field");
+            let mesh = extract_mesh(&field, PIECE_RESOLUTION, &|_, _| {}).expect("mesh");
+            component_labels(&mesh.mesh).1
+        };
+        let clean = pieces(&trained.network);
+        assert!(pieces(&broken) > clean, "the blob makes pieces of its own");
+        let added = guard_stray_pieces(&broken, &oracle, regions(), diagonal, 0.1);
+        assert!(!added.is_empty());
+        let fixed = broken.with_guards([vec![blob], added].concat());
+        assert_eq!(pieces(&fixed), clean);
     }
 }

@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use nalgebra::{Matrix3, Vector3};
-use neurosurf_core::implicit::ModuleKind;
+use neurosurf_core::implicit::{MAX_GUARDS, ModuleKind};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use super::capacity::check_capacity;
 use super::constraints::{OffSurface, SampleBox, SignPoint, off_surface, sign_points};
 use super::frame::{Frame, MODEL_DIAGONAL};
-use super::guards::place_guards;
+use super::guards::{guard_stray_pieces, place_guards};
 use super::jacobian::{MAX_INPUTS, TrainedLayout};
 use super::network::{Guard, ImplicitNetwork};
 use super::normalize::Normalization;
@@ -355,12 +355,26 @@ pub fn train(
             reports[i] = Some(report);
         }
     }
-    let guards = place_guards(
+    let searched = searched_box(&network, &model.positions, options.box_size);
+    let mut guards = place_guards(
         &network,
         &setting.oracle,
-        &searched_box(&network, &model.positions, options.box_size),
+        &searched,
         MODEL_DIAGONAL,
+        options.slope,
     );
+    // Then the pieces of the mesh that no control point supports, twice: a guard can leave a
+    // smaller piece behind.
+    let push = options.slope * GUARD_PUSH * MODEL_DIAGONAL;
+    for _ in 0..2 {
+        let guarded = network.clone().with_guards(guards.clone());
+        let regions = mesh_regions(&guarded, &searched, options.box_size);
+        let more = guard_stray_pieces(&guarded, &setting.oracle, regions, MODEL_DIAGONAL, push);
+        if more.is_empty() || guards.len() + more.len() > MAX_GUARDS {
+            break;
+        }
+        guards.extend(more);
+    }
     let network = in_frame(&network, |n| frame.normalization_to_world(n)).with_guards(
         guards
             .iter()
@@ -386,6 +400,24 @@ pub fn train(
         frame,
     };
     Ok(Trained { network, summary })
+}
+
+/// How far a stray piece's guard pushes Φ past zero, as the field s·d at a distance d of this
+/// fraction of the diagonal.
+const GUARD_PUSH: f64 = 0.005;
+
+/// The regions `neurosurf mesh` searches: the searched box and every leaf box, inflated as
+/// rendering inflates it.
+fn mesh_regions(network: &ImplicitNetwork, searched: &Aabb, box_size: f64) -> Vec<Region> {
+    let half = searched.half();
+    let normalization = Normalization {
+        center: searched.center(),
+        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+    };
+    Region::new(normalization, 2.0, 1.0)
+        .into_iter()
+        .chain(Region::of_network(network, box_size, DEFAULT_INFLATE))
+        .collect()
 }
 
 /// What the mesher searches: the points' bounding box grown by a tenth per side and every

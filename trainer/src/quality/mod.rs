@@ -13,4 +13,6 @@ pub use stray::{
     FAR_FRACTION, STRAY_GROWTH, STRAY_RESOLUTION, StrayReport, grown_bounds, stray_surface,
 };
 pub use truth::{Truth, signed_distance_mesh};
-pub use two_sided::{Distances, MEASURE_RESOLUTION, MeshCheck, TwoSided, components, two_sided};
+pub use two_sided::{
+    Distances, MEASURE_RESOLUTION, MeshCheck, TwoSided, component_labels, components, two_sided,
+};

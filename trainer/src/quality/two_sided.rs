@@ -281,8 +281,9 @@ fn project<F: Field + ?Sized>(
     result
 }
 
-/// Connected pieces of a mesh: triangles that share a vertex belong to the same piece.
-pub fn components(mesh: &Mesh) -> usize {
+/// The connected pieces of a mesh (triangles sharing a vertex): each used vertex's piece
+/// label (`u32::MAX` for unused vertices) and the number of pieces.
+pub fn component_labels(mesh: &Mesh) -> (Vec<u32>, usize) {
     let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
     fn find(parent: &mut [u32], mut v: u32) -> u32 {
         while parent[v as usize] != v {
@@ -306,7 +307,24 @@ pub fn components(mesh: &Mesh) -> usize {
             used[v as usize] = true;
         }
     }
-    (0..mesh.positions.len() as u32)
-        .filter(|&v| used[v as usize] && find(&mut parent, v) == v)
-        .count()
+    let mut label = vec![u32::MAX; mesh.positions.len()];
+    let mut root_label = vec![u32::MAX; mesh.positions.len()];
+    let mut count = 0;
+    for v in 0..mesh.positions.len() as u32 {
+        if !used[v as usize] {
+            continue;
+        }
+        let r = find(&mut parent, v) as usize;
+        if root_label[r] == u32::MAX {
+            root_label[r] = count;
+            count += 1;
+        }
+        label[v as usize] = root_label[r];
+    }
+    (label, count as usize)
+}
+
+/// The number of connected pieces of a mesh (triangles sharing a vertex).
+pub fn components(mesh: &Mesh) -> usize {
+    component_labels(mesh).1
 }
