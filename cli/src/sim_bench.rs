@@ -196,7 +196,8 @@ pub fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-/// The two built-in models, trained with fixed seeds, stored in both scalars.
+/// The two built-in models, trained with fixed seeds, stored in both scalars: the networks
+/// alone, and the head again with its sign guards.
 fn built_in() -> Result<Vec<Subject>> {
     let torus = Shape::Torus {
         major: 1.0,
@@ -223,23 +224,33 @@ fn built_in() -> Result<Vec<Subject>> {
             &|_| {},
         )
         .with_context(|| format!("cannot train the {name} model"))?;
-        let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
-            .into_iter()
-            .map(|scalar| {
-                Ok((
-                    scalar,
-                    implicit::to_blob(&trained.network, Some(&trained.summary), scalar)?,
-                ))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        subjects.push(Subject {
-            name: name.to_string(),
-            path: PathBuf::from(format!("<built-in {name}>")),
-            points: points(&trained.network, box_size(Some(&trained.summary))),
-            arity: 3,
-            blobs,
-            ops: [Op::Field, Op::FieldGradient],
-        });
+        // The network alone (the kernels' yardstick), then, for the head, with the sign
+        // guards training gave it: what they add.
+        let guards = trained.network.guards().len();
+        let alone = trained.network.clone().with_guards(Vec::new());
+        let mut variants = vec![(name.to_string(), &alone)];
+        if tree.is_some() && guards > 0 {
+            variants.push((format!("{name} + {guards} sign guards"), &trained.network));
+        }
+        for (name, network) in variants {
+            let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
+                .into_iter()
+                .map(|scalar| {
+                    Ok((
+                        scalar,
+                        implicit::to_blob(network, Some(&trained.summary), scalar)?,
+                    ))
+                })
+                .collect::<Result<Vec<_>>>()?;
+            subjects.push(Subject {
+                path: PathBuf::from(format!("<built-in {name}>")),
+                name,
+                points: points(network, box_size(Some(&trained.summary))),
+                arity: 3,
+                blobs,
+                ops: [Op::Field, Op::FieldGradient],
+            });
+        }
     }
     subjects.push(spiral_curve()?);
     subjects.push(wavy_network()?);

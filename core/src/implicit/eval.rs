@@ -95,12 +95,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
     /// Φ at `L` points at once.
     #[inline]
     pub(crate) fn field_lanes<const L: usize>(&self, points: &[[S; 3]; L]) -> [S; L] {
-        let mut values = at_width!(self.model.width, self.field_at::<L>(points));
-        let guards = self.guards();
-        if !guards.is_empty() {
-            guard::add_values(guards, points, &mut values);
-        }
-        values
+        at_width!(self.model.width, self.field_at::<L>(points))
     }
 
     /// The guards this view adds: the model's for the root, none for a subtree.
@@ -128,7 +123,11 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         let params = model.module_parameters(entry.offset, layout.len);
         let last = model.last_hidden::<L, N, EXACT>(self.module, points, MAX_HEIGHT);
         let hidden = last.get(..width).unwrap_or(&[]);
-        let [out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[], &[]));
+        let [mut out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[], &[]));
+        let guards = self.guards();
+        if !guards.is_empty() {
+            guard::add_values(guards, points, &mut out);
+        }
         out
     }
 }

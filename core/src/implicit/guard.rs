@@ -63,26 +63,28 @@ pub(crate) fn add_values<S: Scalar, const L: usize>(
     }
 }
 
-/// Adds every guard of `params` to the values and gradients at `points`:
-/// ∇g = −6·a·ρ·(1 − t²)²·d with d = ρ·(x − c).
+/// Adds every guard of `params` to the values and gradients (one array of lanes per axis) at
+/// `points`: ∇g = −6·a·ρ·(1 − t²)²·d with d = ρ·(x − c).
 #[inline(never)]
 pub(crate) fn add_values_gradients<S: Scalar, const L: usize>(
     params: &[S],
     points: &[[S; 3]; L],
     values: &mut [S; L],
-    gradients: &mut [[S; 3]; L],
+    gradients: &mut [[S; L]; 3],
 ) {
     let six = S::from_f32_saturating(6.0);
     for guard in params.chunks_exact(GUARD_LEN) {
         let [.., rho, a] = guard else { continue };
         let scale = six.mul(*a).mul(*rho).neg();
-        for ((value, gradient), point) in values.iter_mut().zip(gradients.iter_mut()).zip(points) {
+        for (lane, (value, point)) in values.iter_mut().zip(points).enumerate() {
             if let Some((u, d)) = inside(guard, point) {
                 let u2 = u.mul(u);
                 *value = value.add(a.mul(u2.mul(u)));
                 let s = scale.mul(u2);
-                for (g, dk) in gradient.iter_mut().zip(d) {
-                    *g = g.add(s.mul(dk));
+                for (axis, dk) in gradients.iter_mut().zip(d) {
+                    if let Some(g) = axis.get_mut(lane) {
+                        *g = g.add(s.mul(dk));
+                    }
                 }
             }
         }
@@ -141,7 +143,7 @@ mod tests {
             [-400.0, 2.0, 3.0],
         ] {
             let points = [p.map(|v: f64| S::from_f32_saturating(v as f32))];
-            let (mut values, mut gradients) = ([S::ZERO], [[S::ZERO; 3]]);
+            let (mut values, mut gradients) = ([S::ZERO], [[S::ZERO]; 3]);
             add_values_gradients(&params, &points, &mut values, &mut gradients);
             let mut only = [S::ZERO];
             add_values(&params, &points, &mut only);
@@ -150,7 +152,7 @@ mod tests {
             assert!((values[0].to_f64() - v).abs() <= tolerance, "{p:?}");
             for k in 0..3 {
                 assert!(
-                    (gradients[0][k].to_f64() - g[k]).abs() <= 4.0 * tolerance,
+                    (gradients[k][0].to_f64() - g[k]).abs() <= 4.0 * tolerance,
                     "{p:?}"
                 );
             }

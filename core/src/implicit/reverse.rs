@@ -39,17 +39,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         &self,
         points: &[[S; 3]; L],
     ) -> [FieldGradient<S>; L] {
-        let mut results = at_width!(self.model.width, self.field_gradient_at::<L>(points));
-        let guards = self.guards();
-        if !guards.is_empty() {
-            let mut values = results.map(|r| r.value);
-            let mut gradients = results.map(|r| r.gradient);
-            guard::add_values_gradients(guards, points, &mut values, &mut gradients);
-            for ((result, value), gradient) in results.iter_mut().zip(values).zip(gradients) {
-                *result = FieldGradient { value, gradient };
-            }
-        }
-        results
+        at_width!(self.model.width, self.field_gradient_at::<L>(points))
     }
 
     /// Φ and ∇Φ at `L` points with layers of capacity `N` (see [`width`]).
@@ -89,7 +79,12 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
             };
             model.reverse::<L, N, EXACT>(self.module, points, MAX_HEIGHT, &mut gradient, root);
         }
-        let [g0, g1, g2] = gradient.map(|lanes| lanes.map(S::from_acc));
+        let mut gradient = gradient.map(|lanes| lanes.map(S::from_acc));
+        let guards = self.guards();
+        if !guards.is_empty() {
+            guard::add_values_gradients(guards, points, &mut value, &mut gradient);
+        }
+        let [g0, g1, g2] = gradient;
         core::array::from_fn(|lane| {
             let at = |lanes: &[S; L]| lanes.get(lane).copied().unwrap_or(S::ZERO);
             FieldGradient {

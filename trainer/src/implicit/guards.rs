@@ -16,7 +16,6 @@
 //! which is why nothing closer than the clearance is touched.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use neurosurf_core::implicit::MAX_GUARDS;
 use rayon::prelude::*;
 
 use neurosurf_core::implicit::{ImplicitModel, LANES};
@@ -79,14 +78,15 @@ impl Grid {
 }
 
 /// The guards that give `network` the winding number's sign at every grid point of `domain`
-/// farther than [`GUARD_CLEARANCE`]·`diagonal` from the points of `oracle` (at most
-/// [`MAX_GUARDS`], farthest first).
+/// farther than [`GUARD_CLEARANCE`]·`diagonal` from the points of `oracle` (at most `limit`,
+/// farthest first).
 pub fn place_guards(
     network: &ImplicitNetwork,
     oracle: &Oracle,
     domain: &Aabb,
     diagonal: f64,
     slope: f64,
+    limit: usize,
 ) -> Vec<Guard> {
     let Some(grid) = Grid::over(domain) else {
         return Vec::new();
@@ -149,7 +149,7 @@ pub fn place_guards(
         if covered[w] {
             continue;
         }
-        if guards.len() == MAX_GUARDS {
+        if guards.len() >= limit {
             break;
         }
         let (i, centre) = (wrong[w], positions[w]);
@@ -389,6 +389,7 @@ mod tests {
     use crate::implicit::tests::torus_points;
     use crate::implicit::{ImplicitOptions, Trained, TreeSpec, train};
     use crate::points::PointSet;
+    use neurosurf_core::implicit::MAX_GUARDS;
 
     /// `count` torus points and a one-leaf network trained on them.
     fn torus(count: usize, seed: u64) -> (PointSet, Trained) {
@@ -423,8 +424,10 @@ mod tests {
             hi: [1.8, 1.8, 1.2],
         };
         let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
-        let added = place_guards(&broken, &oracle, &domain, diagonal, 5.0);
+        let added = place_guards(&broken, &oracle, &domain, diagonal, 5.0, MAX_GUARDS);
         assert!(!added.is_empty());
+        let one = place_guards(&broken, &oracle, &domain, diagonal, 5.0, 1);
+        assert_eq!(one.len(), 1, "the limit holds");
         let fixed = broken
             .clone()
             .with_guards([vec![blob], added.clone()].concat());

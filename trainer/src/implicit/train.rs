@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use nalgebra::{Matrix3, Vector3};
-use neurosurf_core::implicit::{MAX_GUARDS, ModuleKind};
+use neurosurf_core::implicit::{DEFAULT_PARAMETERS, GUARD_LEN, MAX_GUARDS, ModuleKind};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -356,12 +356,16 @@ pub fn train(
         }
     }
     let searched = searched_box(&network, &model.positions, options.box_size);
+    // As many guards as the core loads beside the modules' parameters.
+    let limit =
+        MAX_GUARDS.min(DEFAULT_PARAMETERS.saturating_sub(network.params().len()) / GUARD_LEN);
     let mut guards = place_guards(
         &network,
         &setting.oracle,
         &searched,
         MODEL_DIAGONAL,
         options.slope,
+        limit,
     );
     // Then the pieces of the mesh that no control point supports, twice: a guard can leave a
     // smaller piece behind.
@@ -370,7 +374,7 @@ pub fn train(
         let guarded = network.clone().with_guards(guards.clone());
         let regions = mesh_regions(&guarded, &searched, options.box_size);
         let more = guard_stray_pieces(&guarded, &setting.oracle, regions, MODEL_DIAGONAL, push);
-        if more.is_empty() || guards.len() + more.len() > MAX_GUARDS {
+        if more.is_empty() || guards.len() + more.len() > limit {
             break;
         }
         guards.extend(more);
