@@ -26,7 +26,8 @@ pub use capacity::{check_capacity, fits, model_size};
 pub use features::decompose;
 pub use frame::{Frame, MODEL_DIAGONAL};
 pub use guards::{
-    GUARD_CLEARANCE, GUARD_RESOLUTION, PIECE_RESOLUTION, guard_stray_pieces, place_guards,
+    GUARD_CLEARANCE, GUARD_RESOLUTION, PIECE_RESOLUTION, PIECE_SUPPORT, guard_stray_pieces,
+    place_guards,
 };
 pub use jacobian::{HiddenJet, InputJet, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows};
 pub use network::{Guard, ImplicitNetwork};
