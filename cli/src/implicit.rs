@@ -41,6 +41,10 @@ pub struct ImplicitArgs {
     /// Warm start from a model of the same tree (animation frames).
     #[arg(long, value_name = "M0.nsb")]
     init: Option<PathBuf>,
+    /// Leave out the sign guards (bumps that fix Φ's sign where the network has it wrong
+    /// away from the points): Carcenac's procedure alone.
+    #[arg(long)]
+    no_guards: bool,
     /// Output blob.
     #[arg(long, short)]
     out: PathBuf,
@@ -221,6 +225,7 @@ fn implicit(args: &ImplicitArgs) -> Result<()> {
         features: args.features,
         tree: args.tree.clone(),
         init,
+        unguarded: args.no_guards,
     };
     let bar = progress::training_bar("training", args.quiet || args.json);
     let trained = implicit::fit(points, &request, &options, &|event| {

@@ -5,7 +5,7 @@ use super::blob::DecodedImplicit;
 use super::capacity::check_capacity;
 use super::features::decompose;
 use super::options::ImplicitOptions;
-use super::train::{Progress, Trained, train};
+use super::train::{Progress, Trained, train, train_unguarded};
 use super::tree::TreeSpec;
 use crate::error::{Error, Result};
 use crate::points::PointSet;
@@ -19,6 +19,8 @@ pub struct FitRequest {
     pub tree: Option<TreeSpec>,
     /// Warm start from this model (same tree and width).
     pub init: Option<DecodedImplicit>,
+    /// Leave out the sign guards: Carcenac's procedure alone (Table 5 times it).
+    pub unguarded: bool,
 }
 
 /// Labels the points, chooses the tree and trains.
@@ -65,7 +67,11 @@ pub fn fit(
         .map(|s| s.cold_iterations.clone())
         .unwrap_or_default();
     let init = request.init.as_ref().map(|i| (&i.network, cold.as_slice()));
-    train(&points, &tree, &options, init, progress)
+    if request.unguarded {
+        train_unguarded(&points, &tree, &options, init, progress)
+    } else {
+        train(&points, &tree, &options, init, progress)
+    }
 }
 
 /// The centroid of each feature's points (features numbered densely from 0; an empty feature

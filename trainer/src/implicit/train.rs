@@ -204,6 +204,9 @@ pub struct Trained {
 /// animation use case); leaves refit their box to the new points and re-express the inherited
 /// first layer in it, so the starting field is exactly the previous one.
 ///
+/// Ends by placing sign guards where the network has the wrong sign away from the data
+/// ([`super::place_guards`], [`super::guard_stray_pieces`]).
+///
 /// # Errors
 /// [`Error::InvalidInput`] for missing/unused features, features with too few points or a
 /// degenerate box, options out of range, or an `init` model of another shape.
@@ -213,6 +216,31 @@ pub fn train(
     options: &ImplicitOptions,
     init: Option<(&ImplicitNetwork, &[usize])>,
     progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Trained> {
+    train_with(points, tree, options, init, progress, true)
+}
+
+/// [`train`] without the sign guards: Carcenac's procedure alone (what Table 5 times).
+///
+/// # Errors
+/// As [`train`].
+pub fn train_unguarded(
+    points: &PointSet,
+    tree: &TreeSpec,
+    options: &ImplicitOptions,
+    init: Option<(&ImplicitNetwork, &[usize])>,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Trained> {
+    train_with(points, tree, options, init, progress, false)
+}
+
+fn train_with(
+    points: &PointSet,
+    tree: &TreeSpec,
+    options: &ImplicitOptions,
+    init: Option<(&ImplicitNetwork, &[usize])>,
+    progress: &(dyn Fn(Progress) + Sync),
+    guarded: bool,
 ) -> Result<Trained> {
     let start = Instant::now();
     check_options(options)?;
@@ -359,18 +387,21 @@ pub fn train(
     // As many guards as the core loads beside the modules' parameters.
     let limit =
         MAX_GUARDS.min(DEFAULT_PARAMETERS.saturating_sub(network.params().len()) / GUARD_LEN);
-    let mut guards = place_guards(
-        &network,
-        &setting.oracle,
-        &searched,
-        MODEL_DIAGONAL,
-        options.slope,
-        limit,
-    );
+    let mut guards = Vec::new();
+    if guarded {
+        guards = place_guards(
+            &network,
+            &setting.oracle,
+            &searched,
+            MODEL_DIAGONAL,
+            options.slope,
+            limit,
+        );
+    }
     // Then the pieces of the mesh that no control point supports, twice: a guard can leave a
     // smaller piece behind.
     let push = options.slope * GUARD_PUSH * MODEL_DIAGONAL;
-    for _ in 0..2 {
+    for _ in 0..if guarded { 2 } else { 0 } {
         let guarded = network.clone().with_guards(guards.clone());
         let regions = mesh_regions(&guarded, &searched, options.box_size);
         let more = guard_stray_pieces(&guarded, &setting.oracle, regions, MODEL_DIAGONAL, push);
