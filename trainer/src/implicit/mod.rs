@@ -36,9 +36,7 @@ pub use options::ImplicitOptions;
 pub use oracle::Oracle;
 pub use pipeline::{FitRequest, feature_centroids, fit};
 pub use problem::{ModuleData, ModuleProblem, ValueGoal};
-pub use train::{
-    ModuleReport, Outcome, Progress, Trained, TrainingSummary, train, train_unguarded,
-};
+pub use train::{ModuleReport, Outcome, Progress, Trained, TrainingSummary, train};
 pub use tree::TreeSpec;
 
 #[cfg(test)]

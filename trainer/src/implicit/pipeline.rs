@@ -5,7 +5,7 @@ use super::blob::DecodedImplicit;
 use super::capacity::check_capacity;
 use super::features::decompose;
 use super::options::ImplicitOptions;
-use super::train::{Progress, Trained, train, train_unguarded};
+use super::train::{Progress, Trained, train_with};
 use super::tree::TreeSpec;
 use crate::error::{Error, Result};
 use crate::points::PointSet;
@@ -67,11 +67,7 @@ pub fn fit(
         .map(|s| s.cold_iterations.clone())
         .unwrap_or_default();
     let init = request.init.as_ref().map(|i| (&i.network, cold.as_slice()));
-    if request.unguarded {
-        train_unguarded(&points, &tree, &options, init, progress)
-    } else {
-        train(&points, &tree, &options, init, progress)
-    }
+    train_with(&points, &tree, &options, init, progress, !request.unguarded)
 }
 
 /// The centroid of each feature's points (features numbered densely from 0; an empty feature

@@ -220,21 +220,9 @@ pub fn train(
     train_with(points, tree, options, init, progress, true)
 }
 
-/// [`train`] without the sign guards: Carcenac's procedure alone (what Table 5 times).
-///
-/// # Errors
-/// As [`train`].
-pub fn train_unguarded(
-    points: &PointSet,
-    tree: &TreeSpec,
-    options: &ImplicitOptions,
-    init: Option<(&ImplicitNetwork, &[usize])>,
-    progress: &(dyn Fn(Progress) + Sync),
-) -> Result<Trained> {
-    train_with(points, tree, options, init, progress, false)
-}
-
-fn train_with(
+/// [`train`], with the sign guards only when `guarded` (without them: Carcenac's procedure
+/// alone, which Table 5 times).
+pub(crate) fn train_with(
     points: &PointSet,
     tree: &TreeSpec,
     options: &ImplicitOptions,
