@@ -1,5 +1,5 @@
 //! Two-sided accuracy of a field against a known surface: from the true surface to the
-//! model's zero set, from the model's zero set (a mesh of it over the whole bounding box) back
+//! model's zero set, from the model's zero set (a mesh of it as `neurosurf mesh` makes it) back
 //! to the true surface, the normals, the mesh's pieces, and stray surface.
 
 use rayon::prelude::*;
@@ -10,7 +10,6 @@ use super::truth::Truth;
 use crate::caoen::TriangleTree;
 use crate::error::Result;
 use crate::geometry::vector::{dot, norm, scale, sub};
-use crate::implicit::Normalization;
 use crate::io::Mesh;
 use crate::render::{Field, Region, extract_mesh};
 
@@ -144,9 +143,10 @@ impl<F: Field + ?Sized> Field for Within<'_, F> {
 pub const MEASURE_RESOLUTION: usize = 96;
 
 /// Measures `field` against `truth` both ways (see the module documentation); the model is
-/// meshed with `resolution` cells along the longest side of the union of the reference's
-/// bounding box grown by [`STRAY_GROWTH`] per side and the field's own regions, and the stray-surface grid has `stray_resolution` points per
-/// axis.
+/// meshed as `neurosurf mesh` meshes it, with `resolution` cells along the longest side of
+/// the field's own regions (the reference's bounding box grown by [`STRAY_GROWTH`] per side
+/// for a field without regions), and the stray-surface grid has `stray_resolution` points
+/// per axis.
 ///
 /// # Errors
 /// [`crate::Error::InvalidInput`] for a resolution the mesher refuses.
@@ -159,18 +159,16 @@ pub fn two_sided<F: Field + ?Sized>(
     let diagonal = truth.diagonal();
     let stray = stray_surface(truth, stray_resolution, &|p, out| field.values(p, out));
 
-    let bounds = grown_bounds(truth, STRAY_GROWTH);
-    let half = bounds.half();
-    let normalization = Normalization {
-        center: bounds.center(),
-        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+    // What `neurosurf mesh` searches (a network's inflated leaf boxes and, with several
+    // leaves, their common bounding box), on the same grid; the grown bounding box for a field
+    // without regions. Stray surface elsewhere is what the stray-surface grid counts.
+    let regions = if field.regions().is_empty() {
+        Region::of_box(&grown_bounds(truth, STRAY_GROWTH))
+            .into_iter()
+            .collect()
+    } else {
+        field.regions().to_vec()
     };
-    // The grown bounding box, and wherever the field itself says its surface may be (a
-    // network's inflated leaf boxes: what `neurosurf mesh` searches).
-    let regions = Region::new(normalization, 2.0, 1.0)
-        .into_iter()
-        .chain(field.regions().iter().copied())
-        .collect();
     let within = Within { field, regions };
     let extracted = extract_mesh(&within, resolution, &|_, _| {})?;
     let mut mesh = extracted.mesh;

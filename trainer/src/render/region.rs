@@ -100,12 +100,36 @@ impl Region {
     /// The inflated boxes of every leaf of `network`, for its normalization side `box_size`
     /// (the trainer's default is 2) grown by `inflate` (e.g. 1.2). Leaves whose
     /// normalization is singular are skipped.
+    ///
+    /// With several leaves, their common bounding box is one more region: the leaf boxes
+    /// need not cover the inside of the shape between them, and an uncovered pocket would
+    /// read as outside and close a cavity wall around itself. The trainer checks Φ's sign in
+    /// that whole box ([`crate::implicit::place_guards`]).
     pub fn of_network(network: &ImplicitNetwork, box_size: f64, inflate: f64) -> Vec<Region> {
-        (0..network.module_count())
+        let mut regions: Vec<Region> = (0..network.module_count())
             .filter(|&i| network.kinds()[i] == neurosurf_core::implicit::ModuleKind::Leaf)
             .filter_map(|i| network.normalization(i))
             .filter_map(|n| Region::new(n, box_size, inflate))
-            .collect()
+            .collect();
+        if regions.len() > 1
+            && let Some(around) = bounds_of(&regions).and_then(|b| Region::of_box(&b))
+        {
+            regions.push(around);
+        }
+        regions
+    }
+
+    /// The axis-aligned box `aabb` as a region; `None` when it has no extent.
+    pub fn of_box(aabb: &Aabb) -> Option<Region> {
+        let half = aabb.half();
+        if half.iter().any(|&h| h.is_nan() || h <= 0.0) {
+            return None;
+        }
+        let normalization = Normalization {
+            center: aabb.center(),
+            matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+        };
+        Region::new(normalization, 2.0, 1.0)
     }
 
     /// The shortest world-space side, 2h/|row| minimized over the rows of A (rows are
