@@ -25,13 +25,13 @@ use super::blob::to_blob;
 use super::network::{Guard, ImplicitNetwork};
 use super::oracle::Oracle;
 use crate::quality::component_labels;
-use crate::render::Aabb;
-use crate::render::{CoreField, Region, extract_mesh};
+use crate::render::{Aabb, Field, extract_mesh};
 
 /// How far a guard's support keeps from the sampled surface, and how far from it the grid is
 /// checked, as a fraction of the bounding diagonal.
 pub const GUARD_CLEARANCE: f64 = 0.02;
-/// Grid cells along the longest side of the checked box.
+/// Cells along the longest side of the grid the guards are placed on and the mesh is checked
+/// on: the resolution `neurosurf mesh` uses by default.
 pub const GUARD_RESOLUTION: usize = 96;
 /// A guard covers the wrong grid points within this fraction of its radius.
 const COVER: f64 = 0.7;
@@ -141,8 +141,14 @@ pub fn place_guards(
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&positions) else {
         return Vec::new();
     };
+    // Points with the wrong sign first, then points with too weak a sign; farthest first.
+    let weak = |w: usize| inside[wrong[w]].is_some_and(|s| toward(s, phi[wrong[w]]) > 0.0);
     let mut order: Vec<usize> = (0..wrong.len()).collect();
-    order.sort_by(|&a, &b| distance[wrong[b]].total_cmp(&distance[wrong[a]]));
+    order.sort_by(|&a, &b| {
+        weak(a)
+            .cmp(&weak(b))
+            .then(distance[wrong[b]].total_cmp(&distance[wrong[a]]))
+    });
     let mut covered = vec![false; wrong.len()];
     let mut guards = Vec::new();
     for w in order {
@@ -188,98 +194,264 @@ pub fn place_guards(
     guards
 }
 
-/// Cells along the longest side of the mesh [`guard_stray_pieces`] checks: the resolution
-/// `neurosurf mesh` uses by default.
-pub const PIECE_RESOLUTION: usize = 96;
 /// A piece of the zero set is stray when none of its vertices comes within this fraction of
 /// the diagonal of a control point (the off-surface offset: the network fits the points far
 /// more closely than that).
 pub const PIECE_SUPPORT: f64 = 0.01;
-/// A stray piece's guard reaches at least this many times past the piece's farthest vertex.
+/// A piece guard's radius is this many times the distance to the farthest point it covers.
 const PIECE_REACH: f64 = 1.1;
+/// A bridge guard's radius, as a fraction of its distance to the nearest point.
+const BRIDGE_REACH: f64 = 0.9;
+/// How much farther than a stray piece's guard a bridge pushes Φ: a joint as thick as a mesh
+/// cell or two, not a thread between the grid points.
+const BRIDGE_PUSH: f64 = 2.0;
+/// Samples along a bridge, as a fraction of [`PIECE_SUPPORT`].
+const BRIDGE_STEP: f64 = 0.5;
 
-/// Guards for the stray pieces of `network`'s zero set: meshed at [`PIECE_RESOLUTION`] within
-/// `regions`, every piece none of whose vertices comes within [`PIECE_SUPPORT`] of the
-/// diagonal of a control point gets one guard at its centroid, on the side the winding number
-/// gives there, reaching past the whole piece but not within [`PIECE_SUPPORT`] of the points,
-/// and strong enough to push Φ to its side by `push` at the piece's vertices, its centroid
-/// and the points between. Pieces no such guard fits are left alone.
-pub fn guard_stray_pieces(
+/// Guards for the pieces of `network`'s zero set that the points do not explain: `field` is
+/// the network's own (the core's, or a [`super::GridCache`]'s), meshed at [`GUARD_RESOLUTION`].
+///
+/// Each control point belongs to the piece with the nearest vertex. A piece no control point
+/// belongs to is stray: guards on the winding number's side cover its vertices, the first at
+/// its centroid when one reaches past the whole piece, then at the vertices farthest from the
+/// points. A piece with points of its own that is not the largest is a part the network cut
+/// off (a limb at a sparsely sampled joint): where the winding number is clearly inside all
+/// along the shortest segment to the largest piece, inside guards along that segment join
+/// them. Every guard stops [`PIECE_SUPPORT`] of the diagonal short of the points and pushes Φ
+/// to its side by `push` where it is meant to; what no guard fits is left alone. Returns the
+/// number of pieces found and the guards.
+pub fn guard_stray_pieces<F: Field + ?Sized>(
     network: &ImplicitNetwork,
+    field: &F,
     oracle: &Oracle,
-    regions: Vec<Region>,
     diagonal: f64,
     push: f64,
-) -> Vec<Guard> {
-    let Ok(blob) = to_blob(network, None, ScalarKind::F32) else {
-        return Vec::new();
-    };
-    let Ok(field) = CoreField::new(&blob, regions) else {
-        return Vec::new();
-    };
-    let Ok(extracted) = extract_mesh(&field, PIECE_RESOLUTION, &|_, _| {}) else {
-        return Vec::new();
+) -> (usize, Vec<Guard>) {
+    let Ok(extracted) = extract_mesh(field, GUARD_RESOLUTION, &|_, _| {}) else {
+        return (0, Vec::new());
     };
     let mesh = extracted.mesh;
     let (labels, count) = component_labels(&mesh);
     if count <= 1 {
-        return Vec::new();
+        return (count, Vec::new());
     }
-    let support = PIECE_SUPPORT * diagonal;
     let mut pieces: Vec<Vec<[f64; 3]>> = vec![Vec::new(); count];
-    let mut supported = vec![false; count];
     for (p, &label) in mesh.positions.iter().zip(&labels) {
-        let Some(piece) = pieces.get_mut(label as usize) else {
-            continue;
-        };
-        piece.push(*p);
-        if oracle.nearest(*p).1 <= support {
-            supported[label as usize] = true;
+        if let Some(piece) = pieces.get_mut(label as usize) {
+            piece.push(*p);
         }
     }
+    let Ok(vertices) = ImmutableKdTree::<f64, 3>::new_from_slice(&mesh.positions) else {
+        return (count, Vec::new());
+    };
+    let mut owners = vec![0_usize; count];
+    for q in oracle.positions() {
+        let found = vertices
+            .query(q)
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
+        if let Some(o) = labels
+            .get(found.item as usize)
+            .and_then(|&l| owners.get_mut(l as usize))
+        {
+            *o += 1;
+        }
+    }
+    let guarding = Guarding {
+        network,
+        oracle,
+        support: PIECE_SUPPORT * diagonal,
+        push,
+    };
     let mut guards = Vec::new();
-    for (piece, _) in pieces
-        .iter()
-        .zip(&supported)
-        .filter(|(p, s)| !**s && !p.is_empty())
-    {
-        let n = piece.len() as f64;
-        let centre = [0, 1, 2].map(|k| piece.iter().map(|p| p[k]).sum::<f64>() / n);
-        let winding = oracle.winding(centre);
-        let side = if winding > 1.0 - CLEAR_WINDING {
-            true
-        } else if winding < CLEAR_WINDING {
-            false
-        } else {
-            continue;
-        };
-        let reach = piece
-            .iter()
-            .map(|p| distance(*p, centre))
-            .fold(0.0, f64::max);
-        let radius = oracle.nearest(centre).1 - support;
-        if radius <= PIECE_REACH * reach.max(f64::EPSILON) {
+    let main = (0..count).max_by_key(|&i| owners[i]).unwrap_or(0);
+    for (i, piece) in pieces.iter().enumerate() {
+        if i == main || piece.is_empty() {
             continue;
         }
-        let sign = if side { 1.0 } else { -1.0 };
+        if owners[i] == 0 {
+            guarding.cover_stray(piece, &mut guards);
+        } else {
+            guarding.bridge(piece, &pieces[main], &mut guards);
+        }
+    }
+    (count, guards)
+}
+
+/// What the piece guards share.
+#[derive(Clone, Copy)]
+struct Guarding<'a> {
+    network: &'a ImplicitNetwork,
+    oracle: &'a Oracle,
+    /// How far every guard keeps from the points.
+    support: f64,
+    /// How far past zero a guard pushes Φ where it is meant to.
+    push: f64,
+}
+
+impl Guarding<'_> {
+    /// The side the winding number clearly gives at `q`, if it does.
+    fn side(&self, q: [f64; 3]) -> Option<bool> {
+        let winding = self.oracle.winding(q);
+        if winding > 1.0 - CLEAR_WINDING {
+            Some(true)
+        } else if winding < CLEAR_WINDING {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    /// The largest guard radius at `centre`: up to [`PIECE_SUPPORT`] short of the points.
+    fn radius(&self, centre: [f64; 3]) -> f64 {
+        self.oracle.nearest(centre).1 - self.support
+    }
+
+    /// A guard at `centre` of `radius` on `side` that pushes Φ there by `push` at `probes`.
+    fn guard(&self, centre: [f64; 3], radius: f64, side: bool, probes: &[[f64; 3]]) -> Guard {
         let mut need = 0.0_f64;
-        let probes = piece
-            .iter()
-            .flat_map(|p| [*p, [0, 1, 2].map(|k| 0.5 * (p[k] + centre[k]))])
-            .chain([centre]);
-        for q in probes {
+        for &q in probes.iter().chain([&centre]) {
             let t = distance(q, centre) / radius;
             let u = 1.0 - t * t;
-            let deficit = push - toward(side, network.eval(q).0);
+            let deficit = self.push - toward(side, self.network.eval(q).0);
             need = need.max(MARGIN * deficit.max(0.0) / (u * u * u));
         }
-        guards.push(Guard {
+        let magnitude = need.max(f64::EPSILON);
+        Guard {
             center: centre,
             inverse_radius: 1.0 / radius,
-            amplitude: sign * need.max(f64::EPSILON),
-        });
+            amplitude: if side { magnitude } else { -magnitude },
+        }
     }
-    guards
+
+    /// Guards over a stray piece's vertices and the points between them and each centre.
+    fn cover_stray(&self, piece: &[[f64; 3]], guards: &mut Vec<Guard>) {
+        let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(piece) else {
+            return;
+        };
+        let n = piece.len() as f64;
+        let centroid = [0, 1, 2].map(|k| piece.iter().map(|p| p[k]).sum::<f64>() / n);
+        let mut vertices: Vec<(f64, usize)> = piece
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (self.oracle.nearest(*p).1, i))
+            .collect();
+        vertices.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let candidates = std::iter::once((None, centroid))
+            .chain(vertices.iter().map(|&(_, i)| (Some(i), piece[i])));
+        let mut covered = vec![false; piece.len()];
+        let mut left = piece.len();
+        for (vertex, centre) in candidates {
+            if left == 0 {
+                break;
+            }
+            if vertex.is_some_and(|i| covered[i]) {
+                continue;
+            }
+            let Some(side) = self.side(centre) else {
+                continue;
+            };
+            let radius = self.radius(centre);
+            if radius <= 0.0 {
+                continue;
+            }
+            let reach = radius / PIECE_REACH;
+            let members: Vec<usize> = tree
+                .query(&centre)
+                .within::<SquaredEuclidean<f64>>(reach * reach)
+                .unsorted()
+                .execute()
+                .into_iter()
+                .map(|f| f.item as usize)
+                .filter(|&i| !covered[i])
+                .collect();
+            // The centroid only when it covers the whole piece.
+            if members.is_empty() || (vertex.is_none() && members.len() < piece.len()) {
+                continue;
+            }
+            let probes: Vec<[f64; 3]> = members
+                .iter()
+                .flat_map(|&i| {
+                    let p = piece[i];
+                    [p, [0, 1, 2].map(|k| 0.5 * (p[k] + centre[k]))]
+                })
+                .collect();
+            guards.push(self.guard(centre, radius, side, &probes));
+            for &i in &members {
+                covered[i] = true;
+            }
+            left -= members.len();
+        }
+    }
+
+    /// Inside guards along the shortest segment from `piece` to `main`, when the winding
+    /// number is clearly inside all along it.
+    fn bridge(&self, piece: &[[f64; 3]], main: &[[f64; 3]], guards: &mut Vec<Guard>) {
+        let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(main) else {
+            return;
+        };
+        let Some((from, to)) = piece
+            .iter()
+            .map(|p| {
+                let found = tree
+                    .query(p)
+                    .nearest_one::<SquaredEuclidean<f64>>()
+                    .execute();
+                (found.distance, *p, main[found.item as usize])
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, p, q)| (p, q))
+        else {
+            return;
+        };
+        // A gap wider than the sample spacing there is the points' to resolve.
+        let length = distance(from, to);
+        let (nearest, _) = self
+            .oracle
+            .nearest([0, 1, 2].map(|k| 0.5 * (from[k] + to[k])));
+        if length > self.oracle.gap(nearest) {
+            return;
+        }
+        let steps = (length / (BRIDGE_STEP * self.support)).ceil().max(2.0) as usize;
+        let samples: Vec<[f64; 3]> = (0..=steps)
+            .map(|j| {
+                let t = j as f64 / steps as f64;
+                [0, 1, 2].map(|k| from[k] + t * (to[k] - from[k]))
+            })
+            .collect();
+        // Nowhere clearly outside.
+        if samples
+            .iter()
+            .any(|&q| self.oracle.winding(q) < CLEAR_WINDING)
+        {
+            return;
+        }
+        let mut covered = vec![false; samples.len()];
+        for j in 0..samples.len() {
+            if covered[j] {
+                continue;
+            }
+            let centre = samples[j];
+            // Up to the points themselves: a bridge joins surface the points already hold.
+            let radius = BRIDGE_REACH * self.oracle.nearest(centre).1;
+            if radius <= 0.0 {
+                continue;
+            }
+            let reach = radius / PIECE_REACH;
+            let members: Vec<usize> = (j..samples.len())
+                .filter(|&m| distance(samples[m], centre) <= reach)
+                .collect();
+            let probes: Vec<[f64; 3]> = members.iter().map(|&m| samples[m]).collect();
+            let thick = Guarding {
+                push: BRIDGE_PUSH * self.push,
+                ..*self
+            };
+            guards.push(thick.guard(centre, radius, true, &probes));
+            for m in members {
+                covered[m] = true;
+            }
+        }
+    }
 }
 
 fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -387,9 +559,13 @@ fn sides(oracle: &Oracle, grid: &Grid, far: &[bool]) -> Vec<Option<bool>> {
 mod tests {
     use super::*;
     use crate::implicit::tests::torus_points;
+    use crate::implicit::to_blob;
     use crate::implicit::{ImplicitOptions, Trained, TreeSpec, train};
     use crate::points::PointSet;
+    use crate::render::{CoreField, Region};
+    use neurosurf_core::implicit::ImplicitModel;
     use neurosurf_core::implicit::MAX_GUARDS;
+    use neurosurf_core::scalar::ScalarKind;
 
     /// `count` torus points and a one-leaf network trained on them.
     fn torus(count: usize, seed: u64) -> (PointSet, Trained) {
@@ -502,14 +678,18 @@ mod tests {
         let pieces = |network: &ImplicitNetwork| {
             let blob = to_blob(network, None, ScalarKind::F32).expect("blob");
             let field = CoreField::new(&blob, regions()).expect("field");
-            let mesh = extract_mesh(&field, PIECE_RESOLUTION, &|_, _| {}).expect("mesh");
+            let mesh = extract_mesh(&field, GUARD_RESOLUTION, &|_, _| {}).expect("mesh");
             component_labels(&mesh.mesh).1
         };
         let clean = pieces(&trained.network);
         assert!(pieces(&broken) > clean, "the blob makes pieces of its own");
-        let added = guard_stray_pieces(&broken, &oracle, regions(), diagonal, 0.1);
+        let broken_blob = to_blob(&broken, None, ScalarKind::F32).expect("blob");
+        let field = CoreField::new(&broken_blob, regions()).expect("field");
+        let (found, added) = guard_stray_pieces(&broken, &field, &oracle, diagonal, 0.1);
+        assert_eq!(found, pieces(&broken));
         assert!(!added.is_empty());
         let fixed = broken.with_guards([vec![blob], added].concat());
-        assert_eq!(pieces(&fixed), clean);
+        // The blob's piece is gone (and any other piece no point belongs to): one torus.
+        assert_eq!(pieces(&fixed), 1);
     }
 }

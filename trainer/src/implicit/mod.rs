@@ -8,6 +8,7 @@ mod capacity;
 mod constraints;
 mod features;
 mod frame;
+mod grid_cache;
 mod guards;
 mod jacobian;
 mod network;
@@ -25,9 +26,9 @@ pub use blob::{DecodedImplicit, ImplicitMetadata, from_blob, to_blob};
 pub use capacity::{check_capacity, fits, model_size};
 pub use features::decompose;
 pub use frame::{Frame, MODEL_DIAGONAL};
+pub use grid_cache::{CachedField, GridCache};
 pub use guards::{
-    GUARD_CLEARANCE, GUARD_RESOLUTION, PIECE_RESOLUTION, PIECE_SUPPORT, guard_stray_pieces,
-    place_guards,
+    GUARD_CLEARANCE, GUARD_RESOLUTION, PIECE_SUPPORT, guard_stray_pieces, place_guards,
 };
 pub use jacobian::{HiddenJet, InputJet, MAX_INPUTS, Tape, TrainedLayout, forward, jacobian_rows};
 pub use network::{Guard, ImplicitNetwork};

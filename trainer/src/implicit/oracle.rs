@@ -67,6 +67,12 @@ impl Oracle {
         })
     }
 
+    /// The distance from control point `i` to its eighth nearest neighbour: the
+    /// local sample spacing (0 for an index out of range).
+    pub fn gap(&self, i: usize) -> f64 {
+        self.gaps.get(i).copied().unwrap_or(0.0)
+    }
+
     /// The generalized winding number at `q`.
     pub fn winding(&self, q: [f64; 3]) -> f64 {
         let mut sum = 0.0;

@@ -16,7 +16,8 @@ use serde::{Deserialize, Serialize};
 use super::capacity::check_capacity;
 use super::constraints::{OffSurface, SampleBox, SignPoint, off_surface, sign_points};
 use super::frame::{Frame, MODEL_DIAGONAL};
-use super::guards::{guard_stray_pieces, place_guards};
+use super::grid_cache::GridCache;
+use super::guards::{GUARD_RESOLUTION, guard_stray_pieces, place_guards};
 use super::jacobian::{MAX_INPUTS, TrainedLayout};
 use super::network::{Guard, ImplicitNetwork};
 use super::normalize::Normalization;
@@ -371,43 +372,18 @@ pub(crate) fn train_with(
             reports[i] = Some(report);
         }
     }
-    let searched = searched_box(&network, &model.positions, options.box_size);
-    // As many guards as the core loads beside the modules' parameters.
-    let limit =
-        MAX_GUARDS.min(DEFAULT_PARAMETERS.saturating_sub(network.params().len()) / GUARD_LEN);
-    let mut guards = Vec::new();
-    if guarded {
-        guards = place_guards(
-            &network,
+    let network = if guarded {
+        guard(
+            network,
+            points,
+            &model.positions,
             &setting.oracle,
-            &searched,
-            MODEL_DIAGONAL,
-            options.slope,
-            limit,
-        );
-    }
-    // Then the pieces of the mesh that no control point supports, twice: a guard can leave a
-    // smaller piece behind.
-    let push = options.slope * GUARD_PUSH * MODEL_DIAGONAL;
-    for _ in 0..if guarded { 2 } else { 0 } {
-        let guarded = network.clone().with_guards(guards.clone());
-        let regions = mesh_regions(&guarded, &searched, options.box_size);
-        let more = guard_stray_pieces(&guarded, &setting.oracle, regions, MODEL_DIAGONAL, push);
-        if more.is_empty() || guards.len() + more.len() > limit {
-            break;
-        }
-        guards.extend(more);
-    }
-    let network = in_frame(&network, |n| frame.normalization_to_world(n)).with_guards(
-        guards
-            .iter()
-            .map(|g| Guard {
-                center: frame.to_world(g.center),
-                inverse_radius: g.inverse_radius / frame.scale,
-                amplitude: g.amplitude,
-            })
-            .collect(),
-    );
+            options,
+            frame,
+        )
+    } else {
+        in_frame(&network, |n| frame.normalization_to_world(n))
+    };
 
     let modules: Vec<ModuleReport> = reports.into_iter().flatten().collect();
     let cold_iterations = match init {
@@ -425,26 +401,76 @@ pub(crate) fn train_with(
     Ok(Trained { network, summary })
 }
 
-/// How far a stray piece's guard pushes Φ past zero, as the field s·d at a distance d of this
-/// fraction of the diagonal.
-const GUARD_PUSH: f64 = 0.005;
-
-/// The regions `neurosurf mesh` searches: the searched box and every leaf box, inflated as
-/// rendering inflates it.
-fn mesh_regions(network: &ImplicitNetwork, searched: &Aabb, box_size: f64) -> Vec<Region> {
-    let half = searched.half();
-    let normalization = Normalization {
-        center: searched.center(),
-        matrix: [0, 1, 2].map(|r| [0, 1, 2].map(|c| if r == c { 1.0 / half[r] } else { 0.0 })),
+/// `network` (in the model frame) in the data's units with sign guards: first where the grid
+/// check finds Φ on the wrong side ([`place_guards`], in the model frame, over everything the
+/// mesher searches and the points' bounding box grown by a tenth), then for the pieces of
+/// its mesh the points do not explain ([`guard_stray_pieces`], meshed exactly as `neurosurf
+/// mesh` meshes the blob), round after round until none is left, a round changes nothing or
+/// the guards run out. The mesh grid is evaluated once; after that only where new guards
+/// reach.
+fn guard(
+    network: ImplicitNetwork,
+    points: &PointSet,
+    model_positions: &[[f64; 3]],
+    model_oracle: &Oracle,
+    options: &ImplicitOptions,
+    frame: Frame,
+) -> ImplicitNetwork {
+    // As many guards as the core loads beside the modules' parameters.
+    let limit =
+        MAX_GUARDS.min(DEFAULT_PARAMETERS.saturating_sub(network.params().len()) / GUARD_LEN);
+    let searched = searched_box(&network, model_positions, options.box_size);
+    let guards = place_guards(
+        &network,
+        model_oracle,
+        &searched,
+        MODEL_DIAGONAL,
+        options.slope,
+        limit - limit / PIECE_SHARE,
+    );
+    let mut network = in_frame(&network, |n| frame.normalization_to_world(n)).with_guards(
+        guards
+            .iter()
+            .map(|g| Guard {
+                center: frame.to_world(g.center),
+                inverse_radius: g.inverse_radius / frame.scale,
+                amplitude: g.amplitude,
+            })
+            .collect(),
+    );
+    let Ok(oracle) = Oracle::new(&points.positions, &points.normals) else {
+        return network;
     };
-    Region::new(normalization, 2.0, 1.0)
-        .into_iter()
-        .chain(Region::of_network(network, box_size, DEFAULT_INFLATE))
-        .collect()
+    let diagonal = MODEL_DIAGONAL * frame.scale;
+    let regions = Region::of_network(&network, options.box_size, DEFAULT_INFLATE);
+    let Ok(mut cache) = GridCache::new(&network, regions, GUARD_RESOLUTION) else {
+        return network;
+    };
+    let push = options.slope * GUARD_PUSH * MODEL_DIAGONAL;
+    let mut before = usize::MAX;
+    for _ in 0..PIECE_ROUNDS {
+        let room = limit.saturating_sub(network.guards().len());
+        let Ok(field) = cache.field(&network) else {
+            break;
+        };
+        let (pieces, more) = guard_stray_pieces(&network, &field, &oracle, diagonal, push);
+        // Done, out of room, or the last round's guards changed nothing.
+        if more.is_empty() || room == 0 || pieces >= before {
+            break;
+        }
+        before = pieces;
+        let mut guards = network.guards().to_vec();
+        guards.extend(more.into_iter().take(room));
+        network = network.with_guards(guards);
+        if cache.update(&network).is_err() {
+            break;
+        }
+    }
+    network
 }
 
-/// What the mesher searches: the points' bounding box grown by a tenth per side and every
-/// leaf box, inflated as rendering inflates it.
+/// What the mesher searches in the model frame, and the points' bounding box grown by a
+/// tenth per side (where stray surface is measured).
 fn searched_box(network: &ImplicitNetwork, positions: &[[f64; 3]], box_size: f64) -> Aabb {
     let mut bounds = Aabb {
         lo: positions[0],
@@ -463,6 +489,16 @@ fn searched_box(network: &ImplicitNetwork, positions: &[[f64; 3]], box_size: f64
     }
     bounds
 }
+
+/// How far a stray piece's guard pushes Φ past zero, as the field s·d at a distance d of this
+/// fraction of the diagonal.
+const GUARD_PUSH: f64 = 0.005;
+
+/// One guard in this many is kept for the pieces of the mesh.
+const PIECE_SHARE: usize = 4;
+
+/// At most this many rounds of stray-piece guards.
+const PIECE_ROUNDS: usize = 8;
 
 /// The largest |Φ| a sign point asks for, in the model frame where the slope is s.
 const MAX_SIGN_MARGIN: f64 = 0.5;
