@@ -257,6 +257,18 @@ pub fn guard_stray_pieces<F: Field + ?Sized>(
             *o += 1;
         }
     }
+    let mut volumes = vec![0.0_f64; count];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|v| mesh.positions.get(v as usize).copied().unwrap_or([0.0; 3]));
+        if let Some(v) = labels
+            .get(t[0] as usize)
+            .and_then(|&l| volumes.get_mut(l as usize))
+        {
+            *v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0;
+        }
+    }
     let guarding = Guarding {
         network,
         oracle,
@@ -270,7 +282,11 @@ pub fn guard_stray_pieces<F: Field + ?Sized>(
             continue;
         }
         if owners[i] == 0 {
-            guarding.cover_stray(piece, &mut guards);
+            // A closed piece winds counter-clockwise seen from Φ < 0: a positive volume
+            // encloses inside (a blob, pushed outside), a negative one outside (a cavity,
+            // pushed inside). The piece goes when what it encloses takes its surroundings'
+            // sign, whatever the winding number says there.
+            guarding.cover_stray(piece, volumes[i] < 0.0, &mut guards);
         } else {
             guarding.bridge(piece, &pieces[main], &mut guards);
         }
@@ -290,18 +306,6 @@ struct Guarding<'a> {
 }
 
 impl Guarding<'_> {
-    /// The side the winding number clearly gives at `q`, if it does.
-    fn side(&self, q: [f64; 3]) -> Option<bool> {
-        let winding = self.oracle.winding(q);
-        if winding > 1.0 - CLEAR_WINDING {
-            Some(true)
-        } else if winding < CLEAR_WINDING {
-            Some(false)
-        } else {
-            None
-        }
-    }
-
     /// The largest guard radius at `centre`: up to [`PIECE_SUPPORT`] short of the points.
     fn radius(&self, centre: [f64; 3]) -> f64 {
         self.oracle.nearest(centre).1 - self.support
@@ -324,8 +328,9 @@ impl Guarding<'_> {
         }
     }
 
-    /// Guards over a stray piece's vertices and the points between them and each centre.
-    fn cover_stray(&self, piece: &[[f64; 3]], guards: &mut Vec<Guard>) {
+    /// Guards on `side` over a stray piece's vertices and the points between them and each
+    /// centre.
+    fn cover_stray(&self, piece: &[[f64; 3]], side: bool, guards: &mut Vec<Guard>) {
         let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(piece) else {
             return;
         };
@@ -348,9 +353,6 @@ impl Guarding<'_> {
             if vertex.is_some_and(|i| covered[i]) {
                 continue;
             }
-            let Some(side) = self.side(centre) else {
-                continue;
-            };
             let radius = self.radius(centre);
             if radius <= 0.0 {
                 continue;
@@ -691,5 +693,46 @@ mod tests {
         let fixed = broken.with_guards([vec![blob], added].concat());
         // The blob's piece is gone (and any other piece no point belongs to): one torus.
         assert_eq!(pieces(&fixed), 1);
+    }
+
+    /// A cavity carved inside the tube (where 96 torus points cannot tell the side by the
+    /// winding number) is filled from inside: what a stray piece encloses takes its
+    /// surroundings' sign.
+    #[test]
+    fn a_cavity_no_point_explains_is_filled() {
+        let (points, trained) = torus(400, 3);
+        let carve = Guard {
+            center: [1.0, 0.0, 0.0],
+            inverse_radius: 1.0 / 0.15,
+            amplitude: -20.0,
+        };
+        let broken = trained.network.clone().with_guards(vec![carve]);
+        assert!(broken.eval(carve.center).0 < 0.0, "the cavity is there");
+        // Normals turned inward: the winding number now calls the tube outside, and the side
+        // must come from the piece itself.
+        let inward: Vec<[f64; 3]> = points.normals.iter().map(|n| n.map(|v| -v)).collect();
+        let oracle = Oracle::new(&points.positions, &inward).expect("oracle");
+        assert!(oracle.winding(carve.center) < CLEAR_WINDING);
+        let regions = || Region::of_network(&trained.network, 2.0, crate::render::DEFAULT_INFLATE);
+        let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
+        let pieces = |network: &ImplicitNetwork| {
+            let blob = to_blob(network, None, ScalarKind::F32).expect("blob");
+            let field = CoreField::new(&blob, regions()).expect("field");
+            let mesh = extract_mesh(&field, GUARD_RESOLUTION, &|_, _| {}).expect("mesh");
+            component_labels(&mesh.mesh).1
+        };
+        assert_eq!(
+            pieces(&broken),
+            2,
+            "the cavity's wall is a piece of its own"
+        );
+        let blob = to_blob(&broken, None, ScalarKind::F32).expect("blob");
+        let field = CoreField::new(&blob, regions()).expect("field");
+        let (_, added) = guard_stray_pieces(&broken, &field, &oracle, diagonal, 0.1);
+        assert!(!added.is_empty());
+        assert!(added.iter().all(|g| g.amplitude > 0.0), "inside guards");
+        let fixed = broken.with_guards([vec![carve], added].concat());
+        assert_eq!(pieces(&fixed), 1);
+        assert!(fixed.eval(carve.center).0 > 0.0, "filled");
     }
 }
