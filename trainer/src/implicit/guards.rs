@@ -583,6 +583,19 @@ mod tests {
         (points, trained)
     }
 
+    /// `network` through the core in `f32`, within `regions`.
+    fn core_field(network: &ImplicitNetwork, regions: Vec<Region>) -> CoreField {
+        let blob = to_blob(network, None, ScalarKind::F32).expect("blob");
+        CoreField::new(&blob, regions).expect("field")
+    }
+
+    /// The pieces of `network`'s mesh within `regions`, as the guards see them.
+    fn count_pieces(network: &ImplicitNetwork, regions: Vec<Region>) -> usize {
+        let field = core_field(network, regions);
+        let mesh = extract_mesh(&field, GUARD_RESOLUTION, &|_, _| {}).expect("mesh");
+        component_labels(&mesh.mesh).1
+    }
+
     /// A torus network with a blob grown on purpose (a guard of the wrong sign, outside the
     /// torus above its hole): placing guards must remove the blob and leave the field near
     /// the points untouched.
@@ -677,16 +690,10 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
-        let pieces = |network: &ImplicitNetwork| {
-            let blob = to_blob(network, None, ScalarKind::F32).expect("blob");
-            let field = CoreField::new(&blob, regions()).expect("field");
-            let mesh = extract_mesh(&field, GUARD_RESOLUTION, &|_, _| {}).expect("mesh");
-            component_labels(&mesh.mesh).1
-        };
+        let pieces = |network: &ImplicitNetwork| count_pieces(network, regions());
         let clean = pieces(&trained.network);
         assert!(pieces(&broken) > clean, "the blob makes pieces of its own");
-        let broken_blob = to_blob(&broken, None, ScalarKind::F32).expect("blob");
-        let field = CoreField::new(&broken_blob, regions()).expect("field");
+        let field = core_field(&broken, regions());
         let (found, added) = guard_stray_pieces(&broken, &field, &oracle, diagonal, 0.1);
         assert_eq!(found, pieces(&broken));
         assert!(!added.is_empty());
@@ -715,19 +722,13 @@ mod tests {
         assert!(oracle.winding(carve.center) < CLEAR_WINDING);
         let regions = || Region::of_network(&trained.network, 2.0, crate::render::DEFAULT_INFLATE);
         let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
-        let pieces = |network: &ImplicitNetwork| {
-            let blob = to_blob(network, None, ScalarKind::F32).expect("blob");
-            let field = CoreField::new(&blob, regions()).expect("field");
-            let mesh = extract_mesh(&field, GUARD_RESOLUTION, &|_, _| {}).expect("mesh");
-            component_labels(&mesh.mesh).1
-        };
+        let pieces = |network: &ImplicitNetwork| count_pieces(network, regions());
         assert_eq!(
             pieces(&broken),
             2,
             "the cavity's wall is a piece of its own"
         );
-        let blob = to_blob(&broken, None, ScalarKind::F32).expect("blob");
-        let field = CoreField::new(&blob, regions()).expect("field");
+        let field = core_field(&broken, regions());
         let (_, added) = guard_stray_pieces(&broken, &field, &oracle, diagonal, 0.1);
         assert!(!added.is_empty());
         assert!(added.iter().all(|g| g.amplitude > 0.0), "inside guards");
