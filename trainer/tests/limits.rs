@@ -2,13 +2,13 @@
 //! core in f32 and Q16.16), one past it is refused before anything is written, naming the
 //! limit and the option that fits.
 
-use neurosurf_core::implicit::{DEFAULT_MODULES, DEFAULT_PARAMETERS};
+use neurosurf_core::implicit::{DEFAULT_MODULES, MAX_GUARDS, MODULE_PARAMETERS};
 use neurosurf_core::parametric::{
     DEFAULT_PARAMETERS as DEFAULT_NETWORK_PARAMETERS, MAX_HIDDEN_LAYERS, MAX_NEURONS,
 };
 use neurosurf_core::scalar::ScalarKind;
 use neurosurf_trainer::blob::write_checked;
-use neurosurf_trainer::implicit::{self, ImplicitNetwork, TreeSpec};
+use neurosurf_trainer::implicit::{self, Guard, ImplicitNetwork, TreeSpec};
 use neurosurf_trainer::parametric::{
     Activation, SurfaceNetwork, check_capacity, largest_parameter_count, network_to_blob,
 };
@@ -24,9 +24,17 @@ fn balanced(first: u32, count: u32) -> TreeSpec {
     TreeSpec::node(balanced(first, left), balanced(first + left, count - left))
 }
 
-/// The blob of an (untrained) implicit model of `leaves` leaves at `width`, as `scalar`.
+/// The blob of an (untrained) implicit model of `leaves` leaves at `width` with as many sign
+/// guards as a model may hold (what training may add), as `scalar`.
 fn implicit_blob(leaves: usize, width: usize, scalar: ScalarKind) -> Vec<u8> {
-    let network = ImplicitNetwork::new(width, &balanced(0, leaves as u32)).unwrap();
+    let guard = Guard {
+        center: [0.0; 3],
+        inverse_radius: 1.0,
+        amplitude: -0.5,
+    };
+    let network = ImplicitNetwork::new(width, &balanced(0, leaves as u32))
+        .unwrap()
+        .with_guards(vec![guard; MAX_GUARDS]);
     implicit::to_blob(&network, None, scalar).unwrap()
 }
 
@@ -56,7 +64,7 @@ fn implicit_models_at_the_parameter_limit_are_written_and_one_feature_more_is_re
             .find(|&k| implicit::fits(k, width))
             .unwrap();
         let (_, parameters) = implicit::model_size(most + 1, width);
-        assert!(parameters > DEFAULT_PARAMETERS || 2 * most + 1 > DEFAULT_MODULES);
+        assert!(parameters > MODULE_PARAMETERS || 2 * most + 1 > DEFAULT_MODULES);
         implicit::check_capacity(most, width).unwrap();
         let error = implicit::check_capacity(most + 1, width)
             .unwrap_err()

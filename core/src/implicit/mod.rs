@@ -21,5 +21,7 @@ pub use batch::LANES;
 pub use eval::{FieldGradient, ModuleView};
 pub use guard::{GUARD_CODE, GUARD_LEN, MAX_GUARDS};
 pub use layout::{DenseLayout, MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
-pub use model::{DEFAULT_MODULES, DEFAULT_PARAMETERS, ImplicitModel, ImplicitPayload};
+pub use model::{
+    DEFAULT_MODULES, DEFAULT_PARAMETERS, ImplicitModel, ImplicitPayload, MODULE_PARAMETERS,
+};
 pub use width::SPECIALIZED as SPECIALIZED_WIDTHS;

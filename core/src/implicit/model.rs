@@ -9,9 +9,12 @@ use crate::blob::{self, ModelKind};
 use crate::error::{BlobError, Quantity};
 use crate::scalar::{Scalar, ScalarKind};
 
-/// Default parameter capacity: a 17-leaf, 16-node body model of width 9 needs 7 476
-/// (17 × 148 + 16 × 310).
-pub const DEFAULT_PARAMETERS: usize = 8192;
+/// The modules' share of the default parameter capacity: a 17-leaf, 16-node body model of
+/// width 9 needs 7 476 (17 × 148 + 16 × 310).
+pub const MODULE_PARAMETERS: usize = 8192;
+/// Default parameter capacity: [`MODULE_PARAMETERS`] for the modules and room for
+/// [`MAX_GUARDS`] sign guards beside them (9 472).
+pub const DEFAULT_PARAMETERS: usize = MODULE_PARAMETERS + MAX_GUARDS * GUARD_LEN;
 /// Default module capacity.
 pub const DEFAULT_MODULES: usize = 64;
 
@@ -62,8 +65,8 @@ pub(crate) struct ModuleEntry {
 /// A modular implicit surface Φ (Carcenac 2004), loaded from a blob and validated.
 ///
 /// `P` and `M` are the parameter and module capacities reserved inline (no heap): the defaults
-/// take 32 KiB in `f32` and hold a 33-module body model. Evaluation after a successful load
-/// cannot fail: it saturates in fixed point and never reads out of bounds.
+/// take 37 KiB in `f32` and hold a 33-module body model with 256 guards. Evaluation after a
+/// successful load cannot fail: it saturates in fixed point and never reads out of bounds.
 ///
 /// ```
 /// # use neurosurf_core::implicit::*;

@@ -1,7 +1,7 @@
 //! What the core can hold, checked before training: a model that trains for minutes and then
 //! is refused by `mesh`, `render`, `eval` and the microcontroller is worse than an error now.
 
-use neurosurf_core::implicit::{DEFAULT_MODULES, DEFAULT_PARAMETERS, ModuleKind, ModuleLayout};
+use neurosurf_core::implicit::{DEFAULT_MODULES, MODULE_PARAMETERS, ModuleKind, ModuleLayout};
 
 use crate::error::{Error, Result};
 
@@ -15,10 +15,11 @@ pub fn model_size(leaves: usize, width: usize) -> (usize, usize) {
 }
 
 /// Whether a model of `leaves` leaves at `width` fits the core's default capacity
-/// ([`DEFAULT_MODULES`] modules, [`DEFAULT_PARAMETERS`] parameters).
+/// ([`DEFAULT_MODULES`] modules, [`MODULE_PARAMETERS`] parameters; the rest of the core's
+/// parameter capacity is the sign guards').
 pub fn fits(leaves: usize, width: usize) -> bool {
     let (modules, parameters) = model_size(leaves, width);
-    modules <= DEFAULT_MODULES && parameters <= DEFAULT_PARAMETERS
+    modules <= DEFAULT_MODULES && parameters <= MODULE_PARAMETERS
 }
 
 /// Checks that a tree of `leaves` leaves at `width` fits the core.
@@ -44,7 +45,7 @@ pub fn check_capacity(leaves: usize, width: usize) -> Result<()> {
     };
     Err(Error::invalid(format!(
         "{leaves} features at width {width} make {modules} modules and {parameters} \
-         parameters; the core holds at most {DEFAULT_MODULES} modules and {DEFAULT_PARAMETERS} \
+         parameters; the core holds at most {DEFAULT_MODULES} modules and {MODULE_PARAMETERS} \
          parameters: use {features} at width {width}{width_hint}"
     )))
 }
@@ -69,7 +70,7 @@ mod tests {
         assert!(message.contains("--features"), "{message}");
         assert!(message.contains("--width"), "{message}");
         assert!(
-            message.contains(&DEFAULT_PARAMETERS.to_string()),
+            message.contains(&MODULE_PARAMETERS.to_string()),
             "{message}"
         );
         // The suggested way out fits, one more feature does not.
