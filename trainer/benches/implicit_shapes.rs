@@ -9,7 +9,8 @@
 //! skip the RBF, `--diagonal 0.01` to scale every shape first (units), `--set key=value,…` to
 //! change a training option, `--save DIR` for the blobs, `--slices DIR` for pictures of three
 //! slices (red: model inside where the points say outside, blue the reverse), `--body 50` for
-//! the demo's body and its animation frame by frame instead.
+//! the demo's body and its animation frame by frame instead, `--units` for each case scaled
+//! ×0.01 and ×100 and moved by (1000, −1000, 500) instead.
 
 mod shapes;
 
@@ -138,7 +139,7 @@ fn slices(
 /// The demo's body, cold in the rest pose, then `frames − 1` animation frames each warm from
 /// the previous one, every frame measured against its true body (meshed from its signed
 /// distance).
-fn body_animation(frames: usize) {
+fn body_animation(frames: usize, save: Option<String>) {
     use neurosurf_trainer::demo::{body_points, train_body};
     use neurosurf_trainer::sample::{Body, Pose};
     let options = ImplicitOptions::default();
@@ -159,6 +160,9 @@ fn body_animation(frames: usize) {
         let truth =
             Truth::from_signed_distance(|p| body.signed_distance(p), grown, 160).expect("truth");
         let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
+        if let Some(dir) = &save {
+            std::fs::write(format!("{dir}/body-{frame}.nsb"), &blob).expect("save");
+        }
         let m = measure_core(&blob, &trained.network, &truth);
         let s = &trained.summary;
         row(
@@ -191,14 +195,22 @@ fn main() {
     let rbf = !args.iter().any(|a| a == "--no-rbf");
     // Scale every case to this bounding diagonal (as given when absent).
     let to_diagonal: Option<f64> = value("--diagonal").map(|v| v.parse().expect("diagonal"));
-    emit(
-        "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices | time ÷ RBF | truth → model ÷ RBF |",
-    );
-    emit("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    if let Some(frames) = value("--body") {
-        body_animation(frames.parse().expect("--body FRAMES"));
+    let in_units = args.iter().any(|a| a == "--units");
+    if in_units {
+        emit(
+            "| case | units | time | truth → model median, f32 | truth → model median, Q16.16 | model → truth median | normal median | stray sign changes, f32 | stray sign changes, Q16.16 | mesh pieces | far vertices | truth → model ÷ as given |",
+        );
+        emit("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+        units(&filter);
     } else {
-        shapes(&filter, &seeds, rbf, to_diagonal, &value);
+        emit(
+            "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices | time ÷ RBF | truth → model ÷ RBF |",
+        );
+        emit("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+        match value("--body") {
+            Some(frames) => body_animation(frames.parse().expect("--body FRAMES"), value("--save")),
+            None => shapes(&filter, &seeds, rbf, to_diagonal, &value),
+        }
     }
     if let Some(path) = value("--out").map(|p| shapes::in_workspace(&p)) {
         let command = shapes::arguments(&args);
@@ -212,6 +224,8 @@ fn main() {
              the built-in RBF on the same points, in the same run.\n\n{}",
             if value("--body").is_some() {
                 "The demo's body and its animation, frame by frame"
+            } else if in_units {
+                "Implicit models in other units"
             } else {
                 "Implicit models on real shapes"
             },
@@ -220,6 +234,62 @@ fn main() {
         );
         std::fs::write(&path, text).expect("write --out");
         eprintln!("wrote {}", path.display());
+    }
+}
+
+/// Every case of `filter` in other units: scaled ×0.01 and ×100 and moved by
+/// (1000, −1000, 500), beside the data as given; measured in f32 and Q16.16.
+fn units(filter: &[String]) {
+    use neurosurf_trainer::render::{DEFAULT_BOX_SIZE, DEFAULT_INFLATE, Q16Field, Region};
+    let transforms: [(&str, f64, [f64; 3]); 4] = [
+        ("as given", 1.0, [0.0; 3]),
+        ("×0.01", 0.01, [0.0; 3]),
+        ("×100", 100.0, [0.0; 3]),
+        ("moved by (1000, −1000, 500)", 1.0, [1000.0, -1000.0, 500.0]),
+    ];
+    for case in cases(filter) {
+        let mut reference = None;
+        for (label, scale, offset) in transforms {
+            let mut mesh = case.mesh.clone();
+            for p in &mut mesh.positions {
+                *p = [0, 1, 2].map(|k| p[k] * scale + offset[k]);
+            }
+            let truth = Truth::from_mesh(&mesh).expect("truth");
+            let mut points = sample_mesh(&mesh, case.points, 1).expect("sample");
+            let options = ImplicitOptions::default();
+            points.features = Some(
+                implicit::decompose(&points.positions, case.features, options.min_points)
+                    .expect("features"),
+            );
+            let request = FitRequest {
+                features: Some(case.features),
+                ..FitRequest::default()
+            };
+            let start = Instant::now();
+            let trained = implicit::fit(points, &request, &options, &|_| {}).expect("training");
+            let seconds = start.elapsed().as_secs_f64();
+            let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
+            let m = measure_core(&blob, &trained.network, &truth);
+            let q16 = implicit::to_blob(&trained.network, None, ScalarKind::Q16_16).expect("blob");
+            let regions = Region::of_network(&trained.network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE);
+            let field = Q16Field::new(&q16, regions).expect("the core loads the Q16.16 blob");
+            let fixed =
+                two_sided(&field, &truth, MEASURE_RESOLUTION, STRAY_RESOLUTION).expect("measure");
+            let median = m.truth_to_model.median_percent;
+            let ratio = *reference.get_or_insert(median);
+            emit(&format!(
+                "| {} | {label} | {seconds:.2} s | {median:.4} % | {:.4} % | {:.4} % | {:.2}° | {} | {} | {} | {:.2} % | {:.2}× |",
+                case.name,
+                fixed.truth_to_model.median_percent,
+                m.model_to_truth.median_percent,
+                m.normal_median_degrees,
+                m.stray.sign_changes,
+                fixed.stray.sign_changes,
+                m.mesh.components,
+                m.mesh.far_vertices_percent,
+                median / ratio,
+            ));
+        }
     }
 }
 

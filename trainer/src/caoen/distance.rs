@@ -20,7 +20,8 @@ const LEAF_SIZE: usize = 4;
 /// A bounding volume hierarchy over a mesh's triangles for nearest-point queries.
 #[derive(Clone, Debug)]
 pub struct TriangleTree {
-    triangles: Vec<[[f64; 3]; 3]>,
+    /// Each triangle with its index in the mesh.
+    triangles: Vec<([[f64; 3]; 3], u32)>,
     nodes: Vec<Node>,
 }
 
@@ -40,10 +41,11 @@ impl TriangleTree {
     /// [`Error::InvalidInput`] for an invalid mesh (see [`Mesh::validated`]).
     pub fn new(mesh: &Mesh) -> Result<Self> {
         let mesh = mesh.clone().validated()?;
-        let mut triangles: Vec<[[f64; 3]; 3]> = mesh
+        let mut triangles: Vec<([[f64; 3]; 3], u32)> = mesh
             .triangles
             .iter()
-            .map(|t| t.map(|v| mesh.positions[v as usize]))
+            .zip(0..)
+            .map(|(t, index)| (t.map(|v| mesh.positions[v as usize]), index))
             .collect();
         let mut nodes = vec![bounds(&triangles, 0, triangles.len())];
         let mut pending = vec![0];
@@ -53,7 +55,7 @@ impl TriangleTree {
                 continue;
             }
             let slice = &mut triangles[start..start + count];
-            let centre = |t: &[[f64; 3]; 3], k: usize| t[0][k] + t[1][k] + t[2][k];
+            let centre = |(t, _): &([[f64; 3]; 3], u32), k: usize| t[0][k] + t[1][k] + t[2][k];
             let (mut low, mut high) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
             for t in slice.iter() {
                 for k in 0..3 {
@@ -78,7 +80,13 @@ impl TriangleTree {
 
     /// The distance from `p` to the nearest point of any triangle.
     pub fn distance(&self, p: [f64; 3]) -> f64 {
+        self.nearest(p).1
+    }
+
+    /// The index (in the mesh) of the triangle nearest to `p`, and the distance to it.
+    pub fn nearest(&self, p: [f64; 3]) -> (usize, f64) {
         let mut best = f64::INFINITY;
+        let mut nearest = 0;
         let mut stack = vec![0_usize];
         while let Some(index) = stack.pop() {
             let node = &self.nodes[index];
@@ -86,8 +94,11 @@ impl TriangleTree {
                 continue;
             }
             if node.count > 0 {
-                for t in &self.triangles[node.start..node.start + node.count] {
-                    best = best.min(triangle_distance_squared(p, t));
+                for (t, index) in &self.triangles[node.start..node.start + node.count] {
+                    let d = triangle_distance_squared(p, t);
+                    if d < best {
+                        (best, nearest) = (d, *index as usize);
+                    }
                 }
             } else {
                 let (a, b) = (node.start, node.start + 1);
@@ -103,14 +114,14 @@ impl TriangleTree {
                 }
             }
         }
-        best.sqrt()
+        (nearest, best.sqrt())
     }
 }
 
 /// The box of `count` triangles from `start` as a leaf node.
-fn bounds(triangles: &[[[f64; 3]; 3]], start: usize, count: usize) -> Node {
+fn bounds(triangles: &[([[f64; 3]; 3], u32)], start: usize, count: usize) -> Node {
     let (mut low, mut high) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for t in &triangles[start..start + count] {
+    for (t, _) in &triangles[start..start + count] {
         for v in t {
             for k in 0..3 {
                 low[k] = low[k].min(v[k]);

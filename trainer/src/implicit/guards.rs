@@ -18,12 +18,13 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use neurosurf_core::implicit::{ImplicitModel, LANES};
+use neurosurf_core::implicit::{FieldGradient, ImplicitModel, LANES};
 use neurosurf_core::scalar::ScalarKind;
 
 use super::blob::to_blob;
 use super::network::{Guard, ImplicitNetwork};
 use super::oracle::Oracle;
+use crate::caoen::TriangleTree;
 use crate::quality::component_labels;
 use crate::render::{Aabb, Field, extract_mesh};
 
@@ -33,6 +34,9 @@ pub const GUARD_CLEARANCE: f64 = 0.02;
 /// Cells along the longest side of the grid the guards are placed on and the mesh is checked
 /// on: the resolution `neurosurf mesh` uses by default.
 pub const GUARD_RESOLUTION: usize = 96;
+/// The guard grid has at least this many cells along every side (a flat shape's thin side
+/// too): finer than the 48 points per side of [`crate::quality::stray_surface`].
+pub const GUARD_MIN_CELLS: usize = 64;
 /// A guard covers the wrong grid points within this fraction of its radius.
 const COVER: f64 = 0.7;
 /// A guard outweighs Φ at the wrong points it covers by this factor.
@@ -46,23 +50,31 @@ fn toward(inside: bool, phi: f64) -> f64 {
     if inside { phi } else { -phi }
 }
 
-/// The checked grid: `counts` points per axis from `lo`, `step` apart.
+/// The checked grid: `counts` points per axis from `lo`, `spacing` apart along each axis.
 struct Grid {
     lo: [f64; 3],
+    /// The longest side over [`GUARD_RESOLUTION`]: the largest spacing.
     step: f64,
+    spacing: [f64; 3],
     counts: [usize; 3],
 }
 
 impl Grid {
+    /// [`GUARD_RESOLUTION`] cells along the longest side, and at least
+    /// [`GUARD_MIN_CELLS`] along the others: a stray piece thin along the short side of a flat
+    /// shape is caught as surely as the 48³ stray-surface test finds it.
     fn over(domain: &Aabb) -> Option<Grid> {
-        let side = (0..3)
-            .map(|k| domain.hi[k] - domain.lo[k])
-            .fold(0.0, f64::max);
-        let step = side / GUARD_RESOLUTION as f64;
-        (step > 0.0 && step.is_finite()).then(|| Grid {
+        let extent = [0, 1, 2].map(|k| domain.hi[k] - domain.lo[k]);
+        let step = extent.iter().copied().fold(0.0, f64::max) / GUARD_RESOLUTION as f64;
+        if !(step > 0.0 && step.is_finite()) {
+            return None;
+        }
+        let spacing = extent.map(|e| step.min(e / GUARD_MIN_CELLS as f64).max(step * 1e-3));
+        Some(Grid {
             lo: domain.lo,
             step,
-            counts: [0, 1, 2].map(|k| ((domain.hi[k] - domain.lo[k]) / step).ceil() as usize + 1),
+            spacing,
+            counts: [0, 1, 2].map(|k| (extent[k] / spacing[k]).ceil() as usize + 1),
         })
     }
 
@@ -70,10 +82,23 @@ impl Grid {
         self.counts.iter().product()
     }
 
+    /// The grid points next to point `i` along each axis.
+    fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> {
+        let [nx, ny, nz] = self.counts;
+        let index = [i % nx, (i / nx) % ny, i / (nx * ny)];
+        let stride = [1, nx, nx * ny];
+        let counts = [nx, ny, nz];
+        (0..3).flat_map(move |k| {
+            let below = (index[k] > 0).then(|| i - stride[k]);
+            let above = (index[k] + 1 < counts[k]).then(|| i + stride[k]);
+            below.into_iter().chain(above)
+        })
+    }
+
     fn point(&self, i: usize) -> [f64; 3] {
         let [nx, ny, _] = self.counts;
         let index = [i % nx, (i / nx) % ny, i / (nx * ny)];
-        [0, 1, 2].map(|k| self.lo[k] + self.step * index[k] as f64)
+        [0, 1, 2].map(|k| self.lo[k] + self.spacing[k] * index[k] as f64)
     }
 }
 
@@ -104,11 +129,42 @@ pub fn place_guards(
         .iter()
         .map(|&d| d >= clearance + grid.step)
         .collect();
-    let phi = field(network, &grid, &far);
-    let inside = sides(oracle, &grid, &far);
-    let wrong: Vec<usize> = (0..grid.len())
+    let probe = Probe::new(network);
+    let jets = probe.grid(&grid, &far);
+    let mut inside = sides(oracle, &grid, &far);
+    let mut phi: Vec<f64> = jets.iter().map(|j| j.0).collect();
+    let mut distance = distance;
+    let mut wrong: Vec<usize> = (0..grid.len())
         .filter(|&i| far[i] && inside[i].is_some_and(|s| toward(s, phi[i]) < push))
         .collect();
+    // Points off the grid where a steep bump of the wrong sign hides between grid points,
+    // appended after them.
+    let hidden = hidden_crossings(&probe, &grid, &far, &inside, &jets, push);
+    let mut extra = Vec::new();
+    for q in hidden {
+        let d = oracle.disk_distance(q).1;
+        let Some(side) = side_of(oracle.winding(q)) else {
+            continue;
+        };
+        let (value, gradient) = probe.at(q);
+        if d < clearance + grid.step || toward(side, value) >= 0.0 {
+            continue;
+        }
+        // The bump may peak anywhere within the cell: as wrong as the slope there allows.
+        let value = value - if side { 1.0 } else { -1.0 } * norm(gradient) * norm(grid.spacing);
+        wrong.push(grid.len() + extra.len());
+        extra.push(q);
+        distance.push(d);
+        inside.push(Some(side));
+        phi.push(value);
+    }
+    let point = |i: usize| {
+        if i < grid.len() {
+            grid.point(i)
+        } else {
+            extra[i - grid.len()]
+        }
+    };
     if wrong.is_empty() {
         return Vec::new();
     }
@@ -137,7 +193,7 @@ pub fn place_guards(
                 .sqrt()
         })
     };
-    let positions: Vec<[f64; 3]> = wrong.iter().map(|&i| grid.point(i)).collect();
+    let positions: Vec<[f64; 3]> = wrong.iter().map(|&i| point(i)).collect();
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&positions) else {
         return Vec::new();
     };
@@ -194,12 +250,73 @@ pub fn place_guards(
     guards
 }
 
-/// A piece of the zero set is stray when none of its vertices comes within this fraction of
-/// the diagonal of a control point (the off-surface offset: the network fits the points far
-/// more closely than that).
+/// Newton steps a hidden-crossing search takes from a grid point.
+const HIDDEN_STEPS: usize = 4;
+
+/// Points within half a cell of a far grid point where Φ has the wrong side's sign although
+/// the grid point has the right one by more than `push`: a steep bump narrower than a cell
+/// that no grid point lands in (a network can grow one from a single neuron). A grid point
+/// is searched when the tangent plane of Φ there reaches the wrong sign within a cell
+/// diagonal (a bump steepens toward its top); Newton steps toward Φ = −`push` on its side, kept within the cell around it,
+/// find the bump.
+fn hidden_crossings(
+    probe: &Probe<'_>,
+    grid: &Grid,
+    far: &[bool],
+    inside: &[Option<bool>],
+    jets: &[(f64, [f64; 3])],
+    push: f64,
+) -> Vec<[f64; 3]> {
+    let half = grid.spacing.map(|h| 0.5 * h);
+    let reach = norm(grid.spacing);
+    (0..grid.len())
+        .into_par_iter()
+        .filter_map(|i| {
+            let side = inside[i]?;
+            let (value, gradient) = jets[i];
+            let ahead = toward(side, value);
+            if !far[i] || ahead < push || ahead - norm(gradient) * reach >= 0.0 {
+                return None;
+            }
+            // Only among grid points that are all right: next to a wrong or weak one, the
+            // grid's own guards cover the place.
+            let healthy =
+                |j: usize| far[j] && inside[j] == Some(side) && toward(side, jets[j].0) >= push;
+            if !grid.neighbours(i).all(healthy) {
+                return None;
+            }
+            let origin = grid.point(i);
+            let target = if side { -push } else { push };
+            let (mut x, mut v, mut g) = (origin, value, gradient);
+            for _ in 0..HIDDEN_STEPS {
+                let g2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+                if !(g2 > 0.0 && g2.is_finite()) {
+                    return None;
+                }
+                let t = (v - target) / g2;
+                x = [0, 1, 2]
+                    .map(|k| (x[k] - t * g[k]).clamp(origin[k] - half[k], origin[k] + half[k]));
+                (v, g) = probe.at(x);
+                if toward(side, v) < 0.0 {
+                    return Some(x);
+                }
+            }
+            None
+        })
+        .collect()
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// How far a stray piece's guards keep from the points, as a fraction of the diagonal (the
+/// off-surface offset: the network fits the points far more closely than that).
 pub const PIECE_SUPPORT: f64 = 0.01;
 /// A piece guard's radius is this many times the distance to the farthest point it covers.
 const PIECE_REACH: f64 = 1.1;
+/// A stray piece's guard reaches at least this fraction of the way to the nearest point.
+const STRAY_REACH: f64 = 0.5;
 /// A bridge guard's radius, as a fraction of its distance to the nearest point.
 const BRIDGE_REACH: f64 = 0.9;
 /// How much farther than a stray piece's guard a bridge pushes Φ: a joint as thick as a mesh
@@ -211,12 +328,13 @@ const BRIDGE_STEP: f64 = 0.5;
 /// Guards for the pieces of `network`'s zero set that the points do not explain: `field` is
 /// the network's own (the core's, or a [`super::GridCache`]'s), meshed at [`GUARD_RESOLUTION`].
 ///
-/// Each control point belongs to the piece with the nearest vertex. A piece no control point
+/// Each control point belongs to the piece with the nearest triangle. A piece no control point
 /// belongs to is stray: guards on the winding number's side cover its vertices, the first at
 /// its centroid when one reaches past the whole piece, then at the vertices farthest from the
 /// points. A piece with points of its own that is not the largest is a part the network cut
-/// off (a limb at a sparsely sampled joint): where the winding number is clearly inside all
-/// along the shortest segment to the largest piece, inside guards along that segment join
+/// off (a limb at a sparsely sampled joint): when the shortest segment to the largest piece
+/// is shorter than the sample spacing there and nothing on it is clearly outside (by the
+/// winding number, half a spacing or more from the points), inside guards along it join
 /// them. Every guard stops [`PIECE_SUPPORT`] of the diagonal short of the points and pushes Φ
 /// to its side by `push` where it is meant to; what no guard fits is left alone. Returns the
 /// number of pieces found and the guards.
@@ -241,19 +359,23 @@ pub fn guard_stray_pieces<F: Field + ?Sized>(
             piece.push(*p);
         }
     }
-    let Ok(vertices) = ImmutableKdTree::<f64, 3>::new_from_slice(&mesh.positions) else {
-        return (count, Vec::new());
+    // A point's piece is the one whose surface passes nearest: the network's zero set goes
+    // through its points, and a small piece a cell away can hold a nearer vertex.
+    let piece_of: Vec<Option<usize>> = match TriangleTree::new(&mesh) {
+        Ok(tree) => oracle
+            .positions()
+            .par_iter()
+            .map(|&q| {
+                let (t, _) = tree.nearest(q);
+                let vertex = mesh.triangles.get(t)?[0];
+                labels.get(vertex as usize).map(|&l| l as usize)
+            })
+            .collect(),
+        Err(_) => return (count, Vec::new()),
     };
     let mut owners = vec![0_usize; count];
-    for q in oracle.positions() {
-        let found = vertices
-            .query(q)
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute();
-        if let Some(o) = labels
-            .get(found.item as usize)
-            .and_then(|&l| owners.get_mut(l as usize))
-        {
+    for piece in piece_of.into_iter().flatten() {
+        if let Some(o) = owners.get_mut(piece) {
             *o += 1;
         }
     }
@@ -306,9 +428,11 @@ struct Guarding<'a> {
 }
 
 impl Guarding<'_> {
-    /// The largest guard radius at `centre`: up to [`PIECE_SUPPORT`] short of the points.
+    /// The largest guard radius at `centre`: up to [`PIECE_SUPPORT`] short of the points, or
+    /// half way to them when that is farther (a small piece just under the surface).
     fn radius(&self, centre: [f64; 3]) -> f64 {
-        self.oracle.nearest(centre).1 - self.support
+        let nearest = self.oracle.nearest(centre).1;
+        (nearest - self.support).max(STRAY_REACH * nearest)
     }
 
     /// A guard at `centre` of `radius` on `side` that pushes Φ there by `push` at `probes`.
@@ -386,8 +510,9 @@ impl Guarding<'_> {
         }
     }
 
-    /// Inside guards along the shortest segment from `piece` to `main`, when the winding
-    /// number is clearly inside all along it.
+    /// Inside guards along the shortest segment from `piece` to `main`, when the segment is
+    /// shorter than the sample spacing there and no sample on it that the winding number can
+    /// judge is clearly outside.
     fn bridge(&self, piece: &[[f64; 3]], main: &[[f64; 3]], guards: &mut Vec<Guard>) {
         let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(main) else {
             return;
@@ -421,11 +546,13 @@ impl Guarding<'_> {
                 [0, 1, 2].map(|k| from[k] + t * (to[k] - from[k]))
             })
             .collect();
-        // Nowhere clearly outside.
-        if samples
-            .iter()
-            .any(|&q| self.oracle.winding(q) < CLEAR_WINDING)
-        {
+        // Nowhere clearly outside, where the winding number can tell: within half the
+        // sample spacing of a point, sparse points' winding number is noise (at a body's
+        // shoulder it reads −0.25 inside the torso).
+        if samples.iter().any(|&q| {
+            let (i, d) = self.oracle.nearest(q);
+            d >= 0.5 * self.oracle.gap(i) && self.oracle.winding(q) < CLEAR_WINDING
+        }) {
             return;
         }
         let mut covered = vec![false; samples.len()];
@@ -460,42 +587,81 @@ fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// Φ at the `far` grid points (0 elsewhere): through the core in `f32`, in batches, when the
-/// network makes a blob; else the `f64` network.
-fn field(network: &ImplicitNetwork, grid: &Grid, far: &[bool]) -> Vec<f64> {
-    let indices: Vec<usize> = (0..grid.len()).filter(|&i| far[i]).collect();
-    let model = to_blob(network, None, ScalarKind::F32)
-        .ok()
-        .and_then(|blob| ImplicitModel::<f32>::from_blob(&blob).ok().map(Box::new));
-    let values: Vec<f64> = indices
-        .par_chunks(LANES * 64)
-        .flat_map_iter(|chunk| {
-            let points: Vec<[f64; 3]> = chunk.iter().map(|&i| grid.point(i)).collect();
-            let values: Vec<f64> = match &model {
-                Some(model) => {
-                    let points: Vec<[f32; 3]> =
-                        points.iter().map(|p| p.map(|v| v as f32)).collect();
-                    let mut out = vec![0.0_f32; points.len()];
-                    match model.field_batch(&points, &mut out) {
-                        Ok(()) => out.into_iter().map(f64::from).collect(),
-                        Err(_) => points.iter().map(|_| 0.0).collect(),
-                    }
-                }
-                None => points.iter().map(|&p| network.eval(p).0).collect(),
-            };
-            values
-        })
-        .collect();
-    let mut phi = vec![0.0; grid.len()];
-    for (&i, v) in indices.iter().zip(values) {
-        phi[i] = v;
+/// Φ and ∇Φ of a guarded network: through the core in `f32` when the network makes a blob
+/// (what `mesh` and the microcontroller evaluate); else the `f64` network.
+struct Probe<'a> {
+    network: &'a ImplicitNetwork,
+    model: Option<Box<ImplicitModel<f32>>>,
+}
+
+impl<'a> Probe<'a> {
+    fn new(network: &'a ImplicitNetwork) -> Self {
+        let model = to_blob(network, None, ScalarKind::F32)
+            .ok()
+            .and_then(|blob| ImplicitModel::<f32>::from_blob(&blob).ok().map(Box::new));
+        Probe { network, model }
     }
-    phi
+
+    fn at(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        match &self.model {
+            Some(model) => {
+                let g = model.field_gradient(p.map(|v| v as f32));
+                (f64::from(g.value), g.gradient.map(f64::from))
+            }
+            None => self.network.eval(p),
+        }
+    }
+
+    /// Φ and ∇Φ at the `far` grid points (0 elsewhere), in batches.
+    fn grid(&self, grid: &Grid, far: &[bool]) -> Vec<(f64, [f64; 3])> {
+        let indices: Vec<usize> = (0..grid.len()).filter(|&i| far[i]).collect();
+        let values: Vec<(f64, [f64; 3])> = indices
+            .par_chunks(LANES * 64)
+            .flat_map_iter(|chunk| {
+                let points: Vec<[f64; 3]> = chunk.iter().map(|&i| grid.point(i)).collect();
+                match &self.model {
+                    Some(model) => {
+                        let points: Vec<[f32; 3]> =
+                            points.iter().map(|p| p.map(|v| v as f32)).collect();
+                        let zero = FieldGradient {
+                            value: 0.0_f32,
+                            gradient: [0.0; 3],
+                        };
+                        let mut out = vec![zero; points.len()];
+                        if model.field_gradient_batch(&points, &mut out).is_err() {
+                            out.fill(zero);
+                        }
+                        out.into_iter()
+                            .map(|g| (f64::from(g.value), g.gradient.map(f64::from)))
+                            .collect::<Vec<_>>()
+                    }
+                    None => points.iter().map(|&p| self.network.eval(p)).collect(),
+                }
+            })
+            .collect();
+        let mut out = vec![(0.0, [0.0; 3]); grid.len()];
+        for (&i, v) in indices.iter().zip(values) {
+            out[i] = v;
+        }
+        out
+    }
 }
 
 /// Winding numbers below this are clearly outside, and above one minus this clearly inside;
 /// between, a point's side is unknown and no guard covers it.
 const CLEAR_WINDING: f64 = 0.3;
+
+/// The side a winding number `w` gives: `Some(true)` inside, `Some(false)` outside, `None`
+/// when it is not clear.
+fn side_of(w: f64) -> Option<bool> {
+    if w > 1.0 - CLEAR_WINDING {
+        Some(true)
+    } else if w < CLEAR_WINDING {
+        Some(false)
+    } else {
+        None
+    }
+}
 
 /// The side of each `far` grid point by the winding number: `Some(true)` inside, `Some(false)`
 /// outside, `None` when the winding number is not clear. It is computed exactly on every
@@ -503,15 +669,6 @@ const CLEAR_WINDING: f64 = 0.3;
 /// eight agree clearly (a feature thin enough to slip between them would have no far points
 /// inside), else it is computed exactly too.
 fn sides(oracle: &Oracle, grid: &Grid, far: &[bool]) -> Vec<Option<bool>> {
-    let side = |w: f64| {
-        if w > 1.0 - CLEAR_WINDING {
-            Some(true)
-        } else if w < CLEAR_WINDING {
-            Some(false)
-        } else {
-            None
-        }
-    };
     let [nx, ny, nz] = grid.counts;
     let coarse = [nx, ny, nz].map(|n| n.div_ceil(2));
     let coarse_index = |c: [usize; 3]| c[0] + coarse[0] * (c[1] + coarse[1] * c[2]);
@@ -523,8 +680,8 @@ fn sides(oracle: &Oracle, grid: &Grid, far: &[bool]) -> Vec<Option<bool>> {
                 (i / coarse[0]) % coarse[1],
                 i / (coarse[0] * coarse[1]),
             ];
-            let p = [0, 1, 2].map(|k| grid.lo[k] + grid.step * (2 * c[k]) as f64);
-            side(oracle.winding(p))
+            let p = [0, 1, 2].map(|k| grid.lo[k] + grid.spacing[k] * (2 * c[k]) as f64);
+            side_of(oracle.winding(p))
         })
         .collect();
     (0..grid.len())
@@ -551,7 +708,7 @@ fn sides(oracle: &Oracle, grid: &Grid, far: &[bool]) -> Vec<Option<bool>> {
             }
             match agreed.flatten() {
                 Some(s) => Some(s),
-                None => side(oracle.winding(grid.point(i))),
+                None => side_of(oracle.winding(grid.point(i))),
             }
         })
         .collect()
@@ -638,6 +795,59 @@ mod tests {
         }
         // Guards keep to their side: every added guard's centre is outside, like the blob.
         assert!(added.iter().all(|g| g.amplitude < 0.0), "{added:?}");
+    }
+
+    /// A steep bump inside out between grid points (narrower than a cell, as one saturated
+    /// neuron can grow) is found off the grid and guarded.
+    #[test]
+    fn a_bump_between_grid_points_is_found() {
+        let (points, trained) = torus(400, 3);
+        let domain = Aabb {
+            lo: [-1.8, -1.8, -1.2],
+            hi: [1.8, 1.8, 1.2],
+        };
+        let grid = Grid::over(&domain).expect("grid");
+        // The centre of a cell above the torus's hole: every grid point is half a cell
+        // diagonal away.
+        let centre = [0, 1, 2].map(|k| {
+            let h = grid.spacing[k];
+            let near = [0.0, 0.0, 0.9][k];
+            domain.lo[k] + h * ((near - domain.lo[k]) / h).floor() + 0.5 * h
+        });
+        let reach = norm(grid.spacing);
+        let phi = trained.network.eval(centre).0;
+        assert!(phi < 0.0, "outside the torus");
+        let bump = Guard {
+            center: centre,
+            inverse_radius: 1.0 / (0.6 * reach),
+            amplitude: -1.5 * phi / (1.0_f64 - 0.09).powi(3),
+        };
+        let own = trained.network.guards().to_vec();
+        let broken = trained
+            .network
+            .clone()
+            .with_guards([own.clone(), vec![bump]].concat());
+        assert!(broken.eval(centre).0 > 0.0, "the bump is there");
+        for i in 0..grid.len() {
+            assert!(
+                broken.eval(grid.point(i)).0 <= 0.0 || trained.network.eval(grid.point(i)).0 > 0.0,
+                "no grid point lands in the bump"
+            );
+        }
+        let oracle = Oracle::new(&points.positions, &points.normals).expect("oracle");
+        let diagonal = 2.0 * (1.4_f64 * 1.4 * 2.0 + 0.4 * 0.4).sqrt();
+        let added = place_guards(&broken, &oracle, &domain, diagonal, 5.0, MAX_GUARDS);
+        let fixed = broken
+            .clone()
+            .with_guards([own, vec![bump], added].concat());
+        for k in -10..=10 {
+            let t = 0.1 * f64::from(k) * reach;
+            for axis in 0..3 {
+                let mut p = centre;
+                p[axis] += t;
+                assert!(fixed.eval(p).0 < 0.0, "{p:?}: {}", fixed.eval(p).0);
+            }
+        }
     }
 
     /// Guards go into the blob and come back; the core adds them as the network does.
