@@ -82,6 +82,41 @@ impl Grid {
         self.counts.iter().product()
     }
 
+    /// The index of point `i` along each axis.
+    fn index(&self, i: usize) -> [usize; 3] {
+        let [nx, ny, _] = self.counts;
+        [i % nx, (i / nx) % ny, i / (nx * ny)]
+    }
+
+    /// Whether point `i` is on the coarse grid: every second point along each axis, and the
+    /// last.
+    fn is_coarse(&self, i: usize) -> bool {
+        let index = self.index(i);
+        (0..3).all(|k| index[k].is_multiple_of(2) || index[k] + 1 == self.counts[k])
+    }
+
+    /// The corners of the coarse cell that holds point `i` (itself when it is coarse).
+    fn coarse_corners(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let index = self.index(i);
+        let [nx, ny, _] = self.counts;
+        let span = [0, 1, 2].map(|k| {
+            if index[k].is_multiple_of(2) || index[k] + 1 == self.counts[k] {
+                (index[k], index[k])
+            } else {
+                (index[k] - 1, index[k] + 1)
+            }
+        });
+        (0..8_usize).filter_map(move |corner| {
+            let bit = |k: usize| corner >> k & 1 == 1;
+            // Each distinct corner once.
+            if (0..3).any(|k| bit(k) && span[k].0 == span[k].1) {
+                return None;
+            }
+            let c = [0, 1, 2].map(|k| if bit(k) { span[k].1 } else { span[k].0 });
+            Some(c[0] + nx * (c[1] + ny * c[2]))
+        })
+    }
+
     /// The grid points next to point `i` along each axis.
     fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> {
         let [nx, ny, nz] = self.counts;
@@ -130,9 +165,9 @@ pub fn place_guards(
         .map(|&d| d >= clearance + grid.step)
         .collect();
     let probe = Probe::new(network);
-    let jets = probe.grid(&grid, &far);
     let mut inside = sides(oracle, &grid, &far);
-    let mut phi: Vec<f64> = jets.iter().map(|j| j.0).collect();
+    let jets = probe.grid(&grid, &far, &inside, push);
+    let mut phi: Vec<f64> = jets.iter().map(|j| j.map_or(f64::NAN, |j| j.0)).collect();
     let mut distance = distance;
     let mut wrong: Vec<usize> = (0..grid.len())
         .filter(|&i| far[i] && inside[i].is_some_and(|s| toward(s, phi[i]) < push))
@@ -264,7 +299,7 @@ fn hidden_crossings(
     grid: &Grid,
     far: &[bool],
     inside: &[Option<bool>],
-    jets: &[(f64, [f64; 3])],
+    jets: &[Option<(f64, [f64; 3])>],
     push: f64,
 ) -> Vec<[f64; 3]> {
     let half = grid.spacing.map(|h| 0.5 * h);
@@ -273,15 +308,18 @@ fn hidden_crossings(
         .into_par_iter()
         .filter_map(|i| {
             let side = inside[i]?;
-            let (value, gradient) = jets[i];
+            let (value, gradient) = jets[i]?;
             let ahead = toward(side, value);
             if !far[i] || ahead < push || ahead - norm(gradient) * reach >= 0.0 {
                 return None;
             }
-            // Only among grid points that are all right: next to a wrong or weak one, the
-            // grid's own guards cover the place.
-            let healthy =
-                |j: usize| far[j] && inside[j] == Some(side) && toward(side, jets[j].0) >= push;
+            // Only among grid points that are all right (or settled): next to a wrong or
+            // weak one, the grid's own guards cover the place.
+            let healthy = |j: usize| {
+                far[j]
+                    && inside[j] == Some(side)
+                    && jets[j].is_none_or(|(v, _)| toward(side, v) >= push)
+            };
             if !grid.neighbours(i).all(healthy) {
                 return None;
             }
@@ -612,10 +650,48 @@ impl<'a> Probe<'a> {
         }
     }
 
-    /// Φ and ∇Φ at the `far` grid points (0 elsewhere), in batches.
-    fn grid(&self, grid: &Grid, far: &[bool]) -> Vec<(f64, [f64; 3])> {
-        let indices: Vec<usize> = (0..grid.len()).filter(|&i| far[i]).collect();
-        let values: Vec<(f64, [f64; 3])> = indices
+    /// Φ and ∇Φ at the `far` grid points whose side is known, in batches; `None` elsewhere
+    /// and where the grid is settled. Every second point along each axis comes first (and
+    /// the last); a point between them is evaluated only when a corner of its coarse cell is
+    /// not on the point's side by `push` all across the cell by its tangent plane. Elsewhere
+    /// Φ keeps its side through the cell, as far as first order tells.
+    fn grid(
+        &self,
+        grid: &Grid,
+        far: &[bool],
+        inside: &[Option<bool>],
+        push: f64,
+    ) -> Vec<Option<(f64, [f64; 3])>> {
+        let mut out = vec![None; grid.len()];
+        let wanted = |i: usize| far[i] && inside[i].is_some();
+        let coarse: Vec<usize> = (0..grid.len())
+            .filter(|&i| wanted(i) && grid.is_coarse(i))
+            .collect();
+        for (&i, jet) in coarse.iter().zip(self.batch(grid, &coarse)) {
+            out[i] = Some(jet);
+        }
+        let across = 2.0 * norm(grid.spacing);
+        let settled = |i: usize, side: bool| {
+            grid.coarse_corners(i).all(|c| {
+                inside[c] == Some(side)
+                    && out[c].is_some_and(|(v, g)| toward(side, v) - norm(g) * across >= push)
+            })
+        };
+        let fine: Vec<usize> = (0..grid.len())
+            .into_par_iter()
+            .filter(|&i| {
+                wanted(i) && !grid.is_coarse(i) && inside[i].is_some_and(|s| !settled(i, s))
+            })
+            .collect();
+        for (&i, jet) in fine.iter().zip(self.batch(grid, &fine)) {
+            out[i] = Some(jet);
+        }
+        out
+    }
+
+    /// Φ and ∇Φ at the grid points `indices`.
+    fn batch(&self, grid: &Grid, indices: &[usize]) -> Vec<(f64, [f64; 3])> {
+        indices
             .par_chunks(LANES * 64)
             .flat_map_iter(|chunk| {
                 let points: Vec<[f64; 3]> = chunk.iter().map(|&i| grid.point(i)).collect();
@@ -638,12 +714,7 @@ impl<'a> Probe<'a> {
                     None => points.iter().map(|&p| self.network.eval(p)).collect(),
                 }
             })
-            .collect();
-        let mut out = vec![(0.0, [0.0; 3]); grid.len()];
-        for (&i, v) in indices.iter().zip(values) {
-            out[i] = v;
-        }
-        out
+            .collect()
     }
 }
 
