@@ -270,21 +270,35 @@ fn units(filter: &[String]) {
             let seconds = start.elapsed().as_secs_f64();
             let blob = implicit::to_blob(&trained.network, None, ScalarKind::F32).expect("blob");
             let m = measure_core(&blob, &trained.network, &truth);
-            let q16 = implicit::to_blob(&trained.network, None, ScalarKind::Q16_16).expect("blob");
-            let regions = Region::of_network(&trained.network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE);
-            let field = Q16Field::new(&q16, regions).expect("the core loads the Q16.16 blob");
-            let fixed =
-                two_sided(&field, &truth, MEASURE_RESOLUTION, STRAY_RESOLUTION).expect("measure");
+            // Q16.16 when the blob can hold the model (it refuses data too small or too far
+            // from the origin for its range, by name).
+            let fixed = match implicit::to_blob(&trained.network, None, ScalarKind::Q16_16) {
+                Ok(q16) => {
+                    let regions =
+                        Region::of_network(&trained.network, DEFAULT_BOX_SIZE, DEFAULT_INFLATE);
+                    let field = Q16Field::new(&q16, regions).expect("the core loads the blob");
+                    let f = two_sided(&field, &truth, MEASURE_RESOLUTION, STRAY_RESOLUTION)
+                        .expect("measure");
+                    (
+                        format!("{:.4} %", f.truth_to_model.median_percent),
+                        f.stray.sign_changes.to_string(),
+                    )
+                }
+                Err(e) => {
+                    eprintln!("{} {label}: {e}", case.name);
+                    ("not storable".to_string(), "–".to_string())
+                }
+            };
             let median = m.truth_to_model.median_percent;
             let ratio = *reference.get_or_insert(median);
             emit(&format!(
-                "| {} | {label} | {seconds:.2} s | {median:.4} % | {:.4} % | {:.4} % | {:.2}° | {} | {} | {} | {:.2} % | {:.2}× |",
+                "| {} | {label} | {seconds:.2} s | {median:.4} % | {} | {:.4} % | {:.2}° | {} | {} | {} | {:.2} % | {:.2}× |",
                 case.name,
-                fixed.truth_to_model.median_percent,
+                fixed.0,
                 m.model_to_truth.median_percent,
                 m.normal_median_degrees,
                 m.stray.sign_changes,
-                fixed.stray.sign_changes,
+                fixed.1,
                 m.mesh.components,
                 m.mesh.far_vertices_percent,
                 median / ratio,

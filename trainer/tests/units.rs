@@ -135,3 +135,34 @@ fn the_same_shape_in_any_units_gives_the_same_model() {
         );
     }
 }
+
+/// Data too small for Q16.16 (its normalization scales by more than Q16.16 stores) is refused
+/// as Q16.16 with the part, the limit and the way out named, and stored as f32.
+#[test]
+fn data_too_small_for_fixed_point_is_refused_by_name() {
+    let mut points = torus_points(96, 3);
+    points.positions = points
+        .positions
+        .iter()
+        .map(|p| p.map(|v| 1e-4 * v))
+        .collect();
+    let trained = implicit::fit(
+        points,
+        &FitRequest::default(),
+        &ImplicitOptions::default(),
+        &|_| {},
+    )
+    .unwrap();
+    let error = implicit::to_blob(&trained.network, None, ScalarKind::Q16_16)
+        .unwrap_err()
+        .to_string();
+    for expected in [
+        "normalization matrix",
+        "q16.16",
+        "f32",
+        "scale the points up",
+    ] {
+        assert!(error.contains(expected), "{error}");
+    }
+    assert!(implicit::to_blob(&trained.network, None, ScalarKind::F32).is_ok());
+}

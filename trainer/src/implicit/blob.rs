@@ -72,9 +72,12 @@ pub fn to_blob(
             .encode(value)
             .filter(|_| value.abs() <= limit)
             .ok_or_else(|| {
+                let part = Part::of(network, index);
                 Error::invalid(format!(
-                    "parameter {index} = {value} cannot be stored as {} (limit ±{limit})",
-                    scalar.name()
+                    "parameter {index} = {value} ({}) cannot be stored as {} (limit ±{limit}){}",
+                    part.describe(),
+                    scalar.name(),
+                    part.advice(value, limit)
                 ))
             })?;
         parameters.extend_from_slice(&word);
@@ -106,6 +109,84 @@ pub fn to_blob(
         metadata: &metadata,
     };
     encode(ModelKind::Implicit, scalar, &payload)
+}
+
+/// Where a blob parameter sits.
+enum Part {
+    /// A module's normalization: its centre (moves with the data) or its matrix (grows as
+    /// the data's units shrink).
+    Normalization { module: usize, centre: bool },
+    /// A module's trained weights and biases (the same in any units).
+    Weights { module: usize },
+    /// A sign guard's centre, inverse radius (grows as the units shrink) or amplitude.
+    Guard { guard: usize, part: usize },
+}
+
+impl Part {
+    /// Parameter `index` of `network`'s blob: the modules' parameters, then the guards'.
+    fn of(network: &ImplicitNetwork, index: usize) -> Part {
+        let mut start = 0;
+        for module in 0..network.module_count() {
+            let layout = network.layout(module);
+            if index < start + layout.len {
+                let offset = index - start;
+                return if offset < layout.trainable_start {
+                    // A centre (3), then a matrix (9).
+                    Part::Normalization {
+                        module,
+                        centre: offset < 3,
+                    }
+                } else {
+                    Part::Weights { module }
+                };
+            }
+            start += layout.len;
+        }
+        Part::Guard {
+            guard: (index - start) / GUARD_LEN,
+            part: (index - start) % GUARD_LEN,
+        }
+    }
+
+    fn describe(&self) -> String {
+        match *self {
+            Part::Normalization { module, centre } => format!(
+                "module {module}'s normalization {}",
+                if centre { "centre" } else { "matrix" }
+            ),
+            Part::Weights { module } => format!("module {module}'s weights"),
+            Part::Guard { guard, part } => format!(
+                "sign guard {guard}'s {}",
+                ["centre", "centre", "centre", "inverse radius", "amplitude"][part.min(4)]
+            ),
+        }
+    }
+
+    /// How to make this part's `value` fit within ±`limit`.
+    fn advice(&self, value: f64, limit: f64) -> String {
+        let grows_as_units_shrink = matches!(
+            self,
+            Part::Normalization { centre: false, .. } | Part::Guard { part: 3, .. }
+        );
+        let moves_with_data = matches!(
+            self,
+            Part::Normalization { centre: true, .. } | Part::Guard { part: 0..=2, .. }
+        );
+        if grows_as_units_shrink {
+            format!(
+                ": the data is too small for it; store the model as f32, or scale the points \
+                 up by at least {:.1}× before training",
+                value.abs() / limit
+            )
+        } else if moves_with_data {
+            format!(
+                ": the data lies too far from the origin for it; store the model as f32, or \
+                 move the points within ±{limit} of the origin before training"
+            )
+        } else {
+            String::new()
+        }
+    }
 }
 
 /// Reads an implicit blob back into an `f64` network (parameters widened exactly). `path`
