@@ -220,8 +220,7 @@ fn main() {
              the true surface's bounding diagonal; \"stray sign changes\" counts neighbours on \
              a 48³ grid over the bounding box grown by 10 %, both farther than 5 % of the \
              diagonal from the surface, where Φ changes sign (0 for a clean model); \"far \
-             vertices\" are mesh vertices (resolution 96) that far away. Ratios are against \
-             the built-in RBF on the same points, in the same run.\n\n{}",
+             vertices\" are mesh vertices (resolution 96) that far away. {}\n\n{}",
             if value("--body").is_some() {
                 "The demo's body and its animation, frame by frame"
             } else if in_units {
@@ -230,6 +229,14 @@ fn main() {
                 "Implicit models on real shapes"
             },
             rayon::current_num_threads(),
+            if in_units {
+                "Each case is sampled with the same seed after the change of units; the last \
+                 column is the truth → model median against the case as given. \"Not \
+                 storable\": the core's Q16.16 range cannot hold the model (the trainer says \
+                 why and what to change)."
+            } else {
+                "Ratios are against the built-in RBF on the same points, in the same run."
+            },
             TABLE.lock().expect("table").as_str()
         );
         std::fs::write(&path, text).expect("write --out");

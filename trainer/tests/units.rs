@@ -38,6 +38,21 @@ fn torus_points(count: usize, seed: u64) -> neurosurf_trainer::PointSet {
     }
 }
 
+/// `points` moved by `to_world`, trained with the default settings.
+fn fit_default(
+    mut points: neurosurf_trainer::PointSet,
+    to_world: &dyn Fn([f64; 3]) -> [f64; 3],
+) -> implicit::Trained {
+    points.positions = points.positions.iter().map(|&p| to_world(p)).collect();
+    implicit::fit(
+        points,
+        &FitRequest::default(),
+        &ImplicitOptions::default(),
+        &|_| {},
+    )
+    .unwrap()
+}
+
 struct Outcome {
     median_percent: f64,
     f32_median_percent: f64,
@@ -47,15 +62,7 @@ struct Outcome {
 /// Trains on the torus scaled by `scale` and moved by `offset`, and measures it in its units.
 fn train_in_units(scale: f64, offset: [f64; 3]) -> Outcome {
     let to_world = |p: [f64; 3]| [0, 1, 2].map(|k| scale * p[k] + offset[k]);
-    let mut points = torus_points(160, 7);
-    points.positions = points.positions.iter().map(|&p| to_world(p)).collect();
-    let trained = implicit::fit(
-        points,
-        &FitRequest::default(),
-        &ImplicitOptions::default(),
-        &|_| {},
-    )
-    .unwrap();
+    let trained = fit_default(torus_points(160, 7), &to_world);
 
     let bounds = Aabb {
         lo: to_world([-1.5; 3]),
@@ -140,19 +147,7 @@ fn the_same_shape_in_any_units_gives_the_same_model() {
 /// as Q16.16 with the part, the limit and the way out named, and stored as f32.
 #[test]
 fn data_too_small_for_fixed_point_is_refused_by_name() {
-    let mut points = torus_points(96, 3);
-    points.positions = points
-        .positions
-        .iter()
-        .map(|p| p.map(|v| 1e-4 * v))
-        .collect();
-    let trained = implicit::fit(
-        points,
-        &FitRequest::default(),
-        &ImplicitOptions::default(),
-        &|_| {},
-    )
-    .unwrap();
+    let trained = fit_default(torus_points(96, 3), &|p| p.map(|v| 1e-4 * v));
     let error = implicit::to_blob(&trained.network, None, ScalarKind::Q16_16)
         .unwrap_err()
         .to_string();

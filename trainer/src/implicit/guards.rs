@@ -800,15 +800,20 @@ mod tests {
     /// `count` torus points and a one-leaf network trained on them.
     fn torus(count: usize, seed: u64) -> (PointSet, Trained) {
         let points = torus_points(count, seed);
-        let trained = train(
-            &points,
+        let trained = one_leaf(&points);
+        (points, trained)
+    }
+
+    /// A one-leaf network trained on `points` with the default options.
+    fn one_leaf(points: &PointSet) -> Trained {
+        train(
+            points,
             &TreeSpec::Leaf(0),
             &ImplicitOptions::default(),
             None,
             &|_| {},
         )
-        .expect("training");
-        (points, trained)
+        .expect("training")
     }
 
     /// `network` through the core in `f32`, within `regions`.
@@ -981,6 +986,53 @@ mod tests {
         let fixed = broken.with_guards([vec![blob], added].concat());
         // The blob's piece is gone (and any other piece no point belongs to): one torus.
         assert_eq!(pieces(&fixed), 1);
+    }
+
+    /// A part cut off at a gap narrower than the sample spacing (a limb at a sparsely sampled
+    /// joint) is joined back by inside guards along the shortest gap.
+    #[test]
+    fn a_part_cut_off_at_a_narrow_gap_is_joined() {
+        let axes = [1.5, 0.5, 0.5];
+        let shape = crate::sample::Shape::Ellipsoid { axes };
+        let mut points = crate::sample::sample_shape(&shape, 200, 4).expect("points");
+        points.features = Some(vec![0; points.positions.len()]);
+        let trained = one_leaf(&points);
+        // A slab of outside bumps across the middle (x = 0), thinnest on the axis: two
+        // halves, each with points of its own.
+        let mut cut = trained.network.guards().to_vec();
+        let step = 0.08;
+        for i in -7..=7 {
+            for j in -7..=7 {
+                let (y, z) = (step * f64::from(i), step * f64::from(j));
+                let r = y.hypot(z);
+                if r <= 0.56 {
+                    cut.push(Guard {
+                        center: [0.0, y, z],
+                        inverse_radius: 1.0 / (0.06 + 0.05 * r / 0.56),
+                        amplitude: -50.0,
+                    });
+                }
+            }
+        }
+        let broken = trained.network.clone().with_guards(cut.clone());
+        assert!(broken.eval([0.0; 3]).0 < 0.0, "the slab cuts the middle");
+        let oracle = Oracle::new(&points.positions, &points.normals).expect("oracle");
+        let (nearest, _) = oracle.nearest([0.0, 0.0, 0.5]);
+        assert!(
+            oracle.gap(nearest) > 0.2,
+            "the slab is narrower than the spacing"
+        );
+        let regions = || Region::of_network(&trained.network, 2.0, crate::render::DEFAULT_INFLATE);
+        let pieces = |network: &ImplicitNetwork| count_pieces(network, regions());
+        assert_eq!(pieces(&broken), 2, "two halves");
+        let diagonal = 2.0 * (axes[0] * axes[0] + axes[1] * axes[1] + axes[2] * axes[2]).sqrt();
+        let field = core_field(&broken, regions());
+        let (found, added) = guard_stray_pieces(&broken, &field, &oracle, diagonal, 0.1);
+        assert_eq!(found, 2);
+        assert!(!added.is_empty());
+        assert!(added.iter().all(|g| g.amplitude > 0.0), "inside guards");
+        let fixed = broken.with_guards([cut, added].concat());
+        assert_eq!(pieces(&fixed), 1, "joined");
     }
 
     /// A cavity carved inside the tube (where 96 torus points cannot tell the side by the
