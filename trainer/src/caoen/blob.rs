@@ -43,8 +43,17 @@ pub fn to_blob(network: &CaoEnNetwork, scalar: ScalarKind, metadata: &[u8]) -> R
                 .encode(value)
                 .filter(|_| value.abs() <= limit)
                 .ok_or_else(|| {
+                    let advice = match what {
+                        "target" => {
+                            "the targets are too far from the origin: store the network as \
+                             f32, or scale or move the target mesh within the limit"
+                        }
+                        "sharpness" => "store the network as f32, or fit with a lower sharpness",
+                        _ => "store the network as f32",
+                    };
                     Error::invalid(format!(
-                        "{what} word {index} = {value} cannot be stored as {} (limit ±{limit})",
+                        "{what} word {index} = {value} cannot be stored as {} (limit ±{limit}): \
+                         {advice}",
                         scalar.name()
                     ))
                 })?;

@@ -134,7 +134,13 @@ fn blobs_round_trip_through_the_core() {
     assert!(to_blob(&fitted, ScalarKind::F64, &[]).is_err());
     let mut huge = fitted.clone();
     huge.targets[0][0] = 5000.0;
-    assert!(to_blob(&huge, ScalarKind::Q16_16, &[]).is_err());
+    let e = to_blob(&huge, ScalarKind::Q16_16, &[])
+        .unwrap_err()
+        .to_string();
+    // The refusal names the part, the limit and the way out.
+    for expected in ["target word 0", "±1024", "f32", "scale or move"] {
+        assert!(e.contains(expected), "{e}");
+    }
     assert!(to_blob(&huge, ScalarKind::F32, &[]).is_ok());
 }
 

@@ -8,11 +8,12 @@
 
 use std::path::Path;
 
+use neurosurf_core::BlobError;
 use neurosurf_core::blob::{ModelKind, stored_value};
 use neurosurf_core::parametric::{
     self as core_parametric, SurfaceNetworkModel, SurfaceNetworkPayload,
 };
-use neurosurf_core::scalar::{Q16, ScalarKind};
+use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use serde::{Deserialize, Serialize};
 
 use super::activation::Activation;
@@ -109,10 +110,12 @@ pub fn network_to_blob(
     values.extend(network.output_center);
     values.push(network.output_scale);
     let mut words = Vec::with_capacity(values.len() * 4);
+    let count = values.len();
     for (index, &value) in values.iter().enumerate() {
         let word = scalar.encode(value).ok_or_else(|| {
             Error::invalid(format!(
-                "word {index} of the network ({value}) cannot be stored as {}",
+                "word {index} of the network ({value}, {}) cannot be stored as {}",
+                word_role(index, count).0,
                 scalar.name()
             ))
         })?;
@@ -138,8 +141,45 @@ pub fn network_to_blob(
         ScalarKind::Q16_16 => SurfaceNetworkModel::<Q16>::from_blob(&bytes).map(drop),
         _ => SurfaceNetworkModel::<f32>::from_blob(&bytes).map(drop),
     };
-    loads.map_err(|e| Error::invalid(format!("the core would not load this network: {e}")))?;
+    loads.map_err(|e| {
+        let why = match e {
+            BlobError::ParameterOutOfRange { index } if index < count => {
+                let (part, advice) = word_role(index, count);
+                format!(
+                    "word {index} ({}, {part}) is beyond ±{} in {}: {advice}",
+                    values[index],
+                    <Q16 as Scalar>::MAX_PARAMETER,
+                    scalar.name()
+                )
+            }
+            other => other.to_string(),
+        };
+        Error::invalid(format!("the core would not load this network: {why}"))
+    })?;
     Ok(bytes)
+}
+
+/// What word `index` of `count` in a surface-network blob is, and how to make it fit a
+/// fixed-point range: the input's centre and inverse scale (u, v), the layers, the output's
+/// centre (x, y, z) and scale.
+fn word_role(index: usize, count: usize) -> (&'static str, &'static str) {
+    const F32: &str = "store the network as f32";
+    match index {
+        0 | 1 => ("the parameters' centre", F32),
+        2 | 3 => ("the parameters' inverse scale", F32),
+        i if i + 4 < count => (
+            "a layer weight",
+            "store the network as f32, or fit fewer neurons",
+        ),
+        i if i + 1 < count => (
+            "the output centre",
+            "store the network as f32, or move the points nearer the origin before fitting",
+        ),
+        _ => (
+            "the output scale",
+            "store the network as f32, or scale the points down before fitting",
+        ),
+    }
 }
 
 /// Reads a surface-network blob back into `f64`. `path` only names the source in errors.

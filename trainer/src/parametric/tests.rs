@@ -487,4 +487,16 @@ fn blobs_round_trip_and_the_core_evaluates_what_the_trainer_does() {
         e.contains("cannot be stored") || e.contains("would not load"),
         "{e}"
     );
+    // The refusal names the part and the way out.
+    for expected in ["the output scale", "f32", "scale the points down"] {
+        assert!(e.contains(expected), "{e}");
+    }
+    let mut far = net.clone();
+    far.output_center = [2000.0, 0.0, 0.0];
+    let e = network_to_blob(&far, None, ScalarKind::Q16_16)
+        .unwrap_err()
+        .to_string();
+    for expected in ["the output centre", "f32", "nearer the origin"] {
+        assert!(e.contains(expected), "{e}");
+    }
 }
