@@ -119,10 +119,9 @@ impl Grid {
 
     /// The grid points next to point `i` along each axis.
     fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> {
-        let [nx, ny, nz] = self.counts;
-        let index = [i % nx, (i / nx) % ny, i / (nx * ny)];
-        let stride = [1, nx, nx * ny];
-        let counts = [nx, ny, nz];
+        let index = self.index(i);
+        let counts = self.counts;
+        let stride = [1, counts[0], counts[0] * counts[1]];
         (0..3).flat_map(move |k| {
             let below = (index[k] > 0).then(|| i - stride[k]);
             let above = (index[k] + 1 < counts[k]).then(|| i + stride[k]);
@@ -131,8 +130,7 @@ impl Grid {
     }
 
     fn point(&self, i: usize) -> [f64; 3] {
-        let [nx, ny, _] = self.counts;
-        let index = [i % nx, (i / nx) % ny, i / (nx * ny)];
+        let index = self.index(i);
         [0, 1, 2].map(|k| self.lo[k] + self.spacing[k] * index[k] as f64)
     }
 }
@@ -292,8 +290,8 @@ const HIDDEN_STEPS: usize = 4;
 /// the grid point has the right one by more than `push`: a steep bump narrower than a cell
 /// that no grid point lands in (a network can grow one from a single neuron). A grid point
 /// is searched when the tangent plane of Φ there reaches the wrong sign within a cell
-/// diagonal (a bump steepens toward its top); Newton steps toward Φ = −`push` on its side, kept within the cell around it,
-/// find the bump.
+/// diagonal (a bump steepens toward its top); Newton steps toward Φ = −`push` on its side,
+/// kept within the cell around it, find the bump.
 fn hidden_crossings(
     probe: &Probe<'_>,
     grid: &Grid,
