@@ -196,6 +196,8 @@ struct ImplicitSummary<'a> {
 fn implicit(args: &ImplicitArgs) -> Result<()> {
     neurosurf_trainer::io::check_output(&args.out)?;
     let points = read_points(&args.points)?;
+    implicit::check_storable(&points.positions, args.scalar.kind())
+        .with_context(|| format!("cannot train on {}", args.points.display()))?;
     let init = args.init.as_deref().map(read_init).transpose()?;
     let mut options = ImplicitOptions {
         width: args.width,

@@ -35,6 +35,9 @@ struct Info<'a> {
     leaves: Option<usize>,
     /// Implicit models: sign guards added to the root's output.
     guards: Option<usize>,
+    /// Implicit models: where the model's coordinates sit among the user's,
+    /// `model = (x − origin) · 2^shift`.
+    frame: Option<FrameInfo>,
     /// Multiply–accumulates of one field evaluation and of one field+gradient evaluation.
     macs: Option<(usize, usize)>,
     centers: Option<usize>,
@@ -46,14 +49,25 @@ struct Info<'a> {
     network_fit: Option<&'a NetworkSummary>,
 }
 
+#[derive(Serialize)]
+struct FrameInfo {
+    origin: [f32; 3],
+    shift: i8,
+}
+
 pub fn run(args: &Args) -> Result<()> {
     let model = LoadedModel::read(&args.model)?;
     let info = match &model {
         LoadedModel::Implicit { bytes, decoded } => {
             let net = &decoded.network;
-            let macs = neurosurf_core::implicit::ImplicitModel::<f32>::from_blob(bytes)
-                .ok()
+            let core = neurosurf_core::implicit::ImplicitModel::<f32>::from_blob(bytes).ok();
+            let macs = core
+                .as_ref()
                 .map(|m| (m.mac_count(false), m.mac_count(true)));
+            let frame = core.as_ref().map(|m| FrameInfo {
+                origin: m.frame().origin(),
+                shift: m.frame().shift(),
+            });
             Info {
                 kind: "implicit",
                 stored_as: decoded.stored_as.name(),
@@ -64,6 +78,7 @@ pub fn run(args: &Args) -> Result<()> {
                 modules: Some(net.module_count()),
                 leaves: Some(net.subtree_leaves(net.root()).len()),
                 guards: Some(net.guards().len()),
+                frame,
                 macs,
                 training: decoded.metadata.as_ref().and_then(|m| m.summary.as_ref()),
                 ..Info::default()
@@ -197,6 +212,12 @@ pub fn run(args: &Args) -> Result<()> {
     }
     if let Some(guards) = info.guards.filter(|&g| g > 0) {
         println!("  sign guards  {guards}");
+    }
+    if let Some(FrameInfo { origin, shift }) = &info.frame {
+        println!(
+            "  frame        model = (x − ({}, {}, {})) · 2^{shift}",
+            origin[0], origin[1], origin[2]
+        );
     }
     if let Some(control) = &info.control {
         println!("  control      {control}");

@@ -162,6 +162,10 @@ pub enum BlobError {
         /// Its index in the parameter array.
         index: usize,
     },
+    /// The model's frame (origin and power-of-two scale, [`crate::frame`]) is beyond what the
+    /// scalar holds: an origin coordinate not finite or, in Q16.16, outside ±32 767; or a
+    /// shift beyond ±64.
+    FrameOutOfRange,
     /// Encoding only: the output buffer is too small.
     BufferTooSmall {
         /// Bytes needed.
@@ -235,6 +239,10 @@ impl fmt::Display for BlobError {
             BlobError::ParameterOutOfRange { index } => {
                 write!(f, "parameter {index} is out of range for the target scalar")
             }
+            BlobError::FrameOutOfRange => f.write_str(
+                "the model's frame is out of range: its origin must be finite (within ±32 767 \
+                 for Q16.16) and its scale 2^s with |s| ≤ 64",
+            ),
             BlobError::BufferTooSmall { needed, capacity } => {
                 write!(
                     f,

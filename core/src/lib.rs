@@ -48,6 +48,7 @@ pub mod caoen;
 pub mod curve;
 mod dense;
 mod error;
+pub mod frame;
 pub mod implicit;
 mod lanes;
 mod math;

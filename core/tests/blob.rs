@@ -19,8 +19,9 @@ use neurosurf_core::implicit::{
 };
 use neurosurf_core::scalar::{ACTIVATION_AMPLITUDE, Q16, Scalar, ScalarKind};
 
-/// Postcard's encoding of an `ImplicitPayload`, by hand: the width byte, then three byte
-/// strings, each a LEB128 varint length and the bytes.
+/// Postcard's encoding of an `ImplicitPayload`, by hand: the width byte, the identity frame
+/// (a byte string of 12 zero bytes, then the shift byte 0), then three byte strings, each a
+/// LEB128 varint length and the bytes.
 fn postcard_payload(width: u8, tree: &[u8], parameters: &[u8], metadata: &[u8]) -> Vec<u8> {
     fn varint(out: &mut Vec<u8>, mut n: usize) {
         loop {
@@ -33,7 +34,9 @@ fn postcard_payload(width: u8, tree: &[u8], parameters: &[u8], metadata: &[u8]) 
             out.push(byte | 0x80);
         }
     }
-    let mut out = vec![width];
+    let mut out = vec![width, 12];
+    out.extend_from_slice(&[0; 12]);
+    out.push(0);
     for bytes in [tree, parameters, metadata] {
         varint(&mut out, bytes.len());
         out.extend_from_slice(bytes);
@@ -110,6 +113,7 @@ fn round_trip_in_both_storage_kinds_and_both_scalars() {
                 decoded,
                 ImplicitPayload {
                     width: 9,
+                    frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
                     tree,
                     parameters: &stored,
                     metadata,
@@ -318,10 +322,10 @@ fn bad_magic() {
 
 #[test]
 fn unsupported_version() {
-    // Version 2: every module, node included, stores its normalization first.
-    assert_eq!(FORMAT_VERSION, 2);
+    // Version 3: the payload carries the model's frame.
+    assert_eq!(FORMAT_VERSION, 3);
     let blob = Sample::new(1, 3, PAIR).blob(ScalarKind::F32);
-    for version in [0_u16, 1, 3, u16::MAX] {
+    for version in [0_u16, 1, 2, 4, u16::MAX] {
         let mut bad = blob.clone();
         bad[4..6].copy_from_slice(&version.to_le_bytes());
         // Checked before the CRC: with or without a consistent checksum.
@@ -349,8 +353,8 @@ fn version_1_parameter_count(tree: &[u8], width: usize) -> usize {
 
 /// A blob of format version 1 — framed by hand as that version's writer did, with its node
 /// layout — gets the named version error, from the core and from the simulated target's
-/// core alike (see the simulator tests); the same parameters framed as version 2 do not
-/// match the tree.
+/// core alike (see the simulator tests); the same parameters framed as the current version do
+/// not match the tree.
 #[test]
 fn version_1_blobs_are_rejected_by_their_version() {
     let width = 3;
@@ -377,12 +381,12 @@ fn version_1_blobs_are_rejected_by_their_version() {
         });
         assert_eq!(
             e.to_string(),
-            "blob format version 1 is not supported (this core reads 2)"
+            "blob format version 1 is not supported (this core reads 3)"
         );
         assert_eq!(ImplicitPayload::from_blob(bytes).unwrap_err(), e);
     }
-    let version_2 = frame(FORMAT_VERSION, 1, ScalarKind::F32.code(), &payload);
-    rejected(&version_2, |e| {
+    let current = frame(FORMAT_VERSION, 1, ScalarKind::F32.code(), &payload);
+    rejected(&current, |e| {
         *e == BlobError::ShapeMismatch {
             what: Quantity::Parameters,
             expected: new,
@@ -847,6 +851,7 @@ fn buffer_too_small() {
     let stored = sample.stored(ScalarKind::F32);
     let payload = ImplicitPayload {
         width: 3,
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         tree: SINGLE_LEAF,
         parameters: &stored,
         metadata: b"m",

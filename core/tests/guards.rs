@@ -26,6 +26,7 @@ fn blob(tree_tail: &[u8], guards: &[[f64; GUARD_LEN]], scalar: ScalarKind) -> Ve
     tree.extend_from_slice(tree_tail);
     let payload = ImplicitPayload {
         width: WIDTH as u8,
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         tree: &tree,
         parameters: &bytes,
         metadata: &[],

@@ -501,6 +501,30 @@ fn q16_normalization_saturates_like_the_host() {
 /// (`neurosurf-m4f`: `vmla`, the non-fused multiply–accumulate) round exactly like the host's
 /// `acc + w * x`. Both models have N = 9, so every mode runs the kernels on the target; the
 /// last check makes sure they did (without them the torus costs 1 865 instructions per point).
+/// The blob's frame on the target: the torus trained at ×10⁻⁴ (Q16.16 keeps the frame's
+/// scale as a run-time shift: its normalization would exceed the parameter bound) and at ×100
+/// (a shift that would cost the normalization bits), both moved off the origin, equal the host
+/// bit for bit in both scalars. Without the frame, neither stores as Q16.16.
+#[test]
+fn models_in_other_units_on_the_target_equal_the_host_bit_for_bit() {
+    let sim = simulator();
+    for (scale, offset) in [(1e-4, [0.3, -0.2, 0.1]), (100.0, [250.0, -300.0, 40.0])] {
+        let to_world = |p: [f64; 3]| [0, 1, 2].map(|k| scale * p[k] + offset[k]);
+        let mut points = sample_shape(&TORUS, 96, 11).unwrap();
+        points.positions = points.positions.iter().map(|&p| to_world(p)).collect();
+        let trained = train(points, None);
+        let queries: Vec<[f64; 3]> = queries(&TORUS, 5).into_iter().map(to_world).collect();
+        for (scalar, precision) in [
+            (ScalarKind::Q16_16, Precision::Q16),
+            (ScalarKind::F32, Precision::F32),
+        ] {
+            let bytes = blob(&trained, scalar);
+            let name = format!("torus ×{scale}");
+            assert_runs_equal_host(&sim, &name, &bytes, scalar, precision, &queries);
+        }
+    }
+}
+
 #[test]
 fn f32_on_the_target_equals_the_host_bit_for_bit() {
     assert_target_equals_host(ScalarKind::F32, Precision::F32, 22);
@@ -563,7 +587,7 @@ fn corrupt_truncated_and_foreign_blobs_are_rejected_with_the_cores_error() {
         ImplicitModel::<f32>::from_blob(&version_1).unwrap_err(),
         neurosurf_core::BlobError::UnsupportedVersion {
             found: 1,
-            supported: 2
+            supported: neurosurf_core::blob::FORMAT_VERSION
         }
     );
     let points = [[0.5_f32, 0.0, 0.1]];

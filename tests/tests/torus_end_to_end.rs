@@ -76,13 +76,26 @@ fn blob_round_trip_keeps_the_f32_parameters_exactly() {
     let decoded = implicit::from_blob(&bytes, Path::new("m.nsb")).unwrap();
     assert_eq!(decoded.stored_as, ScalarKind::F32);
     assert_eq!(decoded.network.kinds(), trained.network.kinds());
-    for (a, b) in decoded
-        .network
-        .params()
-        .iter()
-        .zip(trained.network.params())
-    {
-        assert_eq!(*a, f64::from(*b as f32));
+    // Weights and biases exactly as f32; each normalization as the blob's frame stores it,
+    // (c − origin)·2ˢ and A·2⁻ˢ rounded to f32, so within f32 rounding of the value.
+    let (got, want) = (&decoded.network, &trained.network);
+    for module in 0..want.module_count() {
+        for (a, b) in got
+            .trained_params(module)
+            .iter()
+            .zip(want.trained_params(module))
+        {
+            assert_eq!(*a, f64::from(*b as f32));
+        }
+        let (a, b) = (got.normalization(module), want.normalization(module));
+        let (a, b) = (a.unwrap(), b.unwrap());
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-6 * (1.0 + y.abs());
+        for k in 0..3 {
+            assert!(close(a.center[k], b.center[k]), "{a:?} {b:?}");
+            for j in 0..3 {
+                assert!(close(a.matrix[k][j], b.matrix[k][j]), "{a:?} {b:?}");
+            }
+        }
     }
     let metadata = decoded.metadata.unwrap();
     assert_eq!(metadata.summary.unwrap(), trained.summary.without_timings());

@@ -143,21 +143,49 @@ fn the_same_shape_in_any_units_gives_the_same_model() {
     }
 }
 
-/// Data too small for Q16.16 (its normalization scales by more than Q16.16 stores) is refused
-/// as Q16.16 with the part, the limit and the way out named, and stored as f32.
+/// Fixed point refuses only what it cannot hold. The blob's frame keeps the stored model of
+/// order one, so data 10⁻⁴ the size stores as Q16.16 as well as f32 (where the frame's
+/// power-of-two scale absorbs what the normalizations could not hold). Data farther from the
+/// origin than Q16.16 reaches is refused as Q16.16 with the coordinate, the limit and the way
+/// out named, and stored as f32.
 #[test]
-fn data_too_small_for_fixed_point_is_refused_by_name() {
-    let trained = fit_default(torus_points(96, 3), &|p| p.map(|v| 1e-4 * v));
-    let error = implicit::to_blob(&trained.network, None, ScalarKind::Q16_16)
+fn fixed_point_refuses_only_what_it_cannot_hold() {
+    let tiny = fit_default(torus_points(96, 3), &|p| p.map(|v| 1e-4 * v));
+    for kind in [ScalarKind::F32, ScalarKind::Q16_16] {
+        let blob = implicit::to_blob(&tiny.network, None, kind).unwrap();
+        let model = LoadedModel::from_bytes(blob, Path::new("tiny.nsb")).unwrap();
+        // On the torus' core circle (inside, Φ > 0) and well outside (Φ < 0).
+        let points = [[1e-4, 0.0, 0.0], [0.0, 0.0, 2e-4]];
+        for precision in [Precision::F32, Precision::Q16] {
+            let values = model.evaluate(&points, precision).unwrap();
+            assert!(
+                values[0].0 > 0.0 && values[1].0 < 0.0,
+                "{kind:?} {precision:?}: {values:?}"
+            );
+        }
+    }
+
+    let moved = |p: [f64; 3]| [p[0] + 40_000.0, p[1], p[2]];
+    let positions: Vec<[f64; 3]> = torus_points(96, 3)
+        .positions
+        .into_iter()
+        .map(moved)
+        .collect();
+    // Refused before training, and by `to_blob` after.
+    let early = implicit::check_storable(&positions, ScalarKind::Q16_16)
         .unwrap_err()
         .to_string();
-    for expected in [
-        "normalization matrix",
-        "q16.16",
-        "f32",
-        "scale the points up",
-    ] {
+    assert!(
+        early.contains("centre x") && early.contains("32767"),
+        "{early}"
+    );
+    assert!(implicit::check_storable(&positions, ScalarKind::F32).is_ok());
+    let far = fit_default(torus_points(96, 3), &moved);
+    let error = implicit::to_blob(&far.network, None, ScalarKind::Q16_16)
+        .unwrap_err()
+        .to_string();
+    for expected in ["centre x", "q16.16", "32767", "f32", "move the points"] {
         assert!(error.contains(expected), "{error}");
     }
-    assert!(implicit::to_blob(&trained.network, None, ScalarKind::F32).is_ok());
+    assert!(implicit::to_blob(&far.network, None, ScalarKind::F32).is_ok());
 }

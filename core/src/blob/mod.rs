@@ -1,11 +1,11 @@
 //! The blob: a self-checking container for one trained model.
 //!
-//! # Format (version 2)
+//! # Format (version 3)
 //!
 //! | offset | size | field |
 //! |---:|---:|---|
 //! | 0 | 4 | magic `NSRF` |
-//! | 4 | 2 | format version, `u16` little endian (currently 2) |
+//! | 4 | 2 | format version, `u16` little endian (currently 3) |
 //! | 6 | 1 | model kind ([`ModelKind::code`]) |
 //! | 7 | 1 | scalar kind of the stored parameters ([`ScalarKind::code`]) |
 //! | 8 | 4 | payload length *n*, `u32` little endian |
@@ -26,6 +26,10 @@
 //! The core reads exactly one version, [`FORMAT_VERSION`]; any other gets
 //! [`BlobError::UnsupportedVersion`] (checked before the CRC), never a reinterpretation.
 //!
+//! - **3**: an implicit payload carries its [frame](crate::frame) (origin and power-of-two
+//!   scale) after the width; modules and guards are stored in the frame's coordinates, so
+//!   their parameters no longer depend on the data's units. The other kinds' payloads are
+//!   unchanged.
 //! - **2**: every implicit module starts with its normalization c, A — nodes included — and a
 //!   node's a′ layer reads [b_left, b_right, A·(x − c)] (2N + 3 inputs; see
 //!   [`crate::implicit::ModuleLayout`]). The other kinds' payloads are unchanged.
@@ -61,7 +65,7 @@ use crate::scalar::ScalarKind;
 /// The four bytes every blob starts with.
 pub const MAGIC: [u8; 4] = *b"NSRF";
 /// The format version this core reads and writes (see the module docs' version history).
-pub const FORMAT_VERSION: u16 = 2;
+pub const FORMAT_VERSION: u16 = 3;
 /// Bytes before the payload.
 pub const HEADER_LEN: usize = 12;
 /// Bytes after the payload (the CRC).

@@ -5,7 +5,7 @@ use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::{ImplicitModel, ModuleEntry};
 use super::width::{at_width, width};
 use crate::dense::forward;
-use crate::scalar::{Scalar, normalize3};
+use crate::scalar::{Scalar, ScalarKind, normalize3};
 
 /// Φ and ∇Φ at one point.
 #[derive(Copy, Clone, Debug, Default, PartialEq)]
@@ -126,7 +126,7 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         let [mut out] = forward::<S, L, 1>(params, &layout.output, (hidden, &[], &[]));
         let guards = self.guards();
         if !guards.is_empty() {
-            guard::add_values(guards, points, &mut out);
+            guard::add_values(guards, points, &mut out, model.input_shift);
         }
         out
     }
@@ -160,7 +160,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         let (layout, params, hidden_a): (_, _, [[S; L]; N]) = match entry.kind {
             ModuleKind::Leaf => {
                 let (layout, params) = module(ModuleKind::Leaf);
-                let input = normalized_input(params, points);
+                let input = normalized_input(params, points, self.input_shift);
                 (
                     layout,
                     params,
@@ -193,7 +193,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         let params = self.module_parameters(entry.offset, layout.len);
         let left = self.last_hidden::<L, N, EXACT>(entry.left, points, budget);
         let right = self.last_hidden::<L, N, EXACT>(index.saturating_sub(1), points, budget);
-        let position = normalized_input(params, points);
+        let position = normalized_input(params, points, self.input_shift);
         let inputs = (
             left.get(..width).unwrap_or(&[]),
             right.get(..width).unwrap_or(&[]),
@@ -203,13 +203,35 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     }
 }
 
-/// A module's normalized position x′ = A·(x − c), lane by lane: a leaf's input, and the last
-/// three inputs of a node's layer a′ (both store c and A first, see [`ModuleLayout`]).
+/// A module's normalized position x′ = A·(x − c)·2^`shift`, lane by lane: a leaf's input, and
+/// the last three inputs of a node's layer a′ (both store c and A first, see
+/// [`ModuleLayout`]). `shift` is what of the blob's frame the load could not fold into A
+/// (see [`ImplicitModel::frame`]); 0 for every `f32` model.
 #[inline]
 pub(crate) fn normalized_input<S: Scalar, const L: usize>(
     params: &[S],
     points: &[[S; 3]; L],
+    shift: i8,
 ) -> [[S; L]; 3] {
+    let mut input = unscaled_input(params, points);
+    // `f32` models always fold the frame at load: no run-time shift to compile.
+    if S::KIND != ScalarKind::F32 && shift != 0 {
+        scale_lanes(&mut input, shift);
+    }
+    input
+}
+
+/// Every value times 2^`shift`: out of line, so that models without a run-time shift keep
+/// their code as it is.
+#[inline(never)]
+pub(crate) fn scale_lanes<S: Scalar, const L: usize>(values: &mut [[S; L]; 3], shift: i8) {
+    for value in values.iter_mut().flatten() {
+        *value = value.times_power_of_two(shift);
+    }
+}
+
+#[inline]
+fn unscaled_input<S: Scalar, const L: usize>(params: &[S], points: &[[S; 3]; L]) -> [[S; L]; 3] {
     let mut input = [[S::ZERO; L]; 3];
     let Some(normalization) = params.get(..NORMALIZATION_LEN) else {
         return input;

@@ -15,7 +15,7 @@
 //! [`GUARD_LEN`] parameters after the modules' parameters: c (3), ρ, a.
 
 use crate::error::BlobError;
-use crate::scalar::Scalar;
+use crate::scalar::{Scalar, ScalarKind};
 
 /// The tree byte of a guard (after every module).
 pub const GUARD_CODE: u8 = 2;
@@ -47,15 +47,33 @@ pub fn split_tree(tree: &[u8]) -> Result<(&[u8], usize), BlobError> {
 }
 
 /// Adds every guard of `params` (a multiple of [`GUARD_LEN`]) to the values at `points`.
+/// `shift` is the model's run-time shift (see `ImplicitModel::input_shift`): the guards'
+/// centres are in the caller's units, their radii in the frame's.
 #[inline(never)]
 pub(crate) fn add_values<S: Scalar, const L: usize>(
     params: &[S],
     points: &[[S; 3]; L],
     values: &mut [S; L],
+    shift: i8,
+) {
+    if run_time::<S>(shift) {
+        add_values_shifted::<S, L, true>(params, points, values, shift);
+    } else {
+        add_values_shifted::<S, L, false>(params, points, values, 0);
+    }
+}
+
+/// [`add_values`], with the shift compiled in or out.
+#[inline(always)]
+fn add_values_shifted<S: Scalar, const L: usize, const SHIFTED: bool>(
+    params: &[S],
+    points: &[[S; 3]; L],
+    values: &mut [S; L],
+    shift: i8,
 ) {
     for guard in params.chunks_exact(GUARD_LEN) {
         for (value, point) in values.iter_mut().zip(points) {
-            if let Some((u, _)) = inside(guard, point) {
+            if let Some((u, _)) = inside::<S, SHIFTED>(guard, point, shift) {
                 let [.., a] = guard else { continue };
                 *value = value.add(a.mul(u.mul(u).mul(u)));
             }
@@ -71,13 +89,33 @@ pub(crate) fn add_values_gradients<S: Scalar, const L: usize>(
     points: &[[S; 3]; L],
     values: &mut [S; L],
     gradients: &mut [[S; L]; 3],
+    shift: i8,
+) {
+    if run_time::<S>(shift) {
+        add_values_gradients_shifted::<S, L, true>(params, points, values, gradients, shift);
+    } else {
+        add_values_gradients_shifted::<S, L, false>(params, points, values, gradients, 0);
+    }
+}
+
+/// [`add_values_gradients`], with the shift compiled in or out.
+#[inline(always)]
+fn add_values_gradients_shifted<S: Scalar, const L: usize, const SHIFTED: bool>(
+    params: &[S],
+    points: &[[S; 3]; L],
+    values: &mut [S; L],
+    gradients: &mut [[S; L]; 3],
+    shift: i8,
 ) {
     let six = S::from_f32_saturating(6.0);
     for guard in params.chunks_exact(GUARD_LEN) {
         let [.., rho, a] = guard else { continue };
-        let scale = six.mul(*a).mul(*rho).neg();
+        let mut scale = six.mul(*a).mul(*rho).neg();
+        if SHIFTED {
+            scale = scale.times_power_of_two(shift);
+        }
         for (lane, (value, point)) in values.iter_mut().zip(points).enumerate() {
-            if let Some((u, d)) = inside(guard, point) {
+            if let Some((u, d)) = inside::<S, SHIFTED>(guard, point, shift) {
                 let u2 = u.mul(u);
                 *value = value.add(a.mul(u2.mul(u)));
                 let s = scale.mul(u2);
@@ -91,15 +129,29 @@ pub(crate) fn add_values_gradients<S: Scalar, const L: usize>(
     }
 }
 
-/// (1 − t², ρ·(x − c)) when `point` is inside the guard's support, else `None`.
+/// Whether a model of scalar `S` applies `shift` at run time (`f32` never does).
 #[inline(always)]
-fn inside<S: Scalar>(guard: &[S], point: &[S; 3]) -> Option<(S, [S; 3])> {
+fn run_time<S: Scalar>(shift: i8) -> bool {
+    S::KIND != ScalarKind::F32 && shift != 0
+}
+
+/// (1 − t², ρ·(x − c)·2^`shift`) when `point` is inside the guard's support, else `None`.
+#[inline(always)]
+fn inside<S: Scalar, const SHIFTED: bool>(
+    guard: &[S],
+    point: &[S; 3],
+    shift: i8,
+) -> Option<(S, [S; 3])> {
     let [cx, cy, cz, rho, _] = guard else {
         return None;
     };
     let mut d = [S::ZERO; 3];
     for ((slot, &x), &c) in d.iter_mut().zip(point).zip([cx, cy, cz]) {
-        *slot = x.sub(c).mul(*rho);
+        let mut difference = x.sub(c);
+        if SHIFTED {
+            difference = difference.times_power_of_two(shift);
+        }
+        *slot = difference.mul(*rho);
         // Outside the bounding cube: also keeps t² within range in fixed point (a NaN
         // coordinate fails the test on t² below).
         if slot.abs() >= S::ONE {
@@ -132,8 +184,11 @@ mod tests {
         (2.0 * u * u * u, d.map(|v| -6.0 * 2.0 * 2.0 * u * u * v))
     }
 
-    fn check<S: Scalar>(tolerance: f64) {
-        let params = GUARD.map(S::from_f32_saturating);
+    /// The guard stored with its radius in a frame 2^`shift` times finer than the points
+    /// (a model's run-time shift, Q16.16 only), checked against the same reference.
+    fn check<S: Scalar>(tolerance: f64, shift: i8) {
+        let mut params = GUARD.map(S::from_f32_saturating);
+        params[3] = params[3].times_power_of_two(-shift);
         for p in [
             [1.0, 2.0, 3.0],
             [1.2, 2.1, 2.9],
@@ -144,9 +199,9 @@ mod tests {
         ] {
             let points = [p.map(|v: f64| S::from_f32_saturating(v as f32))];
             let (mut values, mut gradients) = ([S::ZERO], [[S::ZERO]; 3]);
-            add_values_gradients(&params, &points, &mut values, &mut gradients);
+            add_values_gradients(&params, &points, &mut values, &mut gradients, shift);
             let mut only = [S::ZERO];
-            add_values(&params, &points, &mut only);
+            add_values(&params, &points, &mut only, shift);
             let (v, g) = reference(p);
             assert_eq!(only, values, "{p:?}");
             assert!((values[0].to_f64() - v).abs() <= tolerance, "{p:?}");
@@ -161,7 +216,10 @@ mod tests {
 
     #[test]
     fn f32_and_q16_follow_the_f64_reference() {
-        check::<f32>(1e-6);
-        check::<Q16>(2e-4);
+        check::<f32>(1e-6, 0);
+        check::<Q16>(2e-4, 0);
+        check::<Q16>(2e-4, 2);
+        // The difference x − c loses 3 bits before ρ = 16 multiplies it.
+        check::<Q16>(2e-3, -3);
     }
 }

@@ -4,9 +4,10 @@ use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
 use super::guard::{GUARD_LEN, MAX_GUARDS, split_tree};
-use super::layout::{MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout};
+use super::layout::{MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use crate::blob::{self, ModelKind};
 use crate::error::{BlobError, Quantity};
+use crate::frame::{Frame, FramePayload};
 use crate::scalar::{Scalar, ScalarKind};
 
 /// The modules' share of the default parameter capacity: a 17-leaf, 16-node body model of
@@ -23,6 +24,9 @@ pub const DEFAULT_MODULES: usize = 64;
 pub struct ImplicitPayload<'a> {
     /// Hidden width N of every module.
     pub width: u8,
+    /// Where the modules' coordinates sit among the user's ([`crate::frame`]).
+    #[serde(borrow)]
+    pub frame: FramePayload<'a>,
     /// Module kinds in post-order ([`ModuleKind::code`]), then one
     /// [`GUARD_CODE`](super::GUARD_CODE) per sign guard.
     #[serde(borrow)]
@@ -85,7 +89,9 @@ pub(crate) struct ModuleEntry {
 /// #     let layout = ModuleLayout::new(ModuleKind::Leaf, 2);
 /// #     let params: Vec<f64> = (0..layout.len).map(|i| ((i * 7 % 11) as f64 - 5.0) / 10.0).collect();
 /// #     let bytes: Vec<u8> = params.iter().flat_map(|&p| ScalarKind::F32.encode(p).unwrap()).collect();
-/// #     let payload = ImplicitPayload { width: 2, tree: &[0], parameters: &bytes, metadata: &[] };
+/// #     let payload = ImplicitPayload {
+/// #         width: 2, frame: neurosurf_core::frame::IDENTITY_PAYLOAD, tree: &[0],
+/// #         parameters: &bytes, metadata: &[] };
 /// #     let mut out = vec![0_u8; 1024];
 /// #     let n = neurosurf_core::blob::write(
 /// #         neurosurf_core::blob::ModelKind::Implicit, ScalarKind::F32, &payload, &mut out).unwrap();
@@ -105,6 +111,11 @@ pub struct ImplicitModel<
     /// Where the guards' parameters start (the modules' parameter count).
     pub(crate) guards_offset: usize,
     pub(crate) stored_as: ScalarKind,
+    /// The blob's frame, as stored.
+    pub(crate) frame: Frame<S>,
+    /// What of the frame's scale 2ˢ the load could not fold into the normalizations (always 0
+    /// for `f32`): each module scales its normalized position by 2^`input_shift`.
+    pub(crate) input_shift: i8,
 }
 
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
@@ -118,6 +129,8 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             parameters: Vec::new(),
             guards_offset: 0,
             stored_as: S::KIND,
+            frame: Frame::IDENTITY,
+            input_shift: 0,
         }
     }
 
@@ -186,6 +199,8 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         self.parameters.clear();
         self.guards_offset = 0;
         self.stored_as = S::KIND;
+        self.frame = Frame::IDENTITY;
+        self.input_shift = 0;
     }
 
     fn fill(&mut self, payload: &ImplicitPayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
@@ -203,6 +218,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                 found: width,
             });
         }
+        let frame = Frame::from_payload(&payload.frame, stored)?;
         // The modules, then the guards: one code each, after the last module.
         let (tree, guards) = split_tree(payload.tree)?;
         if guards > MAX_GUARDS {
@@ -260,9 +276,11 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                 });
             }
         }
+        self.input_shift = fold_frame(&mut self.parameters, &self.modules, width, &frame)?;
         self.width = width;
         self.guards_offset = module_parameters;
         self.stored_as = stored;
+        self.frame = frame;
         Ok(())
     }
 
@@ -315,6 +333,12 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         self.modules.len().saturating_sub(1)
     }
 
+    /// The blob's frame, as stored. The load folds it into the modules and guards (see
+    /// [`crate::frame`]), so every evaluation takes and returns the caller's units.
+    pub fn frame(&self) -> &Frame<S> {
+        &self.frame
+    }
+
     /// The scalar kind the blob stored its parameters in.
     pub fn stored_as(&self) -> ScalarKind {
         self.stored_as
@@ -335,6 +359,79 @@ impl<S: Scalar, const P: usize, const M: usize> Default for ImplicitModel<S, P, 
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// Rewrites the modules' normalizations and the guards, stored in the frame's coordinates, to
+/// read the caller's points: with x_model = (x − o)·2ˢ, a module's A·(x_model − c) is
+/// A·2ˢ·(x − c̃) with c̃ = o + c·2⁻ˢ, and a guard's centre and inverse radius move alike
+/// (with a run-time shift, the radius stays as stored).
+/// Returns the shift left to apply at run time: 0 when A·2ˢ is exact and within the parameter
+/// bound (always in `f32`; in Q16.16 for s ≥ 0 when it fits), else s, with A kept as stored.
+///
+/// # Errors
+/// [`BlobError::FrameOutOfRange`] when A·2ˢ or a guard's inverse radius ·2ˢ overflows `f32`.
+fn fold_frame<S: Scalar>(
+    parameters: &mut [S],
+    modules: &[ModuleEntry],
+    width: usize,
+    frame: &Frame<S>,
+) -> Result<i8, BlobError> {
+    let (origin, shift) = (frame.origin(), frame.shift());
+    let modules_end = modules
+        .last()
+        .map_or(0, |m| m.offset + ModuleLayout::new(m.kind, width).len);
+    let bound = S::from_f32(S::MAX_PARAMETER).unwrap_or(S::ZERO);
+    let fits = |value: S| {
+        let scaled = value.times_power_of_two(shift);
+        scaled.to_f32().is_finite() && scaled.abs().to_f64() <= bound.to_f64()
+    };
+    let is_f32 = S::KIND == ScalarKind::F32;
+    let exact = is_f32 || shift >= 0;
+    let axes = |m: &ModuleEntry| m.offset + 3..m.offset + NORMALIZATION_LEN;
+    let guard_radii = parameters
+        .get(modules_end..)
+        .unwrap_or(&[])
+        .chunks_exact(GUARD_LEN)
+        .filter_map(|g| g.get(3));
+    let fold = exact
+        && modules.iter().all(|m| {
+            parameters
+                .get(axes(m))
+                .is_some_and(|a| a.iter().all(|&v| fits(v)))
+        })
+        && guard_radii.clone().all(|&rho| fits(rho));
+    let move_center = |center: &mut [S]| {
+        for (c, o) in center.iter_mut().zip(origin) {
+            *c = o.add(c.times_power_of_two(shift.saturating_neg()));
+        }
+    };
+    if is_f32 && !fold {
+        // Only an overflow stops f32 (evaluation compiles no run-time shift for it).
+        return Err(BlobError::FrameOutOfRange);
+    }
+    for m in modules {
+        if let Some(center) = parameters.get_mut(m.offset..m.offset + 3) {
+            move_center(center);
+        }
+        if fold && let Some(a) = parameters.get_mut(axes(m)) {
+            for v in a {
+                *v = v.times_power_of_two(shift);
+            }
+        }
+    }
+    for guard in parameters
+        .get_mut(modules_end..)
+        .unwrap_or(&mut [])
+        .chunks_exact_mut(GUARD_LEN)
+    {
+        let (center, rest) = guard.split_at_mut(3);
+        move_center(center);
+        // With a run-time shift the radius stays in the frame's units (see `guard::inside`).
+        if fold && let Some(rho) = rest.first_mut() {
+            *rho = rho.times_power_of_two(shift);
+        }
+    }
+    Ok(if fold { 0 } else { shift })
 }
 
 /// Checks a post-order tree and computes each module's offset, subtree and children.

@@ -14,13 +14,13 @@
 //! width itself for the specialized widths, else `MAX_WIDTH`; see `width.rs`), and nothing is
 //! allocated beyond that.
 
-use super::eval::{FieldGradient, ModuleView, normalized_input};
+use super::eval::{FieldGradient, ModuleView, normalized_input, scale_lanes};
 use super::guard;
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
 use super::width::{at_width, width};
 use crate::dense::{LayerInputs, forward, transposed, transposed_through_activation};
-use crate::scalar::Scalar;
+use crate::scalar::{Scalar, ScalarKind};
 
 /// ∇Φ summed over the modules, per coordinate and lane, in the wide accumulator.
 type Gradient<S, const L: usize> = [[<S as Scalar>::Acc; L]; 3];
@@ -82,7 +82,13 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         let mut gradient = gradient.map(|lanes| lanes.map(S::from_acc));
         let guards = self.guards();
         if !guards.is_empty() {
-            guard::add_values_gradients(guards, points, &mut value, &mut gradient);
+            guard::add_values_gradients(
+                guards,
+                points,
+                &mut value,
+                &mut gradient,
+                model.input_shift,
+            );
         }
         let [g0, g1, g2] = gradient;
         core::array::from_fn(|lane| {
@@ -115,13 +121,13 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
         match entry.kind {
             ModuleKind::Leaf => {
                 let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Leaf);
-                let input = normalized_input(pass.params, points);
+                let input = normalized_input(pass.params, points, self.input_shift);
                 let delta_a = pass.run::<L, N, EXACT>((&input, &[], &[]), gradient, above);
                 let delta_a = delta_a.get(..pass.width).unwrap_or(&[]);
                 let hidden_a = &pass.layout.hidden_a;
                 let delta_input =
                     transposed::<S, L, 3, EXACT>(pass.params, hidden_a, (0, 3), delta_a);
-                add_normalization_transpose(pass.params, &delta_input, gradient);
+                add_normalization_transpose(pass.params, &delta_input, gradient, self.input_shift);
             }
             ModuleKind::Node => {
                 let right_child = index.saturating_sub(1);
@@ -144,7 +150,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                                     left.get(..width).unwrap_or(&[]),
                                     right.get(..width).unwrap_or(&[]),
                                 );
-                                let position = normalized_input(params, points);
+                                let position = normalized_input(params, points, self.input_shift);
                                 let delta_a = pass.run::<L, N, EXACT>(
                                     (left, right, &position),
                                     gradient,
@@ -159,7 +165,12 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                                     (2 * width, 3),
                                     delta_a,
                                 );
-                                add_normalization_transpose(params, &delta_position, gradient);
+                                add_normalization_transpose(
+                                    params,
+                                    &delta_position,
+                                    gradient,
+                                    self.input_shift,
+                                );
                                 // Each child's ∂Φ/∂H_b, through its activation.
                                 delta_left = Some(transposed_through_activation::<S, L, N, EXACT>(
                                     params,
@@ -237,10 +248,38 @@ impl<S: Scalar> Pass<'_, S> {
     }
 }
 
-/// ∇Φ += Aᵀ·∂Φ/∂x′ for a module whose normalized position is x′ = A·(x − c) (a leaf's
-/// input, the last three inputs of a node).
+/// ∇Φ += 2^`shift`·Aᵀ·∂Φ/∂x′ for a module whose normalized position is x′ = A·(x − c)·2^`shift`
+/// (a leaf's input, the last three inputs of a node; see [`normalized_input`]).
 #[inline]
 fn add_normalization_transpose<S: Scalar, const L: usize>(
+    params: &[S],
+    delta_input: &[[S; L]; 3],
+    gradient: &mut Gradient<S, L>,
+    shift: i8,
+) {
+    // `f32` models always fold the frame at load: no run-time shift to compile.
+    if S::KIND != ScalarKind::F32 && shift != 0 {
+        add_scaled_transpose(params, delta_input, gradient, shift);
+    } else {
+        add_transpose(params, delta_input, gradient);
+    }
+}
+
+/// [`add_transpose`] of ∂Φ/∂x′·2^`shift`, out of line (see [`scale_lanes`]).
+#[inline(never)]
+fn add_scaled_transpose<S: Scalar, const L: usize>(
+    params: &[S],
+    delta_input: &[[S; L]; 3],
+    gradient: &mut Gradient<S, L>,
+    shift: i8,
+) {
+    let mut scaled = *delta_input;
+    scale_lanes(&mut scaled, shift);
+    add_transpose(params, &scaled, gradient);
+}
+
+#[inline]
+fn add_transpose<S: Scalar, const L: usize>(
     params: &[S],
     delta_input: &[[S; L]; 3],
     gradient: &mut Gradient<S, L>,

@@ -61,6 +61,12 @@ impl Scalar for f32 {
         self * other
     }
     #[inline]
+    fn times_power_of_two(self, exponent: i8) -> Self {
+        // 2^e is a normal f32 for e in [−126, 127]; frames stay within ±64.
+        let biased = (127 + i32::from(exponent)).clamp(1, 254) as u32;
+        self * f32::from_bits(biased << 23)
+    }
+    #[inline]
     fn neg(self) -> Self {
         -self
     }

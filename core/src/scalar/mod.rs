@@ -205,6 +205,18 @@ pub trait Scalar:
         Self::activation(Self::from_acc(acc))
     }
 
+    /// `self · 2^exponent`, exact unless it leaves the scalar's range (`f32`: IEEE rounding at
+    /// the ends; Q16.16: rounded to nearest, ties up, and saturated). `exponent` within
+    /// ±[`MAX_FRAME_SHIFT`](crate::frame::MAX_FRAME_SHIFT).
+    ///
+    /// ```
+    /// use neurosurf_core::scalar::{Q16, Scalar};
+    /// assert_eq!(<f32 as Scalar>::times_power_of_two(3.0, -2), 0.75);
+    /// assert_eq!(Q16::from_num(3).times_power_of_two(-2), Q16::from_num(0.75));
+    /// assert_eq!(Q16::from_num(3).times_power_of_two(20), Q16::MAX);
+    /// ```
+    fn times_power_of_two(self, exponent: i8) -> Self;
+
     /// Square root; 0 for negative inputs.
     fn sqrt(self) -> Self;
     /// 1/x; `None` when x is 0 or the result is not representable.

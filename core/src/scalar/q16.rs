@@ -169,6 +169,17 @@ impl Scalar for Q16 {
         round_q32(i64::from(self.to_bits()) * i64::from(other.to_bits()))
     }
     #[inline]
+    fn times_power_of_two(self, exponent: i8) -> Self {
+        let bits = i64::from(self.to_bits());
+        if exponent >= 0 {
+            // Any non-zero value saturates by a shift of 32; 2³¹·2³² still fits an i64.
+            saturate(bits << exponent.unsigned_abs().min(32))
+        } else {
+            let shift = exponent.unsigned_abs().min(40);
+            saturate((bits + (1_i64 << (shift - 1))) >> shift)
+        }
+    }
+    #[inline]
     fn neg(self) -> Self {
         self.saturating_neg()
     }

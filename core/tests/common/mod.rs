@@ -197,6 +197,7 @@ pub fn implicit_blob(
 ) -> Vec<u8> {
     let payload = ImplicitPayload {
         width,
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         tree,
         parameters,
         metadata,

@@ -6,7 +6,8 @@
 //! so `neurosurf info` can tell the model's story and `--init` can check it warm-starts the
 //! right tree.
 
-use neurosurf_core::blob::ModelKind;
+use neurosurf_core::blob::{ModelKind, stored_value};
+use neurosurf_core::frame::{Frame as Frame32, FramePayload, MAX_FRAME_SHIFT, MAX_Q16_ORIGIN};
 use neurosurf_core::implicit::guard::split_tree;
 use neurosurf_core::implicit::{GUARD_CODE, GUARD_LEN, ImplicitPayload, MAX_GUARDS, ModuleKind};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
@@ -15,7 +16,9 @@ use std::path::Path;
 use neurosurf_core::BlobError;
 use serde::{Deserialize, Serialize};
 
+use super::frame::Frame;
 use super::network::{Guard, ImplicitNetwork};
+use super::normalize::Normalization;
 use super::train::TrainingSummary;
 use crate::blob::encode;
 use crate::error::{Error, Result};
@@ -61,6 +64,8 @@ pub fn to_blob(
             )));
         }
     };
+    let (frame, origin, shift) = blob_frame(network, scalar)?;
+    let network = &frame.network_to_model(network);
     let guards: Vec<f64> = network
         .guards()
         .iter()
@@ -104,6 +109,10 @@ pub fn to_blob(
         .map_err(|_| Error::invalid(format!("width {} does not fit", network.width())))?;
     let payload = ImplicitPayload {
         width,
+        frame: FramePayload {
+            origin: &origin,
+            shift,
+        },
         tree: &tree,
         parameters: &parameters,
         metadata: &metadata,
@@ -111,14 +120,88 @@ pub fn to_blob(
     encode(ModelKind::Implicit, scalar, &payload)
 }
 
+/// Checks, before training, that a model of `positions` can be stored as `scalar`: its frame's
+/// origin (near the points' centre) must lie within what Q16.16 holds.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming the coordinate, the limit and the way out.
+pub fn check_storable(positions: &[[f64; 3]], scalar: ScalarKind) -> Result<()> {
+    if scalar != ScalarKind::Q16_16 || positions.is_empty() {
+        return Ok(());
+    }
+    for k in 0..3 {
+        let (lo, hi) = positions
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[k]), hi.max(p[k]))
+            });
+        let centre = 0.5 * (lo + hi);
+        if centre.abs() > f64::from(MAX_Q16_ORIGIN) {
+            return Err(origin_error(k, centre, scalar));
+        }
+    }
+    Ok(())
+}
+
+fn origin_error(axis: usize, value: f64, scalar: ScalarKind) -> Error {
+    Error::invalid(format!(
+        "the shape's centre {} = {value} cannot be stored as {} (limit ±{}): store the model \
+         as f32, or move the points toward the origin before training",
+        ["x", "y", "z"][axis],
+        scalar.name(),
+        MAX_Q16_ORIGIN
+    ))
+}
+
+/// The frame a blob keeps `network` in ([`neurosurf_core::frame`]): the root module's centre,
+/// rounded to the stored scalar, and the power of two nearest the root's scale. The stored
+/// normalizations and guards are then of order one whatever the data's units. Returned as the
+/// trainer's [`Frame`] and as the blob stores it.
+fn blob_frame(network: &ImplicitNetwork, scalar: ScalarKind) -> Result<(Frame, [u8; 12], i8)> {
+    let root = network
+        .normalization(network.root())
+        .unwrap_or(Normalization {
+            center: [0.0; 3],
+            matrix: [[0.0; 3]; 3],
+        });
+    let scale = root
+        .matrix
+        .iter()
+        .map(|row| row.iter().map(|a| a * a).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    let shift = if scale.is_finite() && scale > 0.0 {
+        let max = f64::from(MAX_FRAME_SHIFT);
+        scale.log2().round().clamp(-max, max) as i8
+    } else {
+        0
+    };
+    let mut origin = [0_u8; 12];
+    let mut center = [0.0; 3];
+    for (k, (word, value)) in origin.chunks_exact_mut(4).zip(&mut center).enumerate() {
+        let wanted = root.center[k];
+        let in_range = scalar != ScalarKind::Q16_16 || wanted.abs() <= f64::from(MAX_Q16_ORIGIN);
+        let stored = scalar
+            .encode(wanted)
+            .filter(|_| in_range)
+            .ok_or_else(|| origin_error(k, wanted, scalar))?;
+        word.copy_from_slice(&stored);
+        *value = stored_value(&stored, scalar).unwrap_or(0.0);
+    }
+    let frame = Frame {
+        center,
+        scale: (-f64::from(shift)).exp2(),
+    };
+    Ok((frame, origin, shift))
+}
+
 /// Where a blob parameter sits.
 enum Part {
-    /// A module's normalization: its centre (moves with the data) or its matrix (grows as
-    /// the data's units shrink).
+    /// A module's normalization in the blob's frame: its centre or its matrix (large for a
+    /// feature much smaller than the whole shape).
     Normalization { module: usize, centre: bool },
-    /// A module's trained weights and biases (the same in any units).
+    /// A module's trained weights and biases.
     Weights { module: usize },
-    /// A sign guard's centre, inverse radius (grows as the units shrink) or amplitude.
+    /// A sign guard's centre, inverse radius (large for a small guard) or amplitude.
     Guard { guard: usize, part: usize },
 }
 
@@ -162,29 +245,23 @@ impl Part {
         }
     }
 
-    /// How to make this part's `value` fit within ±`limit`.
+    /// How to make this part's `value` fit within ±`limit`. The blob's frame keeps every
+    /// part of order one in any units, so what is left is a part far out of scale with the
+    /// whole shape.
     fn advice(&self, value: f64, limit: f64) -> String {
-        let grows_as_units_shrink = matches!(
-            self,
-            Part::Normalization { centre: false, .. } | Part::Guard { part: 3, .. }
-        );
-        let moves_with_data = matches!(
-            self,
-            Part::Normalization { centre: true, .. } | Part::Guard { part: 0..=2, .. }
-        );
-        if grows_as_units_shrink {
-            format!(
-                ": the data is too small for it; store the model as f32, or scale the points \
-                 up by at least {:.1}× before training",
-                value.abs() / limit
-            )
-        } else if moves_with_data {
-            format!(
-                ": the data lies too far from the origin for it; store the model as f32, or \
-                 move the points within ±{limit} of the origin before training"
-            )
-        } else {
-            String::new()
+        let ratio = value.abs() / limit;
+        match self {
+            Part::Normalization { centre: false, .. } | Part::Guard { part: 3, .. } => format!(
+                ": it is {ratio:.1}× what fits, for a part much smaller than the whole shape; \
+                 store the model as f32, or train with fewer features"
+            ),
+            Part::Normalization { centre: true, .. } | Part::Guard { part: 0..=2, .. } => {
+                format!(
+                    ": it is {ratio:.1}× what fits, for a part far from the shape's centre; \
+                     store the model as f32"
+                )
+            }
+            _ => format!(": it is {ratio:.1}× what fits; store the model as f32"),
         }
     }
 }
@@ -234,6 +311,16 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
         }
         params.push(value);
     }
+    // The stored frame, exactly: a Q16.16 or f32 word is exact in f64.
+    Frame32::<f32>::from_payload(&payload.frame, stored_as).map_err(rejected)?;
+    let mut center = [0.0; 3];
+    for (value, word) in center.iter_mut().zip(payload.frame.origin.chunks_exact(4)) {
+        *value = stored_value(word, stored_as).unwrap_or(0.0);
+    }
+    let frame = Frame {
+        center,
+        scale: (-f64::from(payload.frame.shift)).exp2(),
+    };
     let guard_params = params.split_off(params.len().saturating_sub(GUARD_LEN * guard_count));
     let guards: Vec<Guard> = guard_params
         .chunks_exact(GUARD_LEN)
@@ -270,6 +357,7 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
         ImplicitNetwork::from_parts(usize::from(payload.width), kinds, leaf_features, params)
             .map_err(|e| Error::format(path, format!("not a valid implicit model: {e}")))?
             .with_guards(guards);
+    let network = frame.network_to_world(&network);
     Ok(DecodedImplicit {
         network,
         metadata,

@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::network::{Guard, ImplicitNetwork};
 use super::normalize::Normalization;
 use crate::error::{Error, Result};
 
@@ -120,6 +121,48 @@ impl Frame {
             center: self.to_world(n.center),
             matrix: n.matrix.map(|row| row.map(|a| a / self.scale)),
         }
+    }
+
+    /// `network` rewritten to read model-frame points: every normalization and sign guard
+    /// (Φ itself is unchanged).
+    pub fn network_to_model(&self, network: &ImplicitNetwork) -> ImplicitNetwork {
+        self.rewrite(
+            network,
+            |n| self.normalization_to_model(n),
+            |g| Guard {
+                center: self.to_model(g.center),
+                inverse_radius: g.inverse_radius * self.scale,
+                amplitude: g.amplitude,
+            },
+        )
+    }
+
+    /// The inverse of [`Frame::network_to_model`].
+    pub fn network_to_world(&self, network: &ImplicitNetwork) -> ImplicitNetwork {
+        self.rewrite(
+            network,
+            |n| self.normalization_to_world(n),
+            |g| Guard {
+                center: self.to_world(g.center),
+                inverse_radius: g.inverse_radius / self.scale,
+                amplitude: g.amplitude,
+            },
+        )
+    }
+
+    fn rewrite(
+        &self,
+        network: &ImplicitNetwork,
+        normalization: impl Fn(&Normalization) -> Normalization,
+        guard: impl Fn(&Guard) -> Guard,
+    ) -> ImplicitNetwork {
+        let mut out = network.clone();
+        for i in 0..out.module_count() {
+            if let Some(n) = network.normalization(i) {
+                out.set_normalization(i, &normalization(&n));
+            }
+        }
+        out.with_guards(network.guards().iter().map(guard).collect())
     }
 
     /// The inverse of [`Frame::normalization_to_world`].

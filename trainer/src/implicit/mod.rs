@@ -22,7 +22,7 @@ mod tree;
 mod value_rows;
 
 pub use activation::{Activation, activation};
-pub use blob::{DecodedImplicit, ImplicitMetadata, from_blob, to_blob};
+pub use blob::{DecodedImplicit, ImplicitMetadata, check_storable, from_blob, to_blob};
 pub use capacity::{check_capacity, fits, model_size};
 pub use features::decompose;
 pub use frame::{Frame, MODEL_DIAGONAL};

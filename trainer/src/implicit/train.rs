@@ -268,7 +268,7 @@ pub(crate) fn train_with(
 
     // Everything below works in the model frame.
     let frame = Frame::of(&points.positions)?;
-    let previous = previous.map(|p| in_frame(p, |n| frame.normalization_to_model(n)));
+    let previous = previous.map(|p| frame.network_to_model(p));
     let model = PointSet {
         positions: points
             .positions
@@ -382,7 +382,7 @@ pub(crate) fn train_with(
             frame,
         )
     } else {
-        in_frame(&network, |n| frame.normalization_to_world(n))
+        frame.network_to_world(&network)
     };
 
     let modules: Vec<ModuleReport> = reports.into_iter().flatten().collect();
@@ -428,7 +428,7 @@ fn guard(
         options.slope,
         limit - limit / PIECE_SHARE,
     );
-    let mut network = in_frame(&network, |n| frame.normalization_to_world(n)).with_guards(
+    let mut network = frame.network_to_world(&network).with_guards(
         guards
             .iter()
             .map(|g| Guard {
@@ -502,20 +502,6 @@ const PIECE_ROUNDS: usize = 8;
 
 /// The largest |Φ| a sign point asks for, in the model frame where the slope is s.
 const MAX_SIGN_MARGIN: f64 = 0.5;
-
-/// A copy of `network` with every leaf normalization mapped by `map`.
-fn in_frame(
-    network: &ImplicitNetwork,
-    map: impl Fn(&Normalization) -> Normalization,
-) -> ImplicitNetwork {
-    let mut out = network.clone();
-    for i in 0..out.module_count() {
-        if let Some(n) = network.normalization(i) {
-            out.set_normalization(i, &map(&n));
-        }
-    }
-    out
-}
 
 /// What every module's training data is drawn from, in the model frame.
 struct Setting<'a> {
