@@ -8,7 +8,9 @@
 //! x_model = (x − o) · 2ˢ,
 //!
 //! and the model applies it itself, so callers evaluate in their own units. A power of two
-//! keeps the scaling exact in `f32` and a plain shift in Q16.16.
+//! keeps the scaling exact in `f32` and a plain shift in Q16.16. Implicit models read points
+//! (`to_model`); curves and surfaces store their control points in the frame and give
+//! positions back in the user's units (`to_user`).
 //!
 //! Accuracy: the scaling adds no error in `f32`; the subtraction rounds once, as any `f32`
 //! arithmetic on the caller's coordinates would. In Q16.16 the caller's coordinates carry
@@ -19,6 +21,7 @@
 //! use neurosurf_core::frame::Frame;
 //! let frame = Frame::<f32>::new([1000.0, -1000.0, 500.0], 3).unwrap();
 //! assert_eq!(frame.to_model([1000.5, -1000.0, 500.25]), [4.0, 0.0, 2.0]);
+//! assert_eq!(frame.to_user([4.0, 0.0, 2.0]), [1000.5, -1000.0, 500.25]);
 //! assert_eq!(frame.gradient_to_user([1.0, 0.5, 0.0]), [8.0, 4.0, 0.0]);
 //! ```
 
@@ -116,6 +119,17 @@ impl<S: Scalar> Frame<S> {
         let mut out = point;
         for (value, origin) in out.iter_mut().zip(self.origin) {
             *value = value.sub(origin).times_power_of_two(self.shift);
+        }
+        out
+    }
+
+    /// A model point in the user's units: o + x·2⁻ˢ, saturated in fixed point (the inverse of
+    /// [`Frame::to_model`], up to rounding).
+    #[inline]
+    pub fn to_user(&self, point: [S; 3]) -> [S; 3] {
+        let mut out = point;
+        for (value, origin) in out.iter_mut().zip(self.origin) {
+            *value = origin.add(value.times_power_of_two(self.shift.saturating_neg()));
         }
         out
     }

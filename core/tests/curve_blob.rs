@@ -32,9 +32,17 @@ fn varint(out: &mut Vec<u8>, mut n: usize) {
     }
 }
 
-/// Postcard's encoding of a `CurvePayload`, by hand.
+/// Postcard's encoding of the identity frame: a 12-byte string of zeros, then the shift 0.
+fn identity_frame(out: &mut Vec<u8>) {
+    out.push(12);
+    out.extend_from_slice(&[0; 12]);
+    out.push(0);
+}
+
+/// Postcard's encoding of a `CurvePayload`, by hand (with the identity frame).
 fn curve_postcard(dimension: u8, closed: u8, control: &[u8], metadata: &[u8]) -> Vec<u8> {
     let mut out = vec![dimension, closed];
+    identity_frame(&mut out);
     for bytes in [control, metadata] {
         varint(&mut out, bytes.len());
         out.extend_from_slice(bytes);
@@ -42,12 +50,14 @@ fn curve_postcard(dimension: u8, closed: u8, control: &[u8], metadata: &[u8]) ->
     out
 }
 
-/// Postcard's encoding of a `SurfacePayload`, by hand (u16 counts are varints).
+/// Postcard's encoding of a `SurfacePayload`, by hand (u16 counts are varints; the identity
+/// frame).
 fn surface_postcard(closed: [u8; 2], counts: [u16; 2], control: &[u8], metadata: &[u8]) -> Vec<u8> {
     let mut out = closed.to_vec();
     for count in counts {
         varint(&mut out, usize::from(count));
     }
+    identity_frame(&mut out);
     for bytes in [control, metadata] {
         varint(&mut out, bytes.len());
         out.extend_from_slice(bytes);
@@ -101,6 +111,7 @@ fn curve_round_trip() {
                 CurvePayload {
                     dimension,
                     closed,
+                    frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
                     control: &control,
                     metadata: b"test curve"
                 }
@@ -171,6 +182,7 @@ fn surface_round_trip() {
                     closed_v: closed[1],
                     count_u: counts[0],
                     count_v: counts[1],
+                    frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
                     control: &control,
                     metadata: b"test surface",
                 }
@@ -209,6 +221,7 @@ fn metadata_is_opaque() {
         let payload = CurvePayload {
             dimension: 3,
             closed: true,
+            frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
             control: &control,
             metadata,
         };
@@ -267,6 +280,7 @@ fn load_in_place_and_failures_leave_the_model_empty() {
     let payload = CurvePayload {
         dimension: 3,
         closed: true,
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         control: &control,
         metadata: &[],
     };
@@ -717,6 +731,7 @@ fn buffer_too_small() {
     let payload = CurvePayload {
         dimension: 3,
         closed: false,
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         control: &control,
         metadata: b"m",
     };
@@ -785,9 +800,19 @@ fn feed(bytes: &[u8], stats: &mut Stats, rng: &mut Rng) {
     if let Ok(c) = &cq {
         stats.curves_q16 += 1;
         exercise_curve(c, [q16(t), Q16::MAX, Q16::MIN, Q16::ZERO]);
+        // Positions are convex combinations of the control points (in the user's units,
+        // after the frame).
+        let bound = (0..c.control_count())
+            .filter_map(|i| c.control_point(i))
+            .flatten()
+            .map(|x| x.saturating_abs())
+            .max()
+            .unwrap_or(Q16::ZERO);
         for p in [c.position(q16(t)), c.position(Q16::ONE)] {
-            // Positions are convex combinations of coordinates within ±1024.
-            assert!(p.iter().all(|x| x.abs() <= Q16::from_num(1024)));
+            assert!(
+                p.iter().all(|x| x.saturating_abs() <= bound),
+                "{p:?} beyond {bound}"
+            );
         }
     }
     if let Ok(s) = &sf {

@@ -8,6 +8,7 @@ use neurosurf_core::BlobError;
 use neurosurf_core::blob::{self, ModelKind};
 use neurosurf_core::caoen::CaoEnModel;
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
+use neurosurf_core::frame::{FramePayload, MAX_FRAME_SHIFT, MAX_Q16_ORIGIN};
 use neurosurf_core::implicit::ImplicitModel;
 use neurosurf_core::parametric::SurfaceNetworkModel;
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
@@ -35,6 +36,116 @@ pub fn encode<T: Serialize + ?Sized>(
         .map_err(|e| Error::invalid(format!("cannot encode the blob: {e}")))?;
     out.truncate(len);
     Ok(out)
+}
+
+/// A frame as a blob stores it ([`neurosurf_core::frame`]): model = (x − origin)·2^shift,
+/// the origin exactly as the blob's scalar holds it.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct StoredFrame {
+    /// The origin, in the user's units, exactly as stored.
+    pub origin: [f64; 3],
+    /// The origin's three words in the blob's scalar.
+    pub words: [u8; 12],
+    /// Model coordinates are 2^shift times the user's.
+    pub shift: i8,
+}
+
+impl StoredFrame {
+    /// The frame centred at `center` (rounded to `scalar`) whose scale is the power of two
+    /// nearest `scale` (model units per user unit; 1 when it is not a positive number).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the coordinate, the limit and the way out when Q16.16
+    /// cannot hold the centre.
+    pub fn new(center: [f64; 3], scale: f64, scalar: ScalarKind) -> Result<Self> {
+        let shift = if scale.is_finite() && scale > 0.0 {
+            let max = f64::from(MAX_FRAME_SHIFT);
+            scale.log2().round().clamp(-max, max) as i8
+        } else {
+            0
+        };
+        let mut words = [0_u8; 12];
+        let mut origin = [0.0; 3];
+        for (k, (word, value)) in words.chunks_exact_mut(4).zip(&mut origin).enumerate() {
+            let wanted = center[k];
+            let in_range =
+                scalar != ScalarKind::Q16_16 || wanted.abs() <= f64::from(MAX_Q16_ORIGIN);
+            let stored = scalar
+                .encode(wanted)
+                .filter(|_| in_range)
+                .ok_or_else(|| origin_error(k, wanted, scalar))?;
+            word.copy_from_slice(&stored);
+            *value = blob::stored_value(&stored, scalar).unwrap_or(0.0);
+        }
+        Ok(StoredFrame {
+            origin,
+            words,
+            shift,
+        })
+    }
+
+    /// The frame of a payload the core has validated, exactly.
+    pub fn read(payload: &FramePayload<'_>, scalar: ScalarKind) -> Self {
+        let mut words = [0_u8; 12];
+        let mut origin = [0.0; 3];
+        for ((word, value), stored) in words
+            .chunks_exact_mut(4)
+            .zip(&mut origin)
+            .zip(payload.origin.chunks_exact(4))
+        {
+            word.copy_from_slice(stored);
+            *value = blob::stored_value(stored, scalar).unwrap_or(0.0);
+        }
+        StoredFrame {
+            origin,
+            words,
+            shift: payload.shift,
+        }
+    }
+
+    /// As the payload stores it.
+    pub fn payload(&self) -> FramePayload<'_> {
+        FramePayload {
+            origin: &self.words,
+            shift: self.shift,
+        }
+    }
+
+    /// A user's point in model coordinates.
+    pub fn to_model(&self, x: [f64; 3]) -> [f64; 3] {
+        let scale = f64::from(self.shift).exp2();
+        [0, 1, 2].map(|k| (x[k] - self.origin[k]) * scale)
+    }
+
+    /// A model point in the user's units.
+    pub fn to_user(&self, x: [f64; 3]) -> [f64; 3] {
+        let scale = (-f64::from(self.shift)).exp2();
+        [0, 1, 2].map(|k| self.origin[k] + x[k] * scale)
+    }
+}
+
+/// Whether Q16.16 can hold a frame centred at `center`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming the coordinate, the limit and the way out.
+pub fn check_q16_origin(center: [f64; 3], scalar: ScalarKind) -> Result<()> {
+    if scalar != ScalarKind::Q16_16 {
+        return Ok(());
+    }
+    match (0..3).find(|&k| center[k].abs() > f64::from(MAX_Q16_ORIGIN)) {
+        Some(k) => Err(origin_error(k, center[k], scalar)),
+        None => Ok(()),
+    }
+}
+
+fn origin_error(axis: usize, value: f64, scalar: ScalarKind) -> Error {
+    Error::invalid(format!(
+        "the shape's centre {} = {value} cannot be stored as {} (limit ±{}): store the model \
+         as f32, or move the points toward the origin before training",
+        ["x", "y", "z"][axis],
+        scalar.name(),
+        MAX_Q16_ORIGIN
+    ))
 }
 
 /// Loads `bytes` through the core in the scalar they are stored in (the RBF baseline, which

@@ -65,7 +65,9 @@ pub struct CurvePoint<S> {
 /// # fn example_blob() -> Vec<u8> {
 /// #     let points = [[0.0, 0.0, 0.0], [1.0, 2.0, 0.5], [2.0, 2.0, 0.0], [3.0, 0.0, 1.0], [4.0, 1.0, 0.0], [5.0, 0.0, 0.0]];
 /// #     let control: Vec<u8> = points.iter().flatten().flat_map(|&c| ScalarKind::F32.encode(c).unwrap()).collect();
-/// #     let payload = CurvePayload { dimension: 3, closed: false, control: &control, metadata: &[] };
+/// #     let payload = CurvePayload {
+/// #         dimension: 3, closed: false, frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
+/// #         control: &control, metadata: &[] };
 /// #     let mut out = vec![0_u8; 256];
 /// #     let n = payload.write(ScalarKind::F32, &mut out).unwrap();
 /// #     out.truncate(n);
@@ -104,8 +106,9 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
          expected 2, found 3); [`BlobError::CapacityExceeded`] beyond \
          [`MAX_SEGMENTS`](super::MAX_SEGMENTS) segments (`Segments`) or `C` points \
          (`ControlPoints`); [`BlobError::NonFiniteParameter`] / \
-         [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16) naming the first bad \
-         coordinate word."
+         [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16, in the frame's \
+         coordinates) naming the first bad coordinate word; the frame's own errors \
+         ([`crate::frame::Frame::from_payload`])."
     );
 
     fn fill(&mut self, payload: &CurvePayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
@@ -129,6 +132,7 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
             return Err(control::over_capacity(count, C));
         }
         control::decode(&mut self.control, payload.control, stored, dimension == 2)?;
+        control::fold_frame(&mut self.control, &payload.frame, stored, dimension == 2)?;
         self.dimension = dimension;
         self.direction = direction;
         self.stored_as = stored;

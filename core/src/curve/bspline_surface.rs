@@ -78,7 +78,9 @@ type Patch<S> = [[[S; 3]; 4]; 4];
 /// #     for v in 0..5 { for u in 0..4 { for c in [f64::from(u), f64::from(v), 0.0] {
 /// #         control.extend_from_slice(&ScalarKind::Q16_16.encode(c).unwrap());
 /// #     } } }
-/// #     let payload = SurfacePayload { closed_u: false, closed_v: false, count_u: 4, count_v: 5, control: &control, metadata: &[] };
+/// #     let payload = SurfacePayload {
+/// #         closed_u: false, closed_v: false, count_u: 4, count_v: 5,
+/// #         frame: neurosurf_core::frame::IDENTITY_PAYLOAD, control: &control, metadata: &[] };
 /// #     let mut out = vec![0_u8; 512];
 /// #     let n = payload.write(ScalarKind::Q16_16, &mut out).unwrap();
 /// #     out.truncate(n);
@@ -116,8 +118,9 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
          [`BlobError::CapacityExceeded`] beyond [`MAX_SEGMENTS`](super::MAX_SEGMENTS) \
          segments along a direction (`Segments`) or `C` points in total \
          (`ControlPoints`); [`BlobError::NonFiniteParameter`] / \
-         [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16) naming the first bad \
-         coordinate word."
+         [`BlobError::ParameterOutOfRange`] (|x| > 1024 for Q16.16, in the frame's \
+         coordinates) naming the first bad coordinate word; the frame's own errors \
+         ([`crate::frame::Frame::from_payload`])."
     );
 
     fn fill(&mut self, payload: &SurfacePayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
@@ -137,6 +140,7 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
             return Err(control::length_mismatch(count, payload.control.len()));
         }
         control::decode(&mut self.control, payload.control, stored, false)?;
+        control::fold_frame(&mut self.control, &payload.frame, stored, false)?;
         self.u = u;
         self.v = v;
         self.stored_as = stored;

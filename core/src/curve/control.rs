@@ -4,6 +4,7 @@ use heapless::Vec;
 
 use crate::blob;
 use crate::error::{BlobError, Quantity};
+use crate::frame::{Frame, FramePayload};
 use crate::scalar::{Scalar, ScalarKind};
 
 /// Bytes per stored control point: x, y, z, 4 bytes each.
@@ -65,6 +66,34 @@ pub(crate) fn decode<S: Scalar, const C: usize>(
         }
         out.push(coordinates)
             .map_err(|_| over_capacity(bytes.len() / POINT_BYTES, C))?;
+    }
+    Ok(())
+}
+
+/// Reads the stored frame and moves every control point from its coordinates into the
+/// user's (see [`crate::frame`]): B-splines are affine invariant, so the curve or surface then
+/// evaluates in the user's units at no cost per point. A 2-D (`flat`) curve's frame keeps
+/// z = 0.
+///
+/// # Errors
+/// As [`Frame::from_payload`]; [`BlobError::ShapeMismatch`] (`Dimension`, expected 2, found 3)
+/// for a `flat` curve whose frame has a nonzero z.
+pub(crate) fn fold_frame<S: Scalar>(
+    points: &mut [[S; 3]],
+    frame: &FramePayload<'_>,
+    stored: ScalarKind,
+    flat: bool,
+) -> Result<(), BlobError> {
+    if flat && !stored_zero(frame.origin.get(8..).unwrap_or(&[]), stored) {
+        return Err(BlobError::ShapeMismatch {
+            what: Quantity::Dimension,
+            expected: 2,
+            found: 3,
+        });
+    }
+    let frame = Frame::<S>::from_payload(frame, stored)?;
+    for point in points {
+        *point = frame.to_user(*point);
     }
     Ok(())
 }

@@ -64,7 +64,10 @@
 //! // A closed square of control points, written as the trainer does.
 //! let square = [[1.0, 1.0, 0.0], [-1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]];
 //! let control: Vec<u8> = square.iter().flatten().flat_map(|&c| ScalarKind::Q16_16.encode(c).unwrap()).collect();
-//! let payload = CurvePayload { dimension: 2, closed: true, control: &control, metadata: &[] };
+//! let payload = CurvePayload {
+//!     dimension: 2, closed: true, frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
+//!     control: &control, metadata: &[],
+//! };
 //! let mut blob = [0_u8; 128];
 //! let len = payload.write(ScalarKind::Q16_16, &mut blob)?;
 //!

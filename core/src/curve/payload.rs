@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::blob::{self, BlobHeader, ModelKind};
 use crate::error::BlobError;
+use crate::frame::FramePayload;
 use crate::scalar::ScalarKind;
 
 /// The payload of a [`ModelKind::Curve`] blob.
@@ -12,12 +13,15 @@ use crate::scalar::ScalarKind;
 /// ```
 /// use neurosurf_core::blob::ModelKind;
 /// use neurosurf_core::curve::CurvePayload;
+/// use neurosurf_core::frame::IDENTITY_PAYLOAD;
 /// use neurosurf_core::scalar::ScalarKind;
 /// # fn main() -> Result<(), neurosurf_core::BlobError> {
 /// let points = [[0.0, 0.0, 0.0], [1.0, 2.0, 0.0], [2.0, 2.0, 0.0], [3.0, 0.0, 0.0]];
 /// let control: Vec<u8> =
 ///     points.iter().flatten().flat_map(|&c| ScalarKind::F32.encode(c).unwrap()).collect();
-/// let payload = CurvePayload { dimension: 2, closed: false, control: &control, metadata: b"fit" };
+/// let payload = CurvePayload {
+///     dimension: 2, closed: false, frame: IDENTITY_PAYLOAD, control: &control, metadata: b"fit",
+/// };
 /// let mut out = [0_u8; 128];
 /// let len = payload.write(ScalarKind::F32, &mut out)?;
 /// let (header, decoded) = CurvePayload::from_blob(&out[..len])?;
@@ -32,6 +36,10 @@ pub struct CurvePayload<'a> {
     pub dimension: u8,
     /// Whether the control points wrap around (n segments) or not (n − 3 segments).
     pub closed: bool,
+    /// Where the control points' coordinates sit among the user's ([`crate::frame`]); a 2-D
+    /// curve's has z = 0.
+    #[serde(borrow)]
+    pub frame: FramePayload<'a>,
     /// x, y, z of P₀ … P₍ₙ₋₁₎: 12 bytes per point, 4 little-endian bytes per coordinate in the
     /// blob's scalar kind.
     #[serde(borrow)]
@@ -58,7 +66,8 @@ pub struct CurvePayload<'a> {
 ///     }
 /// }
 /// let payload = SurfacePayload {
-///     closed_u: false, closed_v: false, count_u: 4, count_v: 4, control: &control, metadata: &[],
+///     closed_u: false, closed_v: false, count_u: 4, count_v: 4,
+///     frame: neurosurf_core::frame::IDENTITY_PAYLOAD, control: &control, metadata: &[],
 /// };
 /// let mut out = vec![0_u8; 256];
 /// let len = payload.write(ScalarKind::Q16_16, &mut out)?;
@@ -76,6 +85,9 @@ pub struct SurfacePayload<'a> {
     pub count_u: u16,
     /// Rows (v direction), ≥ 4.
     pub count_v: u16,
+    /// Where the control points' coordinates sit among the user's ([`crate::frame`]).
+    #[serde(borrow)]
+    pub frame: FramePayload<'a>,
     /// x, y, z of P[v·count_u + u], 12 bytes per point as in [`CurvePayload::control`].
     #[serde(borrow)]
     pub control: &'a [u8],

@@ -61,6 +61,7 @@ pub fn curve_blob_raw(kind: ScalarKind, dimension: u8, closed: bool, control: &[
     let payload = CurvePayload {
         dimension,
         closed,
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         control,
         metadata: b"test curve",
     };
@@ -85,6 +86,7 @@ pub fn surface_blob_raw(
         closed_v: closed[1],
         count_u: counts[0],
         count_v: counts[1],
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         control,
         metadata: b"test surface",
     };

@@ -10,11 +10,12 @@ use std::path::Path;
 use neurosurf_core::BlobError;
 use neurosurf_core::blob::ModelKind;
 use neurosurf_core::curve::{self as core_curve, CurvePayload, SurfacePayload};
+use neurosurf_core::frame::{FramePayload, MAX_Q16_ORIGIN};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 use serde::{Deserialize, Serialize};
 
 use super::spline::{BSplineCurve, BSplineSurface};
-use crate::blob::encode;
+use crate::blob::{StoredFrame, encode};
 use crate::error::{Error, Result};
 
 /// How a curve or surface blob was made (stored as its metadata).
@@ -71,11 +72,13 @@ pub fn curve_to_blob(
     scalar: ScalarKind,
 ) -> Result<Vec<u8>> {
     curve.validate()?;
-    let control = encode_control(&curve.control, scalar)?;
+    let frame = control_frame(&curve.control, scalar)?;
+    let control = encode_control(&curve.control, &frame, scalar)?;
     let metadata = encode_summary(summary)?;
     let payload = CurvePayload {
         dimension: if curve.dimension == 2 { 2 } else { 3 },
         closed: curve.closed,
+        frame: frame.payload(),
         control: &control,
         metadata: &metadata,
     };
@@ -108,13 +111,15 @@ pub fn surface_to_blob(
             ))
         })
     };
-    let control = encode_control(&surface.control, scalar)?;
+    let frame = control_frame(&surface.control, scalar)?;
+    let control = encode_control(&surface.control, &frame, scalar)?;
     let metadata = encode_summary(summary)?;
     let payload = SurfacePayload {
         closed_u: surface.closed_u,
         closed_v: surface.closed_v,
         count_u: count(surface.count_u)?,
         count_v: count(surface.count_v)?,
+        frame: frame.payload(),
         control: &control,
         metadata: &metadata,
     };
@@ -142,7 +147,7 @@ pub fn curve_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedCurve> {
     let curve = BSplineCurve {
         dimension: usize::from(payload.dimension),
         closed: payload.closed,
-        control: decode_control(payload.control, header.scalar),
+        control: decode_control(payload.control, &payload.frame, header.scalar),
     };
     curve
         .validate()
@@ -170,7 +175,7 @@ pub fn surface_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedSurface> {
         closed_v: payload.closed_v,
         count_u: usize::from(payload.count_u),
         count_v: usize::from(payload.count_v),
-        control: decode_control(payload.control, header.scalar),
+        control: decode_control(payload.control, &payload.frame, header.scalar),
     };
     surface
         .validate()
@@ -182,7 +187,50 @@ pub fn surface_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedSurface> {
     })
 }
 
-fn encode_control(control: &[[f64; 3]], scalar: ScalarKind) -> Result<Vec<u8>> {
+/// The blob frame of a control net ([`neurosurf_core::frame`]): the centre of its bounding
+/// box and the power of two nearest 4 over its diagonal, so that the stored points are of
+/// order one whatever the data's units. A 2-D curve's has z = 0.
+fn control_frame(control: &[[f64; 3]], scalar: ScalarKind) -> Result<StoredFrame> {
+    let Some(first) = control.first() else {
+        return StoredFrame::new([0.0; 3], 1.0, scalar);
+    };
+    let (lo, hi) = control.iter().fold((*first, *first), |(lo, hi), p| {
+        (
+            [0, 1, 2].map(|k| lo[k].min(p[k])),
+            [0, 1, 2].map(|k| hi[k].max(p[k])),
+        )
+    });
+    let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+    StoredFrame::new(
+        [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k])),
+        4.0 / diagonal,
+        scalar,
+    )
+}
+
+fn encode_control(
+    control: &[[f64; 3]],
+    frame: &StoredFrame,
+    scalar: ScalarKind,
+) -> Result<Vec<u8>> {
+    // Positions are convex combinations of the control points, in the user's units: Q16.16
+    // must hold those.
+    if scalar == ScalarKind::Q16_16 {
+        let limit = f64::from(MAX_Q16_ORIGIN);
+        if let Some((index, point)) = control
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.iter().any(|c| c.abs() > limit))
+        {
+            return Err(Error::invalid(format!(
+                "control point {index} {point:?} has a coordinate beyond ±{limit}, what \
+                 Q16.16 represents; store it as f32 (--scalar f32), or move or scale the \
+                 points toward the origin before fitting"
+            )));
+        }
+    }
+    let control: Vec<[f64; 3]> = control.iter().map(|&p| frame.to_model(p)).collect();
+    let control = &control[..];
     // What the core accepts of a stored parameter in this scalar (Q16.16: ±1024, so that its
     // accumulators provably cannot overflow).
     let limit = match scalar {
@@ -216,8 +264,9 @@ fn encode_control(control: &[[f64; 3]], scalar: ScalarKind) -> Result<Vec<u8>> {
 }
 
 /// The control points of a payload the core has validated (so whole 12-byte points in a
-/// 4-byte scalar), widened exactly.
-fn decode_control(bytes: &[u8], scalar: ScalarKind) -> Vec<[f64; 3]> {
+/// 4-byte scalar), widened exactly and moved from the blob's frame into the user's units.
+fn decode_control(bytes: &[u8], frame: &FramePayload<'_>, scalar: ScalarKind) -> Vec<[f64; 3]> {
+    let frame = StoredFrame::read(frame, scalar);
     let word = |b: &[u8]| {
         let bits = [b[0], b[1], b[2], b[3]];
         match scalar {
@@ -227,7 +276,7 @@ fn decode_control(bytes: &[u8], scalar: ScalarKind) -> Vec<[f64; 3]> {
     };
     bytes
         .chunks_exact(12)
-        .map(|p| [word(&p[0..4]), word(&p[4..8]), word(&p[8..12])])
+        .map(|p| frame.to_user([word(&p[0..4]), word(&p[4..8]), word(&p[8..12])]))
         .collect()
 }
 
@@ -315,26 +364,32 @@ mod tests {
 
     #[test]
     fn coordinates_outside_q16_and_over_capacity_curves_are_refused_clearly() {
-        for beyond in [1_500.0, 40_000.0] {
-            let mut far = curve();
-            far.control[2][0] = beyond;
-            let error = curve_to_blob(&far, None, ScalarKind::Q16_16)
-                .unwrap_err()
-                .to_string();
-            // The coordinate, the limit and both fixes are named.
-            for part in [
-                "control point 2",
-                "±1024",
-                "--scalar f32",
-                "scale the points",
-            ] {
-                assert!(error.contains(part), "{part}: {error}");
+        // The blob's frame keeps the stored points near the origin: far and large data
+        // stores as Q16.16 while its coordinates are within what Q16.16 represents.
+        for (scale, offset) in [(1.0, 1_500.0), (1e-3, 0.0), (1e3, -20_000.0)] {
+            let mut moved = curve();
+            for p in &mut moved.control {
+                p[0] = p[0] * scale + offset;
+                p[1] *= scale;
             }
-            assert!(curve_to_blob(&far, None, ScalarKind::F32).is_ok());
+            let bytes = curve_to_blob(&moved, None, ScalarKind::Q16_16).unwrap();
+            let decoded = curve_from_blob(&bytes, Path::new("m.nsb")).unwrap();
+            for (a, b) in decoded.curve.control.iter().zip(&moved.control) {
+                for k in 0..3 {
+                    assert!((a[k] - b[k]).abs() <= 1.0 / 65_536.0, "{a:?} {b:?}");
+                }
+            }
         }
-        let mut edge = curve();
-        edge.control[2][0] = 1_024.0;
-        assert!(curve_to_blob(&edge, None, ScalarKind::Q16_16).is_ok());
+        let mut far = curve();
+        far.control[2][0] = 40_000.0;
+        let error = curve_to_blob(&far, None, ScalarKind::Q16_16)
+            .unwrap_err()
+            .to_string();
+        // The coordinate, the limit and both fixes are named.
+        for part in ["control point 2", "±32767", "--scalar f32", "move or scale"] {
+            assert!(error.contains(part), "{part}: {error}");
+        }
+        assert!(curve_to_blob(&far, None, ScalarKind::F32).is_ok());
 
         let long = BSplineCurve {
             dimension: 3,

@@ -6,8 +6,8 @@
 //! so `neurosurf info` can tell the model's story and `--init` can check it warm-starts the
 //! right tree.
 
-use neurosurf_core::blob::{ModelKind, stored_value};
-use neurosurf_core::frame::{Frame as Frame32, FramePayload, MAX_FRAME_SHIFT, MAX_Q16_ORIGIN};
+use neurosurf_core::blob::ModelKind;
+use neurosurf_core::frame::Frame as CoreFrame;
 use neurosurf_core::implicit::guard::split_tree;
 use neurosurf_core::implicit::{GUARD_CODE, GUARD_LEN, ImplicitPayload, MAX_GUARDS, ModuleKind};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
@@ -20,7 +20,7 @@ use super::frame::Frame;
 use super::network::{Guard, ImplicitNetwork};
 use super::normalize::Normalization;
 use super::train::TrainingSummary;
-use crate::blob::encode;
+use crate::blob::{StoredFrame, check_q16_origin, encode};
 use crate::error::{Error, Result};
 
 /// What the trainer stores next to the parameters.
@@ -64,7 +64,7 @@ pub fn to_blob(
             )));
         }
     };
-    let (frame, origin, shift) = blob_frame(network, scalar)?;
+    let (frame, stored_frame) = blob_frame(network, scalar)?;
     let network = &frame.network_to_model(network);
     let guards: Vec<f64> = network
         .guards()
@@ -109,10 +109,7 @@ pub fn to_blob(
         .map_err(|_| Error::invalid(format!("width {} does not fit", network.width())))?;
     let payload = ImplicitPayload {
         width,
-        frame: FramePayload {
-            origin: &origin,
-            shift,
-        },
+        frame: stored_frame.payload(),
         tree: &tree,
         parameters: &parameters,
         metadata: &metadata,
@@ -126,38 +123,22 @@ pub fn to_blob(
 /// # Errors
 /// [`Error::InvalidInput`] naming the coordinate, the limit and the way out.
 pub fn check_storable(positions: &[[f64; 3]], scalar: ScalarKind) -> Result<()> {
-    if scalar != ScalarKind::Q16_16 || positions.is_empty() {
+    let Some(first) = positions.first() else {
         return Ok(());
-    }
-    for k in 0..3 {
-        let (lo, hi) = positions
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p[k]), hi.max(p[k]))
-            });
-        let centre = 0.5 * (lo + hi);
-        if centre.abs() > f64::from(MAX_Q16_ORIGIN) {
-            return Err(origin_error(k, centre, scalar));
-        }
-    }
-    Ok(())
+    };
+    let (lo, hi) = positions.iter().fold((*first, *first), |(lo, hi), p| {
+        (
+            [0, 1, 2].map(|k| lo[k].min(p[k])),
+            [0, 1, 2].map(|k| hi[k].max(p[k])),
+        )
+    });
+    check_q16_origin([0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k])), scalar)
 }
 
-fn origin_error(axis: usize, value: f64, scalar: ScalarKind) -> Error {
-    Error::invalid(format!(
-        "the shape's centre {} = {value} cannot be stored as {} (limit ±{}): store the model \
-         as f32, or move the points toward the origin before training",
-        ["x", "y", "z"][axis],
-        scalar.name(),
-        MAX_Q16_ORIGIN
-    ))
-}
-
-/// The frame a blob keeps `network` in ([`neurosurf_core::frame`]): the root module's centre,
-/// rounded to the stored scalar, and the power of two nearest the root's scale. The stored
-/// normalizations and guards are then of order one whatever the data's units. Returned as the
-/// trainer's [`Frame`] and as the blob stores it.
-fn blob_frame(network: &ImplicitNetwork, scalar: ScalarKind) -> Result<(Frame, [u8; 12], i8)> {
+/// The frame a blob keeps `network` in ([`neurosurf_core::frame`]): the root module's centre
+/// and the power of two nearest the root's scale (its matrix's largest row norm). The stored
+/// normalizations and guards are then of order one whatever the data's units.
+fn blob_frame(network: &ImplicitNetwork, scalar: ScalarKind) -> Result<(Frame, StoredFrame)> {
     let root = network
         .normalization(network.root())
         .unwrap_or(Normalization {
@@ -169,29 +150,12 @@ fn blob_frame(network: &ImplicitNetwork, scalar: ScalarKind) -> Result<(Frame, [
         .iter()
         .map(|row| row.iter().map(|a| a * a).sum::<f64>().sqrt())
         .fold(0.0, f64::max);
-    let shift = if scale.is_finite() && scale > 0.0 {
-        let max = f64::from(MAX_FRAME_SHIFT);
-        scale.log2().round().clamp(-max, max) as i8
-    } else {
-        0
-    };
-    let mut origin = [0_u8; 12];
-    let mut center = [0.0; 3];
-    for (k, (word, value)) in origin.chunks_exact_mut(4).zip(&mut center).enumerate() {
-        let wanted = root.center[k];
-        let in_range = scalar != ScalarKind::Q16_16 || wanted.abs() <= f64::from(MAX_Q16_ORIGIN);
-        let stored = scalar
-            .encode(wanted)
-            .filter(|_| in_range)
-            .ok_or_else(|| origin_error(k, wanted, scalar))?;
-        word.copy_from_slice(&stored);
-        *value = stored_value(&stored, scalar).unwrap_or(0.0);
-    }
+    let stored = StoredFrame::new(root.center, scale, scalar)?;
     let frame = Frame {
-        center,
-        scale: (-f64::from(shift)).exp2(),
+        center: stored.origin,
+        scale: (-f64::from(stored.shift)).exp2(),
     };
-    Ok((frame, origin, shift))
+    Ok((frame, stored))
 }
 
 /// Where a blob parameter sits.
@@ -312,14 +276,11 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
         params.push(value);
     }
     // The stored frame, exactly: a Q16.16 or f32 word is exact in f64.
-    Frame32::<f32>::from_payload(&payload.frame, stored_as).map_err(rejected)?;
-    let mut center = [0.0; 3];
-    for (value, word) in center.iter_mut().zip(payload.frame.origin.chunks_exact(4)) {
-        *value = stored_value(word, stored_as).unwrap_or(0.0);
-    }
+    CoreFrame::<f32>::from_payload(&payload.frame, stored_as).map_err(rejected)?;
+    let stored_frame = StoredFrame::read(&payload.frame, stored_as);
     let frame = Frame {
-        center,
-        scale: (-f64::from(payload.frame.shift)).exp2(),
+        center: stored_frame.origin,
+        scale: (-f64::from(stored_frame.shift)).exp2(),
     };
     let guard_params = params.split_off(params.len().saturating_sub(GUARD_LEN * guard_count));
     let guards: Vec<Guard> = guard_params
