@@ -120,6 +120,7 @@ fn blob(activation: Activation, hidden: &[u8], words: &[u8], scalar: ScalarKind)
     let payload = SurfaceNetworkPayload {
         activation: activation.code(),
         hidden,
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         parameters: words,
         metadata: b"test",
     };
@@ -278,6 +279,7 @@ fn bad_blobs_are_named_errors() {
         let payload = SurfaceNetworkPayload {
             activation,
             hidden,
+            frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
             parameters: words,
             metadata: &[],
         };
@@ -337,6 +339,7 @@ fn bad_blobs_are_named_errors() {
     let payload = SurfaceNetworkPayload {
         activation: 1,
         hidden: &[32, 32],
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         parameters: &big,
         metadata: &[],
     };

@@ -5,7 +5,7 @@
 use super::model::{MAX_NEURONS, SurfaceNetworkModel};
 use crate::error::LengthMismatch;
 use crate::lanes;
-use crate::scalar::{Scalar, normalize3};
+use crate::scalar::{Scalar, ScalarKind, normalize3};
 
 /// Position, partials and unit normal at one (u, v).
 #[derive(Copy, Clone, Debug, Default, PartialEq)]
@@ -51,8 +51,21 @@ impl<S: Scalar, const P: usize> SurfaceNetworkModel<S, P> {
     /// ```
     pub fn eval(&self, uv: [S; 2]) -> SurfaceNetworkPoint<S> {
         let mut point = self.forward::<true>(uv);
+        // The normal from the partials in the frame's units, where Q16.16 keeps their bits.
         point.normal = unit_normal(point.du, point.dv);
+        if self.runs_shift() {
+            let shift = self.output_shift;
+            point.du = point.du.map(|v| v.times_power_of_two(shift));
+            point.dv = point.dv.map(|v| v.times_power_of_two(shift));
+        }
         point
+    }
+
+    /// Whether the frame's scale is applied after the output layer (Q16.16 only; `f32` folds
+    /// it into s_p at load).
+    #[inline(always)]
+    fn runs_shift(&self) -> bool {
+        S::KIND != ScalarKind::F32 && self.output_shift != 0
     }
 
     /// The unit normal at (u, v) (see [`SurfaceNetworkModel::eval`]).
@@ -145,11 +158,11 @@ impl<S: Scalar, const P: usize> SurfaceNetworkModel<S, P> {
         }
         let scale = word(at + 3);
         for k in 0..3 {
-            set(
-                &mut out.position,
-                k,
-                get(&jet.value, k).mul(scale).add(word(at + k)),
-            );
+            let mut scaled = get(&jet.value, k).mul(scale);
+            if self.runs_shift() {
+                scaled = scaled.times_power_of_two(self.output_shift);
+            }
+            set(&mut out.position, k, scaled.add(word(at + k)));
             if PARTIALS {
                 set(&mut out.du, k, get(&jet.du, k).mul(scale));
                 set(&mut out.dv, k, get(&jet.dv, k).mul(scale));

@@ -30,9 +30,15 @@
 //!
 //! ```text
 //! { activation: u8 (0 log-sig, 1 tan-sig, 2 rad-bas, 3 tri-bas), hidden: [u8] (n₁ … n_L),
+//!   frame: { origin: [u8] (3 words), shift: i8 },
 //!   parameters: [u8] (words: c_u c_v g_u g_v, then per layer W row-major and b, then
 //!   c_x c_y c_z s_p), metadata: [u8] }
 //! ```
+//!
+//! The position is given in the user's units through the [frame](crate::frame): p = o +
+//! (y·s_p + c_p)·2⁻ˢ. `f32` folds this into c_p and s_p at load; Q16.16 folds the origin and
+//! applies 2⁻ˢ after the output layer, so that c_p and s_p keep their bits whatever the
+//! data's units. The normal is taken before that scaling.
 //!
 //! 1 … [`MAX_HIDDEN_LAYERS`] hidden layers of 1 … [`MAX_NEURONS`] neurons; exactly
 //! [`parameter_count`] words; g_u, g_v and s_p positive; in Q16.16 every word within ±1024.
@@ -70,7 +76,10 @@
 //!     vec![0.0, 0.0, 0.0, 2.0],            // c_p, s_p
 //! ].concat();
 //! let bytes: Vec<u8> = words.iter().flat_map(|&w| ScalarKind::F32.encode(w).unwrap()).collect();
-//! let payload = SurfaceNetworkPayload { activation: 3, hidden: &[1], parameters: &bytes, metadata: &[] };
+//! let payload = SurfaceNetworkPayload {
+//!     activation: 3, hidden: &[1], frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
+//!     parameters: &bytes, metadata: &[],
+//! };
 //! let mut blob = [0_u8; 256];
 //! let len = payload.write(ScalarKind::F32, &mut blob)?;
 //! let model = SurfaceNetworkModel::<f32>::from_blob(&blob[..len])?;

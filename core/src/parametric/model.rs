@@ -6,6 +6,7 @@ use super::activation::Activation;
 use super::payload::SurfaceNetworkPayload;
 use crate::blob::{self, ModelKind};
 use crate::error::{BlobError, Quantity};
+use crate::frame::Frame;
 use crate::scalar::{Scalar, ScalarKind};
 
 /// Most hidden layers a surface-network blob may have (the paper's search stops at 2).
@@ -44,6 +45,11 @@ pub struct SurfaceNetworkModel<S: Scalar, const P: usize = DEFAULT_PARAMETERS> {
     pub(crate) hidden: Vec<u8, MAX_HIDDEN_LAYERS>,
     pub(crate) parameters: Vec<S, P>,
     pub(crate) stored_as: ScalarKind,
+    /// The blob's frame, as stored.
+    pub(crate) frame: Frame<S>,
+    /// What of the frame's scale the load could not fold into s_p (0 for `f32`): positions
+    /// and partials are scaled by 2^`output_shift` after the output layer.
+    pub(crate) output_shift: i8,
 }
 
 impl<S: Scalar, const P: usize> SurfaceNetworkModel<S, P> {
@@ -55,6 +61,8 @@ impl<S: Scalar, const P: usize> SurfaceNetworkModel<S, P> {
             hidden: Vec::new(),
             parameters: Vec::new(),
             stored_as: S::KIND,
+            frame: Frame::IDENTITY,
+            output_shift: 0,
         }
     }
 
@@ -144,9 +152,34 @@ impl<S: Scalar, const P: usize> SurfaceNetworkModel<S, P> {
                 found: layers,
             })?;
         }
+        // The frame: c_p moves into the user's units; f32 folds the scale into s_p exactly,
+        // Q16.16 keeps it for after the output layer (folding would cost s_p its bits).
+        let frame = Frame::<S>::from_payload(&payload.frame, stored)?;
+        let shift = frame.shift().saturating_neg();
+        let origin = frame.origin();
+        if let Some(output) = self.parameters.get_mut(needed - 4..needed) {
+            for (c, o) in output.iter_mut().zip(origin) {
+                *c = o.add(c.times_power_of_two(shift));
+            }
+            if S::KIND == ScalarKind::F32
+                && let Some(scale) = output.get_mut(3)
+            {
+                *scale = scale.times_power_of_two(shift);
+                if !(*scale > S::ZERO && scale.to_f32().is_finite()) {
+                    return Err(BlobError::FrameOutOfRange);
+                }
+            }
+        }
+        self.output_shift = if S::KIND == ScalarKind::F32 { 0 } else { shift };
+        self.frame = frame;
         self.activation = activation;
         self.stored_as = stored;
         Ok(())
+    }
+
+    /// The blob's frame, as stored; the load applies it (see [`crate::frame`]).
+    pub fn frame(&self) -> &Frame<S> {
+        &self.frame
     }
 
     /// σ of every hidden layer.

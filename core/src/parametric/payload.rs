@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::blob::{self, BlobHeader, ModelKind};
 use crate::error::BlobError;
+use crate::frame::FramePayload;
 use crate::scalar::ScalarKind;
 
 /// The payload of a [`ModelKind::SurfaceNetwork`] blob (layout in [`crate::parametric`]).
@@ -19,7 +20,8 @@ use crate::scalar::ScalarKind;
 ///     .flat_map(|i| ScalarKind::F32.encode(if i < 4 { 1.0 } else { 0.5 }).unwrap())
 ///     .collect();
 /// let payload = SurfaceNetworkPayload {
-///     activation: 1, hidden: &[1], parameters: &words, metadata: b"example",
+///     activation: 1, hidden: &[1], frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
+///     parameters: &words, metadata: b"example",
 /// };
 /// let mut out = [0_u8; 128];
 /// let len = payload.write(ScalarKind::F32, &mut out)?;
@@ -38,6 +40,10 @@ pub struct SurfaceNetworkPayload<'a> {
     /// [`MAX_NEURONS`](super::MAX_NEURONS)).
     #[serde(borrow)]
     pub hidden: &'a [u8],
+    /// Where the output's coordinates sit among the user's ([`crate::frame`]): the position is
+    /// the frame's `to_user` of y·s_p + c_p.
+    #[serde(borrow)]
+    pub frame: FramePayload<'a>,
     /// Every word, in the order of [`crate::parametric`]'s layout; 4 little-endian bytes per
     /// word in the blob's scalar kind.
     #[serde(borrow)]

@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use super::activation::Activation;
 use super::fit::SurfaceFit;
 use super::network::SurfaceNetwork;
-use crate::blob::encode;
+use crate::blob::{StoredFrame, encode};
 use crate::error::{Error, Result};
 
 /// How a surface-network blob was made (stored as its metadata).
@@ -107,8 +107,12 @@ pub fn network_to_blob(
         1.0 / network.input_scale[1],
     ];
     values.extend(network.parameters());
-    values.extend(network.output_center);
-    values.push(network.output_scale);
+    // The output in the blob's frame: origin at the output centre, 2^shift near 1 / the output
+    // scale, so that c_p and s_p are of order one (c_p the origin's rounding, s_p within
+    // [0.7, 1.4]) whatever the data's units.
+    let frame = StoredFrame::new(network.output_center, 1.0 / network.output_scale, scalar)?;
+    values.extend(frame.to_model(network.output_center));
+    values.push(network.output_scale * f64::from(frame.shift).exp2());
     let mut words = Vec::with_capacity(values.len() * 4);
     let count = values.len();
     for (index, &value) in values.iter().enumerate() {
@@ -133,6 +137,7 @@ pub fn network_to_blob(
     let payload = SurfaceNetworkPayload {
         activation: network.activation.core().code(),
         hidden: &hidden,
+        frame: frame.payload(),
         parameters: &words,
         metadata: &metadata,
     };
@@ -204,13 +209,14 @@ pub fn network_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedNetwork> {
         .unwrap_or_default();
     let hidden: Vec<usize> = payload.hidden.iter().map(|&n| usize::from(n)).collect();
     let n = words.len();
+    let frame = StoredFrame::read(&payload.frame, header.scalar);
     let mut network = SurfaceNetwork::zeros(
         &hidden,
         activation,
         [words[0], words[1]],
         [1.0 / words[2], 1.0 / words[3]],
-        [words[n - 4], words[n - 3], words[n - 2]],
-        words[n - 1],
+        frame.to_user([words[n - 4], words[n - 3], words[n - 2]]),
+        words[n - 1] * (-f64::from(frame.shift)).exp2(),
     )?;
     network.set_parameters(&words[4..n - 4])?;
     Ok(DecodedNetwork {

@@ -478,25 +478,40 @@ fn blobs_round_trip_and_the_core_evaluates_what_the_trainer_does() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("at most 32"), "{e}");
-    let mut huge = net.clone();
-    huge.output_scale = 5000.0;
-    let e = network_to_blob(&huge, None, ScalarKind::Q16_16)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("cannot be stored") || e.contains("would not load"),
-        "{e}"
-    );
-    // The refusal names the part and the way out.
-    for expected in ["the output scale", "f32", "scale the points down"] {
-        assert!(e.contains(expected), "{e}");
+    // The blob's frame keeps c_p and s_p of order one: large, small and far outputs store as
+    // Q16.16 and evaluate within its rounding, relative to their size.
+    for (scale, centre) in [
+        (5000.0, [0.0; 3]),
+        (1e-3, [0.0; 3]),
+        (1.0, [2000.0, -300.0, 5.0]),
+    ] {
+        let mut moved = net.clone();
+        moved.output_scale = scale;
+        moved.output_center = centre;
+        let bytes = network_to_blob(&moved, None, ScalarKind::Q16_16).unwrap();
+        let read = network_from_blob(&bytes, path).unwrap().network;
+        let fixed = SurfaceNetworkModel::<Q16>::from_blob(&bytes).unwrap();
+        for i in 0..25 {
+            let (u, v) = (-1.0 + 0.09 * i as f64, 0.7 - 0.05 * i as f64);
+            let (u, v) = (f64::from(u as f32), f64::from(v as f32));
+            let want = moved.evaluate(u, v).position;
+            let got = read.evaluate(u, v).position;
+            let q = fixed.eval([Q16::from_num(u), Q16::from_num(v)]).position;
+            for a in 0..3 {
+                assert!((got[a] - want[a]).abs() <= 5e-3 * scale + 1e-4, "×{scale}");
+                let dq = (q[a].to_num::<f64>() - want[a]).abs();
+                assert!(dq <= 5e-3 * scale + 1e-4, "×{scale} {centre:?}: {dq:e}");
+            }
+        }
     }
+    // Beyond what Q16.16 represents, the refusal names the coordinate and the way out.
     let mut far = net.clone();
-    far.output_center = [2000.0, 0.0, 0.0];
+    far.output_center = [40_000.0, 0.0, 0.0];
     let e = network_to_blob(&far, None, ScalarKind::Q16_16)
         .unwrap_err()
         .to_string();
-    for expected in ["the output centre", "f32", "nearer the origin"] {
+    for expected in ["centre x", "32767", "f32"] {
         assert!(e.contains(expected), "{e}");
     }
+    assert!(network_to_blob(&far, None, ScalarKind::F32).is_ok());
 }
