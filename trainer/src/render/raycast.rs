@@ -140,18 +140,45 @@ impl<'a, F: Field + ?Sized> Tracer<'a, F> {
     /// lies within the tolerance of the hit; evaluated at the hit by the guaranteed search).
     pub fn hit_gradient(&self, origin: [f64; 3], direction: [f64; 3]) -> Option<(f64, [f64; 3])> {
         let field = self.field;
+        // Only the parts of a voxel inside a region are searched, as `mesh` searches them: an
+        // octree voxel also covers space beside the oriented boxes, where the field is the
+        // network's extrapolation.
+        let inside = move |span: [f64; 2]| {
+            field
+                .regions()
+                .iter()
+                .filter_map(move |r| r.ray_span(origin, direction, span[0]))
+                .filter_map(move |[a, b]| (a <= span[1]).then_some([a, b.min(span[1])]))
+        };
         match self.method {
             Method::Punctual => self.octree.first_hit(origin, direction, &mut |_, span| {
-                punctual::newton_in_voxel(field, origin, direction, span, self.tolerance)
+                // The regions' spans merged, nearest first: each stretch sampled once.
+                let mut spans = [[0.0_f64; 2]; MAX_SPANS];
+                let mut count = 0;
+                for s in inside(span) {
+                    if let Some(slot) = spans.get_mut(count) {
+                        *slot = s;
+                        count += 1;
+                    }
+                }
+                let spans = &mut spans[..count];
+                spans.sort_unstable_by(|a, b| a[0].total_cmp(&b[0]));
+                let mut merged = 0;
+                for i in 0..spans.len() {
+                    if merged > 0 && spans[i][0] <= spans[merged - 1][1] {
+                        spans[merged - 1][1] = spans[merged - 1][1].max(spans[i][1]);
+                    } else {
+                        spans[merged] = spans[i];
+                        merged += 1;
+                    }
+                }
+                spans[..merged].iter().find_map(|&s| {
+                    punctual::newton_in_voxel(field, origin, direction, s, self.tolerance)
+                })
             }),
             Method::Guaranteed => {
                 let mut search = |_: &super::region::Aabb, span: [f64; 2]| {
-                    // Only the part of the voxel inside a region is searched.
-                    field
-                        .regions()
-                        .iter()
-                        .filter_map(|r| r.ray_span(origin, direction, span[0]))
-                        .filter_map(|[a, b]| (a <= span[1]).then_some([a, b.min(span[1])]))
+                    inside(span)
                         .filter_map(|s| {
                             guaranteed::first_root(
                                 field,
@@ -170,6 +197,10 @@ impl<'a, F: Field + ?Sized> Tracer<'a, F> {
         }
     }
 }
+
+/// The most region spans a voxel's ray segment is cut into (one region per module at most,
+/// and the core holds 64 modules).
+const MAX_SPANS: usize = 64;
 
 /// What a rendering did.
 #[derive(Clone, Debug, Serialize)]
