@@ -282,3 +282,64 @@ fn bad_mesh_requests_are_named() {
     let e = write_mesh(Path::new("x.stp"), &Mesh::default(), None).unwrap_err();
     assert!(e.to_string().contains(".stl"), "{e}");
 }
+
+/// A unit sphere (Φ > 0 inside) whose field turns positive again beyond r = 1.75, a phantom
+/// shell like a network's extrapolation far from its points; its one region is a box turned
+/// 45° about z, half-side 1.2, so the shell crosses the octree's voxels beside the box.
+struct PhantomShell {
+    regions: Vec<Region>,
+}
+
+impl PhantomShell {
+    fn new() -> Self {
+        let (c, s) = (
+            std::f64::consts::FRAC_1_SQRT_2,
+            std::f64::consts::FRAC_1_SQRT_2,
+        );
+        let k = 1.0 / 1.2;
+        let normalization = crate::implicit::Normalization {
+            center: [0.0; 3],
+            matrix: [[c * k, s * k, 0.0], [-s * k, c * k, 0.0], [0.0, 0.0, k]],
+        };
+        PhantomShell {
+            regions: vec![Region::new(normalization, 2.0, 1.0).unwrap()],
+        }
+    }
+}
+
+impl Field for PhantomShell {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        self.value_gradient(p).0
+    }
+
+    fn value_gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        // (1 − r²)(1.75 − r): positive inside r = 1, negative up to r = 1.75, positive beyond.
+        let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        let (a, b) = (1.0 - r * r, 1.75 - r);
+        let dr = -2.0 * r * b - a;
+        let g = if r > 0.0 {
+            p.map(|v| dr * v / r)
+        } else {
+            [0.0; 3]
+        };
+        (a * b, g)
+    }
+
+    fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+}
+
+/// Nothing outside the regions is searched: a ray along the box's turned diagonal meets the
+/// phantom shell at r = 1.75 in voxels beside the box (outside it: |x| + |y| > 1.2·√2), and
+/// must go on to the sphere at r = 1, as `mesh` would.
+#[test]
+fn surface_beside_the_regions_is_not_rendered() {
+    let field = PhantomShell::new();
+    let tracer = Tracer::new(&field, Method::Punctual, &RenderOptions::default()).unwrap();
+    let origin: [f64; 3] = [2.5, 2.5, 0.1];
+    let length = (origin[0] * origin[0] + origin[1] * origin[1] + origin[2] * origin[2]).sqrt();
+    let direction = origin.map(|v| -v / length);
+    let t = tracer.hit(origin, direction).expect("the sphere is hit");
+    assert!((length - t - 1.0).abs() < 1e-3, "hit at r = {}", length - t);
+}
