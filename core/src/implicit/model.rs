@@ -388,7 +388,7 @@ fn fold_frame<S: Scalar>(
     let is_f32 = S::KIND == ScalarKind::F32;
     let exact = is_f32 || shift >= 0;
     let axes = |m: &ModuleEntry| m.offset + 3..m.offset + NORMALIZATION_LEN;
-    let guard_radii = parameters
+    let mut guard_radii = parameters
         .get(modules_end..)
         .unwrap_or(&[])
         .chunks_exact(GUARD_LEN)
@@ -399,7 +399,7 @@ fn fold_frame<S: Scalar>(
                 .get(axes(m))
                 .is_some_and(|a| a.iter().all(|&v| fits(v)))
         })
-        && guard_radii.clone().all(|&rho| fits(rho));
+        && guard_radii.all(|&rho| fits(rho));
     let move_center = |center: &mut [S]| {
         for (c, o) in center.iter_mut().zip(origin) {
             *c = o.add(c.times_power_of_two(shift.saturating_neg()));
