@@ -155,8 +155,10 @@ fn main() {
         let mut tally = Tally::default();
         for seed in 1..=seeds {
             let mut points = (row.sample)(seed);
+            // Decomposed below, as `implicit::fit` would: with the seam band it then turns on.
             let options = ImplicitOptions {
                 seed,
+                seam_band: row.features.is_some(),
                 ..ImplicitOptions::default()
             };
             if let Some(features) = row.features {

@@ -265,7 +265,11 @@ fn units(filter: &[String]) {
             }
             let truth = Truth::from_mesh(&mesh).expect("truth");
             let mut points = sample_mesh(&mesh, case.points, 1).expect("sample");
-            let options = ImplicitOptions::default();
+            // Decomposed here, as `implicit::fit` would: with the seam band it then turns on.
+            let options = ImplicitOptions {
+                seam_band: true,
+                ..ImplicitOptions::default()
+            };
             points.features = Some(
                 implicit::decompose(&points.positions, case.features, options.min_points)
                     .expect("features"),
@@ -360,8 +364,10 @@ fn shapes(
                 features: Some(case.features),
                 ..FitRequest::default()
             };
+            // Decomposed below, as `implicit::fit` would: with the seam band it then turns on.
             let mut options = ImplicitOptions {
                 seed,
+                seam_band: true,
                 ..ImplicitOptions::default()
             };
             for setting in value("--set").iter().flat_map(|s| s.split(',')) {

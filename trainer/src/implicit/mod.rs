@@ -15,6 +15,7 @@ mod network;
 mod normalize;
 mod options;
 mod oracle;
+pub mod overlap;
 mod pipeline;
 mod problem;
 mod train;

@@ -43,6 +43,13 @@ pub struct ImplicitOptions {
     /// Weight of a sign point at the clearance distance (0.1); it grows linearly with the
     /// distance, up to 1.
     pub sign_weight: f64,
+    /// Whether each leaf also learns a band of its neighbouring features' points
+    /// ([`super::overlap`]): right for features cut from one surface by
+    /// [`super::decompose`], whose seams are not edges of the shape, so [`super::fit`] turns
+    /// it on when it decomposes the points itself. Off for features the user labelled, which
+    /// are parts that meet (a limb and a body), each learned on its own.
+    #[serde(default)]
+    pub seam_band: bool,
 }
 
 impl Default for ImplicitOptions {
@@ -62,6 +69,7 @@ impl Default for ImplicitOptions {
             clearance: 0.02,
             sign_margin: 0.25,
             sign_weight: 0.1,
+            seam_band: false,
         }
     }
 }

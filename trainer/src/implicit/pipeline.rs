@@ -41,16 +41,19 @@ pub fn fit(
     if let (Some(k), None) = (request.features, &request.init) {
         check_capacity(k, options.width)?;
     }
+    let mut options = options.clone();
     if points.features.is_none() {
         let labels = match request.features {
-            Some(k) if k > 1 => decompose(&points.positions, k, options.min_points)?,
+            Some(k) if k > 1 => {
+                options.seam_band = true;
+                decompose(&points.positions, k, options.min_points)?
+            }
             Some(0) => return Err(Error::invalid("--features must be at least 1")),
             _ => vec![0; points.len()],
         };
         points.features = Some(labels);
     }
     let labels = points.features.as_deref().unwrap_or_default();
-    let mut options = options.clone();
     if let Some(init) = &request.init {
         options.width = init.network.width();
     }

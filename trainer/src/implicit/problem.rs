@@ -24,6 +24,8 @@ pub struct ModuleData {
     values: Vec<f64>,
     tangents: Vec<f64>,
     targets: Vec<[f64; 3]>,
+    /// Each control point's weight: its residuals and Jacobian rows are scaled by it.
+    weights: Vec<f64>,
     /// Inputs of the value points (`inputs` each) and what each asks of Φ.
     point_values: Vec<f64>,
     goals: Vec<ValueGoal>,
@@ -61,6 +63,7 @@ impl ModuleData {
             values: Vec::new(),
             tangents: Vec::new(),
             targets: Vec::new(),
+            weights: Vec::new(),
             point_values: Vec::new(),
             goals: Vec::new(),
         }
@@ -69,6 +72,17 @@ impl ModuleData {
     /// Adds one control point: input `values` (d), `tangents[k]` (d each), and the target
     /// gradient ∇Φ = −s·n.
     pub fn push(&mut self, values: &[f64], tangents: [&[f64]; 3], target_gradient: [f64; 3]) {
+        self.push_weighted(values, tangents, target_gradient, 1.0);
+    }
+
+    /// [`Self::push`] for a control point whose residuals weigh `weight`.
+    pub fn push_weighted(
+        &mut self,
+        values: &[f64],
+        tangents: [&[f64]; 3],
+        target_gradient: [f64; 3],
+        weight: f64,
+    ) {
         debug_assert_eq!(values.len(), self.inputs);
         self.values.extend_from_slice(values);
         for t in tangents {
@@ -76,6 +90,7 @@ impl ModuleData {
             self.tangents.extend_from_slice(t);
         }
         self.targets.push(target_gradient);
+        self.weights.push(weight);
     }
 
     /// Adds one value point: its input `values` (d) and what it asks of Φ.
@@ -159,9 +174,10 @@ impl<'a> ModuleProblem<'a> {
 
     fn point_residuals(&self, i: usize, tape_value: f64, gradient: [f64; 3], out: &mut [f64]) {
         let target = self.data.targets[i];
-        out[0] = tape_value;
+        let weight = self.data.weights[i];
+        out[0] = weight * tape_value;
         for k in 0..3 {
-            out[1 + k] = self.gamma * (gradient[k] - target[k]);
+            out[1 + k] = weight * self.gamma * (gradient[k] - target[k]);
         }
     }
 
@@ -302,6 +318,12 @@ impl<'a> ModuleProblem<'a> {
         self.lane_residuals(first, tape, out);
         jacobian_lanes::<FMA>(&self.layout, params, lanes, tape, self.gamma, rows, stride);
         transpose_lanes::<FMA>(rows, stride, count, block);
+        let weights = &self.data.weights[first..first + count];
+        for (point, &weight) in block.chunks_exact_mut(4 * stride).zip(weights) {
+            if weight != 1.0 {
+                point.iter_mut().for_each(|j| *j *= weight);
+            }
+        }
     }
 
     /// Scratch space of [`Self::jacobian_group`].
@@ -485,7 +507,13 @@ mod tests {
             let t: [Vec<f64>; 3] =
                 std::array::from_fn(|_| (0..d).map(|_| rng.random_range(-2.0..2.0)).collect());
             let target = std::array::from_fn(|_| rng.random_range(-5.0..5.0));
-            data.push(&values, [&t[0], &t[1], &t[2]], target);
+            // Every third point weighs less, as a module's borrowed points do.
+            let weight = if data.len() % 3 == 2 {
+                rng.random_range(0.1..1.0)
+            } else {
+                1.0
+            };
+            data.push_weighted(&values, [&t[0], &t[1], &t[2]], target, weight);
         }
         let params = (0..TrainedLayout::new(d, n).len)
             .map(|_| rng.random_range(-0.8..0.8))
@@ -634,6 +662,7 @@ mod tests {
             problem.point_residuals(i, tape.value, tape.gradient, &mut expected_e[4 * i..]);
             let rows = &mut expected_j[4 * i * p..4 * (i + 1) * p];
             jacobian_rows(&layout, params, &data.input(i), &tape, problem.gamma, rows);
+            rows.iter_mut().for_each(|j| *j *= data.weights[i]);
         }
         let all_close = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(a, b)| close(*a, *b));
         let mut e = vec![0.0; 4 * points];

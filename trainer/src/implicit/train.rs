@@ -23,6 +23,7 @@ use super::network::{Guard, ImplicitNetwork};
 use super::normalize::Normalization;
 use super::options::ImplicitOptions;
 use super::oracle::Oracle;
+use super::overlap::{BORROWED_WEIGHT, module_points, overlapping};
 use super::problem::{ModuleData, ModuleProblem, ValueGoal};
 use super::tree::TreeSpec;
 use crate::error::{Error, Result};
@@ -279,6 +280,11 @@ pub(crate) fn train_with(
         features: points.features.clone(),
     };
     let setting = Setting::new(&model, labels, options)?;
+    let reach = if options.seam_band {
+        overlapping(&members, &model.positions, &setting.oracle)
+    } else {
+        members.clone()
+    };
 
     // Leaves, in parallel.
     let leaves: Vec<usize> = (0..network.module_count())
@@ -288,7 +294,7 @@ pub(crate) fn train_with(
         .par_iter()
         .map(|&i| {
             let feature = network.leaf_features()[i].unwrap_or(0);
-            let indices = &members[feature as usize];
+            let indices = module_points(&[feature], &reach);
             let positions: Vec<[f64; 3]> = indices.iter().map(|&p| model.positions[p]).collect();
             let what = format!("feature {feature}");
             let norm =
@@ -296,9 +302,8 @@ pub(crate) fn train_with(
             let layout = network.trained_layout(i);
             let mut leaf_net = network.clone();
             leaf_net.set_normalization(i, &norm);
-            let features = [feature];
             let regions = setting.regions(&[norm], false);
-            let data = setting.module_data(&leaf_net, i, &features, &members, &regions, i);
+            let data = setting.module_data(&leaf_net, i, &[feature], &indices, &regions, i);
             let (params, report) = match &previous {
                 Some(previous) => {
                     let old = previous.normalization(i).unwrap_or(norm);
@@ -346,16 +351,15 @@ pub(crate) fn train_with(
                     .filter_map(|&leaf| network.normalization(leaf))
                     .collect();
                 let regions = setting.regions(&boxes, true);
-                let positions: Vec<[f64; 3]> = features
-                    .iter()
-                    .flat_map(|&f| members[f as usize].iter().map(|&p| model.positions[p]))
-                    .collect();
+                let indices = module_points(&features, &reach);
+                let positions: Vec<[f64; 3]> =
+                    indices.iter().map(|&p| model.positions[p]).collect();
                 let norm =
                     Normalization::fit(&positions, options.box_size, options.box_scaling, "node")
                         .unwrap_or(boxes[0]);
                 let mut node_net = network.clone();
                 node_net.set_normalization(i, &norm);
-                let data = setting.module_data(&node_net, i, &features, &members, &regions, i);
+                let data = setting.module_data(&node_net, i, &features, &indices, &regions, i);
                 let (params, report) = match &previous {
                     Some(previous) => {
                         let initial = previous.trained_params(i).to_vec();
@@ -578,14 +582,15 @@ impl<'a> Setting<'a> {
     }
 
     /// The training data of module `i` of `network` (its children trained): the control
-    /// points of `features`, their off-surface points, and sign points in `regions` whose
-    /// nearest control point belongs to `features`.
+    /// points `indices` (the points of `features` and those it borrows, which
+    /// weigh [`BORROWED_WEIGHT`]), their off-surface points, and sign points in `regions` whose
+    /// nearest control point is one of them.
     fn module_data(
         &self,
         network: &ImplicitNetwork,
         i: usize,
         features: &[u32],
-        members: &[Vec<usize>],
+        indices: &[usize],
         regions: &[SampleBox],
         stream: usize,
     ) -> ModuleData {
@@ -596,22 +601,25 @@ impl<'a> Setting<'a> {
         let mut value_points = Vec::new();
         let slope = self.options.slope;
         let mut count = 0;
-        for &f in features {
-            for &p in &members[f as usize] {
-                let target = self.points.normals[p].map(|n| -slope * n);
-                let input =
-                    network.module_input(i, self.points.positions[p], &mut values, &mut tangents);
-                data.push(input.values, input.tangents, target);
-                for o in &self.offsets[p] {
-                    let goal = ValueGoal {
-                        value: o.value,
-                        weight: 1.0,
-                        hinge: 0.0,
-                    };
-                    value_points.push((o.position, goal));
-                }
-                count += 1;
+        for &p in indices {
+            let weight = if features.contains(&self.labels[p]) {
+                1.0
+            } else {
+                BORROWED_WEIGHT
+            };
+            let target = self.points.normals[p].map(|n| -slope * n);
+            let input =
+                network.module_input(i, self.points.positions[p], &mut values, &mut tangents);
+            data.push_weighted(input.values, input.tangents, target, weight);
+            for o in &self.offsets[p] {
+                let goal = ValueGoal {
+                    value: o.value,
+                    weight,
+                    hinge: 0.0,
+                };
+                value_points.push((o.position, goal));
             }
+            count += 1;
         }
         let root = i == network.root() && network.module_count() > 1;
         let ratio = if root {
@@ -623,7 +631,11 @@ impl<'a> Setting<'a> {
         if wanted > 0 {
             let mut rng = ChaCha8Rng::seed_from_u64(self.options.seed ^ 0x5167_4e50);
             rng.set_stream(stream as u64);
-            let owned = |j: usize| features.contains(&self.labels[j]);
+            let mut member = vec![false; self.points.len()];
+            for &p in indices {
+                member[p] = true;
+            }
+            let owned = |j: usize| member[j];
             let clearance = self.options.clearance * MODEL_DIAGONAL;
             let signs: Vec<SignPoint> =
                 sign_points(&self.oracle, regions, wanted, clearance, &owned, &mut rng);
