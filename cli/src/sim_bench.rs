@@ -1,16 +1,15 @@
 //! `neurosurf sim-bench`: what an evaluation costs on the simulated Cortex-M4F — instructions
-//! per evaluation against multiply–accumulates, for f32 and Q16.16, field and field+gradient
-//! (position and position+direction for parametric models), single points and lane batches,
-//! with the
-//! firmware's flash, RAM and stack.
+//! and estimated cycles per evaluation against multiply–accumulates, for f32 and Q16.16, field
+//! and field+gradient (position and position+direction for parametric models), single points
+//! and lane batches, with the firmware's flash, RAM and stack.
 
 use neurosurf_trainer::geometry::vector::inner;
 use neurosurf_trainer::io::write_atomic;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use neurosurf_core::scalar::ScalarKind;
-use neurosurf_firmware_sim::{Footprint, Job, Mode, Op, TARGET_MACHINE};
+use neurosurf_firmware_sim::{Footprint, Job, Mode, Op, Simulator, TARGET_MACHINE};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -52,10 +51,188 @@ pub struct Args {
     /// With `--markdown`: write nothing, fail unless the file matches this run.
     #[arg(long, requires = "markdown")]
     check: bool,
+    /// Instead of the cost table: compare the estimated cycles of the implicit models with
+    /// each group of Cortex-M4F kernels against firmware builds without it (the portable
+    /// loops instead), and write that comparison as Markdown to this file
+    /// (`docs/performance/kernels.md`). Builds one firmware per group.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["markdown", "json"])]
+    kernel_comparison: Option<PathBuf>,
+}
+
+/// The groups of Cortex-M4F kernels `--kernel-comparison` turns off one group at a time
+/// (names as in the core's `src/arch/m4f.rs`), with the scalar they serve.
+const KERNEL_GROUPS: &[(&str, ScalarKind, &[&str])] = &[
+    (
+        "f32 layer products (affine and transposed; 9×9, 9×3, 1×9)",
+        ScalarKind::F32,
+        &[
+            "f32_affine_9x9",
+            "f32_affine_9x3",
+            "f32_affine_1x9",
+            "f32_transposed_9x9",
+            "f32_transposed_9x3",
+            "f32_transposed_1x9",
+        ],
+    ),
+    (
+        "Q16.16 forward layers (9×9, 9×3, 1×9)",
+        ScalarKind::Q16_16,
+        &["q16_layer_9x9", "q16_layer_9x3", "q16_layer_1x9"],
+    ),
+    (
+        "Q16.16 backward pass (transposes with the chain rule, 9×3 transpose, chain rule)",
+        ScalarKind::Q16_16,
+        &[
+            "q16_transposed_slope_9x9",
+            "q16_transposed_slope_1x9",
+            "q16_transposed_9x3",
+            "q16_times_slope_9",
+        ],
+    ),
+    (
+        "Q16.16 input normalization",
+        ScalarKind::Q16_16,
+        &["q16_normalize"],
+    ),
+];
+
+/// Smallest estimated-cycle win, over the portable loops, that keeps a kernel group.
+const KEEP_WIN: f64 = 0.10;
+
+/// One run: a subject in a scalar, an op and a mode.
+type BenchJob<'a> = (&'a Subject, ScalarKind, &'a [u8], Op, Mode);
+
+/// Every (scalar, op, mode) of the subjects, for the scalars `scalar` accepts.
+fn jobs(subjects: &[Subject], scalar: impl Fn(ScalarKind) -> bool) -> Vec<BenchJob<'_>> {
+    let mut jobs = Vec::new();
+    for subject in subjects {
+        for (kind, blob) in &subject.blobs {
+            if !scalar(*kind) {
+                continue;
+            }
+            for op in subject.ops {
+                for mode in [Mode::Single, Mode::Batch] {
+                    jobs.push((subject, *kind, blob.as_slice(), op, mode));
+                }
+            }
+        }
+    }
+    jobs
+}
+
+/// Runs the jobs on `simulator`, in parallel, one row each.
+fn measure(simulator: &Simulator, jobs: &[BenchJob<'_>]) -> Result<Vec<Row>> {
+    jobs.par_iter()
+        .map(|&(subject, scalar, blob, op, mode)| {
+            let job = Job {
+                op,
+                mode,
+                ..Job::position_direction(blob, scalar, &subject.points, subject.arity)
+            };
+            let run = target::run(simulator, &job, &subject.path)?;
+            let derivative = matches!(op, Op::FieldGradient | Op::PositionDirection);
+            let macs = target::mac_count(blob, scalar, derivative, &subject.path)?;
+            let instructions = run.instructions_per_point();
+            Ok(Row {
+                model: subject.name.clone(),
+                scalar: scalar.name(),
+                op: target::op_name(op),
+                mode: target::mode_name(mode),
+                points: run.count(),
+                instructions_per_eval: instructions,
+                cycles_per_eval: run.cycles_per_point(),
+                macs,
+                instructions_per_mac: instructions / macs.max(1) as f64,
+                stack_bytes: run.stack_bytes,
+            })
+        })
+        .collect()
+}
+
+/// `--kernel-comparison`: the implicit subjects' estimated cycles with every kernel, and with
+/// each of [`KERNEL_GROUPS`] turned off, written as Markdown to `path`.
+fn kernel_comparison(simulator: &Simulator, subjects: &[Subject], path: &Path) -> Result<()> {
+    let implicit: Vec<Subject> = subjects
+        .iter()
+        .filter(|s| s.ops[0] == Op::Field)
+        .cloned()
+        .collect();
+    let mut table = Table::new([
+        ("kernels turned off", Align::Left),
+        ("model", Align::Left),
+        ("op", Align::Left),
+        ("mode", Align::Left),
+        ("est. cycles/eval", Align::Right),
+        ("portable", Align::Right),
+        ("win", Align::Right),
+    ]);
+    let mut verdicts = Table::new([
+        ("kernels", Align::Left),
+        ("scalar", Align::Left),
+        ("est. cycles, all rows", Align::Right),
+        ("portable", Align::Right),
+        ("win", Align::Right),
+        ("verdict", Align::Left),
+    ]);
+    for (group, scalar, kernels) in KERNEL_GROUPS {
+        let jobs = jobs(&implicit, |kind| kind == *scalar);
+        let with = measure(simulator, &jobs)?;
+        let portable = target::portable_simulator(kernels)?;
+        let without = measure(&portable, &jobs)?;
+        let (mut total_with, mut total_without) = (0.0, 0.0);
+        for (w, p) in with.iter().zip(&without) {
+            if w.cycles_per_eval == p.cycles_per_eval {
+                continue; // the group does not run here
+            }
+            total_with += w.cycles_per_eval;
+            total_without += p.cycles_per_eval;
+            table.push([
+                group.to_string(),
+                w.model.clone(),
+                w.op.to_string(),
+                w.mode.to_string(),
+                format!("{:.1}", w.cycles_per_eval),
+                format!("{:.1}", p.cycles_per_eval),
+                percent(1.0 - w.cycles_per_eval / p.cycles_per_eval),
+            ]);
+        }
+        let win = 1.0 - total_with / total_without;
+        verdicts.push([
+            group.to_string(),
+            scalar.name().to_string(),
+            format!("{total_with:.1}"),
+            format!("{total_without:.1}"),
+            percent(win),
+            if win >= KEEP_WIN { "keep" } else { "delete" }.to_string(),
+        ]);
+    }
+    let text = format!(
+        "# The Cortex-M4F kernels against the portable loops\n\nWritten by `neurosurf sim-bench \
+         --kernel-comparison docs/performance/kernels.md`: the implicit models of \
+         `docs/performance/target.md` (the width-9 modules the kernels serve) on the simulated \
+         Cortex-M4F, once with every kernel and once per group with that group turned off \
+         (`--cfg neurosurf_portable=\"<kernel>\"`; the core's portable loops run instead, with \
+         the same results). Cycles are the estimate of `docs/target.md` (the Cortex-M4 TRM's \
+         timings on zero-wait-state memory), per evaluation; the win is the share of the \
+         portable build's cycles the kernels save, over every row where they run. A group is \
+         kept when that win is at least {:.0} %.\n\n{}\n{}",
+        KEEP_WIN * 100.0,
+        verdicts.to_markdown(),
+        table.to_markdown()
+    );
+    write_atomic(path, text.as_bytes())?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// `x` as a signed percentage with one decimal.
+fn percent(x: f64) -> String {
+    format!("{:+.1} %", 100.0 * x)
 }
 
 /// A model to measure: its blob for each scalar, its evaluation points (or parameters), and
 /// its two ops (the value alone, and with its derivative).
+#[derive(Clone)]
 struct Subject {
     name: String,
     path: PathBuf,
@@ -74,6 +251,8 @@ struct Row {
     mode: &'static str,
     points: usize,
     instructions_per_eval: f64,
+    /// Estimated Cortex-M4 cycles (the TRM's table, see `neurosurf_firmware_sim::plugin`).
+    cycles_per_eval: f64,
     macs: usize,
     instructions_per_mac: f64,
     stack_bytes: u32,
@@ -120,41 +299,10 @@ pub fn run(args: &Args) -> Result<()> {
             ops: [Op::Field, Op::FieldGradient],
         });
     }
-    let mut jobs = Vec::new();
-    for subject in &subjects {
-        for (scalar, blob) in &subject.blobs {
-            for op in subject.ops {
-                for mode in [Mode::Single, Mode::Batch] {
-                    jobs.push((subject, *scalar, blob, op, mode));
-                }
-            }
-        }
+    if let Some(path) = &args.kernel_comparison {
+        return kernel_comparison(&simulator, &subjects, path);
     }
-    let rows = jobs
-        .par_iter()
-        .map(|&(subject, scalar, blob, op, mode)| {
-            let job = Job {
-                op,
-                mode,
-                ..Job::position_direction(blob, scalar, &subject.points, subject.arity)
-            };
-            let run = target::run(&simulator, &job, &subject.path)?;
-            let derivative = matches!(op, Op::FieldGradient | Op::PositionDirection);
-            let macs = target::mac_count(blob, scalar, derivative, &subject.path)?;
-            let instructions = run.instructions_per_point();
-            Ok(Row {
-                model: subject.name.clone(),
-                scalar: scalar.name(),
-                op: target::op_name(op),
-                mode: target::mode_name(mode),
-                points: run.count(),
-                instructions_per_eval: instructions,
-                macs,
-                instructions_per_mac: instructions / macs.max(1) as f64,
-                stack_bytes: run.stack_bytes,
-            })
-        })
-        .collect::<Result<Vec<Row>>>()?;
+    let rows = measure(&simulator, &jobs(&subjects, |_| true))?;
     let ratios = ratios(&rows);
     let bench = Bench {
         machine: TARGET_MACHINE,
@@ -476,7 +624,10 @@ fn report(bench: &Bench, markdown: bool) -> String {
         out.push_str(
             "# The core on the simulated Cortex-M4F\n\nWritten by `neurosurf sim-bench --markdown \
              docs/performance/target.md`; `scripts/test.sh` checks that the file matches a fresh \
-             run (instruction counts are exact and repeatable). ",
+             run (instruction counts, and the cycle estimates made from them, are exact and \
+             repeatable). Estimated cycles price every executed instruction with the Cortex-M4 \
+             TRM's timing tables on zero-wait-state memory; see `docs/target.md` for the \
+             assumptions. ",
         );
     }
     out.push_str(&format!(
@@ -490,6 +641,7 @@ fn report(bench: &Bench, markdown: bool) -> String {
         ("op", Align::Left),
         ("mode", Align::Left),
         ("instr/eval", Align::Right),
+        ("est. cycles/eval", Align::Right),
         ("MACs", Align::Right),
         ("instr/MAC", Align::Right),
         ("stack B", Align::Right),
@@ -501,6 +653,7 @@ fn report(bench: &Bench, markdown: bool) -> String {
             r.op.to_string(),
             r.mode.to_string(),
             format!("{:.1}", r.instructions_per_eval),
+            format!("{:.1}", r.cycles_per_eval),
             r.macs.to_string(),
             format!("{:.2}", r.instructions_per_mac),
             r.stack_bytes.to_string(),

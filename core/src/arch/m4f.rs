@@ -12,6 +12,11 @@ use neurosurf_m4f as m4f;
 
 use crate::scalar::Q16;
 
+// Every kernel is in use unless a comparison build turns it off with
+// `--cfg neurosurf_portable="<kernel>"` (`neurosurf sim-bench --kernel-comparison` does, to
+// price the portable loop it replaces): the `cfg` attributes below leave the default build's
+// code as it would be without them.
+
 // The forward kernels hard-code the activation table's layout: 1 281 segments of two words,
 // H = 0 at index 640, one segment per 2¹⁰ bits of H.
 const _: () = {
@@ -28,16 +33,19 @@ pub(super) fn f32_affine<const IN: usize, const OUT: usize>(
 ) -> Option<[f32; OUT]> {
     let w = w.as_flattened();
     match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "f32_affine_9x9"))]
         (9, 9) => resize(m4f::affine_9x9(
             rows(w)?,
             b.first_chunk()?,
             x.first_chunk()?,
         )),
+        #[cfg(not(neurosurf_portable = "f32_affine_9x3"))]
         (9, 3) => resize(m4f::affine_9x3(
             rows(w)?,
             b.first_chunk()?,
             x.first_chunk()?,
         )),
+        #[cfg(not(neurosurf_portable = "f32_affine_1x9"))]
         (1, 9) => resize([m4f::affine_1x9(
             w.first_chunk()?,
             b.first()?,
@@ -55,8 +63,11 @@ pub(super) fn f32_transposed<const IN: usize, const OUT: usize>(
 ) -> Option<[f32; IN]> {
     let w = w.as_flattened();
     match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "f32_transposed_9x9"))]
         (9, 9) => resize(m4f::transposed_9x9(rows(w)?, g.first_chunk()?)),
+        #[cfg(not(neurosurf_portable = "f32_transposed_9x3"))]
         (9, 3) => resize(m4f::transposed_9x3(rows(w)?, g.first_chunk()?)),
+        #[cfg(not(neurosurf_portable = "f32_transposed_1x9"))]
         (1, 9) => resize(m4f::transposed_1x9(w.first_chunk()?, g.first()?)),
         _ => None,
     }
@@ -70,6 +81,7 @@ pub(super) fn q16_transposed<const IN: usize, const OUT: usize>(
 ) -> Option<[Q16; IN]> {
     let w = w.as_flattened();
     match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "q16_transposed_9x3"))]
         (9, 3) => resize(m4f::q16_transposed_9x3(rows(w)?, g.first_chunk()?)),
         _ => None,
     }
@@ -78,6 +90,7 @@ pub(super) fn q16_transposed<const IN: usize, const OUT: usize>(
 /// `δᵢ ← times_slope(δᵢ, aᵢ)` for the neurons in the kernel's fast range, when a kernel exists
 /// for `N` neurons: `Some(mask)` of the neurons it left unchanged (outside that range), with
 /// a′ = `offset` − `square`·a² in Q16.16 bits.
+#[cfg(not(neurosurf_portable = "q16_times_slope_9"))]
 #[inline(always)]
 pub(super) fn q16_times_slope<const N: usize>(
     delta: &mut [Q16; N],
@@ -101,18 +114,21 @@ pub(super) fn q16_layer<const IN: usize, const OUT: usize>(
 ) -> Option<[Q16; OUT]> {
     let w = w.as_flattened();
     match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "q16_layer_9x9"))]
         (9, 9) => resize(m4f::q16_layer_9x9(
             rows(w)?,
             b.first_chunk()?,
             x.first_chunk()?,
             table,
         )),
+        #[cfg(not(neurosurf_portable = "q16_layer_9x3"))]
         (9, 3) => resize(m4f::q16_layer_9x3(
             rows(w)?,
             b.first_chunk()?,
             x.first_chunk()?,
             table,
         )),
+        #[cfg(not(neurosurf_portable = "q16_layer_1x9"))]
         (1, 9) => resize([m4f::q16_layer_1x9(
             w.first_chunk()?,
             *b.first()?,
@@ -137,7 +153,9 @@ pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
     let w = w.as_flattened();
     let a = a.first_chunk()?;
     let (out, slow) = match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "q16_transposed_slope_9x9"))]
         (9, 9) => m4f::q16_transposed_slope_9x9(rows(w)?, g.first_chunk()?, a, offset, square),
+        #[cfg(not(neurosurf_portable = "q16_transposed_slope_1x9"))]
         (1, 9) => {
             m4f::q16_transposed_slope_1x9(w.first_chunk()?, *g.first()?, a, offset, square)?
         }
@@ -148,10 +166,25 @@ pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
 
 /// A module's normalized position x′ = A·(x − c) (`normalization` = [c, A row by row]), as the
 /// core's `normalized_input`, when a kernel exists.
+#[cfg(not(neurosurf_portable = "q16_normalize"))]
 #[inline(always)]
 pub(super) fn q16_normalize(normalization: &[Q16; 12], x: &[Q16; 3]) -> Option<[Q16; 3]> {
     Some(m4f::q16_normalize(normalization, x))
 }
+
+// A kernel turned off whose function has no other kernel: the portable stub (see the top of
+// this file).
+#[cfg(any(
+    neurosurf_portable = "q16_times_slope_9",
+    neurosurf_portable = "q16_normalize"
+))]
+#[path = "portable.rs"]
+#[allow(dead_code)]
+mod portable;
+#[cfg(neurosurf_portable = "q16_normalize")]
+pub(super) use portable::q16_normalize;
+#[cfg(neurosurf_portable = "q16_times_slope_9")]
+pub(super) use portable::q16_times_slope;
 
 /// The first `R` rows of `C` values of a row-major matrix.
 #[inline(always)]
