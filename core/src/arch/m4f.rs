@@ -151,8 +151,8 @@ pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
     square: i32,
 ) -> Option<([Q16; IN], u32)> {
     let w = w.as_flattened();
-    let a = a.first_chunk()?;
-    let (out, slow) = match (OUT, IN) {
+    let a: &[Q16; 9] = a.first_chunk()?;
+    let (out, slow): ([Q16; 9], u32) = match (OUT, IN) {
         #[cfg(not(neurosurf_portable = "q16_transposed_slope_9x9"))]
         (9, 9) => m4f::q16_transposed_slope_9x9(rows(w)?, g.first_chunk()?, a, offset, square),
         #[cfg(not(neurosurf_portable = "q16_transposed_slope_1x9"))]
@@ -172,19 +172,22 @@ pub(super) fn q16_normalize(normalization: &[Q16; 12], x: &[Q16; 3]) -> Option<[
     Some(m4f::q16_normalize(normalization, x))
 }
 
-// A kernel turned off whose function has no other kernel: the portable stub (see the top of
-// this file).
-#[cfg(any(
-    neurosurf_portable = "q16_times_slope_9",
-    neurosurf_portable = "q16_normalize"
-))]
-#[path = "portable.rs"]
-#[allow(dead_code)]
-mod portable;
-#[cfg(neurosurf_portable = "q16_normalize")]
-pub(super) use portable::q16_normalize;
+/// The chain rule's kernel turned off (see the top of this file).
 #[cfg(neurosurf_portable = "q16_times_slope_9")]
-pub(super) use portable::q16_times_slope;
+pub(super) fn q16_times_slope<const N: usize>(
+    _: &mut [Q16; N],
+    _: &[Q16; N],
+    _: i32,
+    _: i32,
+) -> Option<u32> {
+    None
+}
+
+/// The normalization's kernel turned off (see the top of this file).
+#[cfg(neurosurf_portable = "q16_normalize")]
+pub(super) fn q16_normalize(_: &[Q16; 12], _: &[Q16; 3]) -> Option<[Q16; 3]> {
+    None
+}
 
 /// The first `R` rows of `C` values of a row-major matrix.
 #[inline(always)]
