@@ -9,12 +9,13 @@
 //! M4F (`vldr` of the weight, `vmul`, `vadd`), because LLVM neither merges the weight loads into
 //! `vldm` nor, for this core, emits `vmla`. Here a row of nine weights is one `vldmia` and each
 //! product one `vmla.f32`: with the loads, stores and the register save, about 1.2 instructions
-//! per multiply–accumulate. What is measured (by the simulator) is instructions; cycles are
-//! not. By the Cortex-M4 TRM's figures a multiply–accumulate costs about the same either way
-//! (`vldr` 2 + `vmul` 1 + `vadd` 1 against `vmla` 3 + a ninth of `vldmia`'s 1 + 9), but every
-//! kernel also saves and restores up to 28 FPU registers (`vpush`/`vpop`, 1 + n cycles each), so
-//! the cycle count is probably somewhat *worse*; that save goes away once the firmware's compiler
-//! accepts FPU register operands (see `layers.rs`).
+//! per multiply–accumulate. By the simulator's cycle estimate (the Cortex-M4 TRM's
+//! timings, `docs/target.md`) that is not a win: a multiply–accumulate costs about the same
+//! either way (`vldr` 2 + `vmul` 1 + `vadd` 1 against `vmla` 3 + a ninth of `vldmia`'s 1 + 9),
+//! and every kernel also saves and restores up to 28 FPU registers (`vpush`/`vpop`, 1 + n cycles
+//! each), so the f32 kernels cost more estimated cycles than the portable loops
+//! (`docs/performance/kernels.md`); that save goes away once the firmware's compiler accepts FPU
+//! register operands (see `layers.rs`).
 //!
 //! **Same bits as the portable loops.** `vmla.f32` is the *non-fused* multiply–accumulate:
 //! `d = d + round(n·m)` with two roundings, exactly `acc + w * x` in Rust (`vfma`, the fused
