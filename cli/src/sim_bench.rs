@@ -63,18 +63,6 @@ pub struct Args {
 /// (names as in the core's `src/arch/m4f.rs`), with the scalar they serve.
 const KERNEL_GROUPS: &[(&str, ScalarKind, &[&str])] = &[
     (
-        "f32 layer products (affine and transposed; 9×9, 9×3, 1×9)",
-        ScalarKind::F32,
-        &[
-            "f32_affine_9x9",
-            "f32_affine_9x3",
-            "f32_affine_1x9",
-            "f32_transposed_9x9",
-            "f32_transposed_9x3",
-            "f32_transposed_1x9",
-        ],
-    ),
-    (
         "Q16.16 forward layers (9×9, 9×3, 1×9)",
         ScalarKind::Q16_16,
         &["q16_layer_9x9", "q16_layer_9x3", "q16_layer_1x9"],
@@ -88,11 +76,6 @@ const KERNEL_GROUPS: &[(&str, ScalarKind, &[&str])] = &[
             "q16_transposed_9x3",
             "q16_times_slope_9",
         ],
-    ),
-    (
-        "Q16.16 input normalization",
-        ScalarKind::Q16_16,
-        &["q16_normalize"],
     ),
 ];
 
