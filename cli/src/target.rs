@@ -55,6 +55,17 @@ pub fn simulator() -> Result<Simulator> {
     Simulator::prepare().context("cannot prepare the simulated Cortex-M4F")
 }
 
+/// A simulator whose firmware runs the core's portable loops instead of the Cortex-M4F kernels
+/// named in `kernels` (built anew on every call).
+pub fn portable_simulator(kernels: &[&str]) -> Result<Simulator> {
+    Simulator::prepare_portable(kernels).with_context(|| {
+        format!(
+            "cannot prepare the simulated Cortex-M4F without the kernels {}",
+            kernels.join(", ")
+        )
+    })
+}
+
 /// The target scalar for `precision`; the target has no `f64`.
 pub fn scalar(precision: Precision) -> Result<ScalarKind> {
     match precision {

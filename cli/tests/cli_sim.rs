@@ -262,6 +262,11 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
         let instructions = r["instructions_per_eval"].as_f64().unwrap();
         let macs = r["macs"].as_u64().unwrap() as f64;
         assert!(macs > 0.0 && instructions >= macs, "{r}");
+        // Every instruction costs at least one estimated cycle.
+        assert!(
+            r["cycles_per_eval"].as_f64().unwrap() >= instructions,
+            "{r}"
+        );
         assert!(r["stack_bytes"].as_u64().unwrap() > 0, "{r}");
         assert_eq!(r["points"], 64, "{r}");
     }
@@ -308,9 +313,9 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
     );
 }
 
-/// `docs/performance/target.md` is what `sim-bench` measures now: instruction counts and
-/// stack on the target are exact, so any difference is a change of the core or the firmware,
-/// to be regenerated and committed with it.
+/// `docs/performance/target.md` is what `sim-bench` measures now: instruction counts, their
+/// cycle estimates and stack on the target are exact, so any difference is a change of the
+/// core or the firmware, to be regenerated and committed with it.
 #[test]
 fn the_committed_target_table_matches_a_fresh_run() {
     let table = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/performance/target.md");

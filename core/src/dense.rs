@@ -10,13 +10,11 @@
 //! before it is written (see `unwritten`).
 //!
 //! A scalar may bring target kernels for whole layers (`Kernels::layer_kernel`,
-//! `Kernels::affine_kernel`, `Kernels::transposed_kernel`), for the chain rule through a
-//! layer (`Kernels::times_slope_kernel`) and for both at once
-//! (`Kernels::transposed_slope_kernel`): for single points whose layer shape one of them
-//! covers, the loops below hand the work to it (with `affine_kernel`, the products only, and
-//! apply the activations themselves). f32 and Q16.16 on a Cortex-M4F have them for the N = 9
-//! shapes (`neurosurf-m4f`); they compute the loops' exact bits, so which path ran never shows
-//! in a result.
+//! `Kernels::transposed_kernel`), for the chain rule through a layer
+//! (`Kernels::times_slope_kernel`) and for both at once (`Kernels::transposed_slope_kernel`):
+//! for single points whose layer shape one of them covers, the loops below hand the work to
+//! it. Q16.16 on a Cortex-M4F has them for the N = 9 shapes (`neurosurf-m4f`); they compute
+//! the loops' exact bits, so which path ran never shows in a result.
 
 use crate::implicit::DenseLayout;
 use crate::scalar::Scalar;
@@ -90,33 +88,12 @@ fn forward_by_kernel<S: Scalar, const L: usize, const OUT: usize>(
     x: &[[S; L]],
 ) -> Option<[[S; L]; OUT]> {
     let layer = match x.len() {
-        3 => layer_kernel::<S, 3, OUT>(weights, biases, x.as_flattened()),
-        9 => layer_kernel::<S, 9, OUT>(weights, biases, x.as_flattened()),
-        _ => None,
-    };
-    if let Some(layer) = layer {
-        let mut out = unwritten::<S, L, OUT>();
-        return fill(&mut out, layer).then_some(out);
-    }
-    let acc = match x.len() {
-        3 => affine_kernel::<S, 3, OUT>(weights, biases, x.as_flattened())?,
-        9 => affine_kernel::<S, 9, OUT>(weights, biases, x.as_flattened())?,
+        3 => layer_kernel::<S, 3, OUT>(weights, biases, x.as_flattened())?,
+        9 => layer_kernel::<S, 9, OUT>(weights, biases, x.as_flattened())?,
         _ => return None,
     };
     let mut out = unwritten::<S, L, OUT>();
-    activate::<S, L>(&mut out, &acc);
-    Some(out)
-}
-
-/// `out[j] = a(acc[j])`: a layer's activations as one loop, not inlined. Unrolled into the
-/// caller, the nine activations were straight-line code in which the compiler reloaded the
-/// activation's constants for every neuron (~45 instructions each on the M4F); as a loop it
-/// keeps them in registers (~37, loop and sign included).
-#[inline(never)]
-fn activate<S: Scalar, const L: usize>(out: &mut [[S; L]], acc: &[S::Acc]) {
-    for (out, &acc) in out.iter_mut().zip(acc) {
-        *out = [S::activation_from_acc(acc); L];
-    }
+    fill(&mut out, layer).then_some(out)
 }
 
 /// `Kernels::layer_kernel` on slices of exactly the shape `(OUT, IN)`.
@@ -131,21 +108,6 @@ fn layer_kernel<S: Scalar, const IN: usize, const OUT: usize>(
         return None;
     }
     S::layer_kernel::<IN, OUT>(rows.first_chunk()?, biases.first_chunk()?, x.first_chunk()?)
-}
-
-/// `Kernels::affine_kernel` on slices of exactly the shape `(OUT, IN)`.
-#[inline(always)]
-fn affine_kernel<S: Scalar, const IN: usize, const OUT: usize>(
-    weights: &[S],
-    biases: &[S],
-    x: &[S],
-) -> Option<[S::Acc; OUT]> {
-    let (rows, _) = weights.as_chunks::<IN>();
-    if rows.len() != OUT || biases.len() != OUT || x.len() != IN {
-        return None;
-    }
-    S::affine_kernel::<IN, OUT>(rows.first_chunk()?, biases.first_chunk()?, x.first_chunk()?)
-        .map(|sums| sums.map(S::to_acc))
 }
 
 /// [`transposed`] over all columns for one point through the scalar's target kernel, when it

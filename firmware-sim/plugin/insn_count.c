@@ -1,5 +1,6 @@
 /*
- * A QEMU TCG plugin that counts guest instructions executed between two marker functions.
+ * A QEMU TCG plugin that counts guest instructions executed between two marker functions, and
+ * estimates the Cortex-M4 cycles they take (m4_cycles.h: the TRM's cycle table).
  *
  * Arguments: start=<address>,stop=<address> (the entry addresses of the firmware's
  * neurosurf_region_start / neurosurf_region_stop; the Thumb bit is ignored), and optionally
@@ -7,10 +8,12 @@
  * Every time the stop marker is reached it prints, through qemu_plugin_outs (enable with
  * `-d plugin`, send to a file with `-D`):
  *
- *     neurosurf-region <index> <instructions>
+ *     neurosurf-region <index> <instructions> <estimated cycles>
  *
  * Counting is per translation block: when a block executes while a region is open, its
- * instruction count is added. The start marker opens the region at its first instruction
+ * instruction count and the sum of its instructions' prices are added, plus M4_REFILL when
+ * the block does not start where the previously executed block falls through (the previous
+ * block ended in a taken branch). The start marker opens the region at its first instruction
  * (the rest of its block is not counted), the stop marker's whole block is counted; that
  * constant is measured by the firmware's empty first region and subtracted by the runner.
  * Exact and deterministic: the firmware takes no interrupts.
@@ -24,6 +27,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "m4_cycles.h"
 
 typedef uint64_t qemu_plugin_id_t;
 struct qemu_plugin_tb;
@@ -43,56 +48,67 @@ void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t 
 size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *tb);
 struct qemu_plugin_insn *qemu_plugin_tb_get_insn(const struct qemu_plugin_tb *tb, size_t idx);
 uint64_t qemu_plugin_insn_vaddr(const struct qemu_plugin_insn *insn);
+const void *qemu_plugin_insn_data(const struct qemu_plugin_insn *insn);
+size_t qemu_plugin_insn_size(const struct qemu_plugin_insn *insn);
 void qemu_plugin_outs(const char *string);
 
 __attribute__((visibility("default"))) int qemu_plugin_version = 1;
 
 static uint64_t start_address, stop_address;
 static bool open_region;
-static uint64_t count, regions;
+static uint64_t count, cycles, regions;
+
+/* One translated block: where it starts and falls through, what it holds and costs. */
+struct block {
+    uint64_t address;
+    uint64_t fall_through; /* the address after its last instruction */
+    uint64_t n_insns;
+    uint64_t cycles; /* the sum of m4_cycles over its instructions */
+    uint64_t executed; /* inside regions */
+};
+/* The block executed last, in or out of a region. */
+static const struct block *previous;
 
 /* profile=1: also attribute the counted instructions to translation blocks, and print the
    heaviest blocks of the whole run at exit (up to PROFILE_LINES of them, enough to cover every
    executed block of an N = 9 leaf's field and gradient) as
-   `neurosurf-profile <address> <instructions in the block> <instructions executed>`. */
+   `neurosurf-profile <address> <instructions in the block> <instructions executed>
+   <estimated cycles, refills excluded>`. */
 #define PROFILE_LINES 400
 static bool profile;
 #define PROFILE_SLOTS 8192
-static struct block {
-    uint64_t address;
-    uint64_t n_insns;
-    uint64_t executed;
-} blocks[PROFILE_SLOTS];
-static size_t block_count;
+static struct block *profiled[PROFILE_SLOTS];
+static size_t profiled_count;
 
 static void on_block(unsigned int vcpu, void *data) {
+    struct block *b = data;
+    bool redirected = previous != NULL && previous->fall_through != b->address;
     (void)vcpu;
+    previous = b;
     if (!open_region) {
         return;
     }
-    if (profile) {
-        struct block *b = data;
-        b->executed++;
-        count += b->n_insns;
-    } else {
-        count += (uint64_t)(uintptr_t)data;
-    }
+    b->executed++;
+    count += b->n_insns;
+    cycles += b->cycles + (redirected ? M4_REFILL : 0);
 }
 
 static int heavier(const void *a, const void *b) {
-    const struct block *x = a, *y = b;
+    const struct block *x = *(struct block *const *)a, *y = *(struct block *const *)b;
     uint64_t wx = x->executed * x->n_insns, wy = y->executed * y->n_insns;
     return wx < wy ? 1 : wx > wy ? -1 : 0;
 }
 
 static void print_profile(qemu_plugin_id_t id, void *unused) {
-    char line[96];
+    char line[128];
     (void)id;
     (void)unused;
-    qsort(blocks, block_count, sizeof blocks[0], heavier);
-    for (size_t i = 0; i < block_count && i < PROFILE_LINES && blocks[i].executed > 0; i++) {
-        snprintf(line, sizeof line, "neurosurf-profile 0x%" PRIx64 " %" PRIu64 " %" PRIu64 "\n",
-                 blocks[i].address, blocks[i].n_insns, blocks[i].executed * blocks[i].n_insns);
+    qsort(profiled, profiled_count, sizeof profiled[0], heavier);
+    for (size_t i = 0; i < profiled_count && i < PROFILE_LINES && profiled[i]->executed > 0; i++) {
+        const struct block *b = profiled[i];
+        snprintf(line, sizeof line,
+                 "neurosurf-profile 0x%" PRIx64 " %" PRIu64 " %" PRIu64 " %" PRIu64 "\n", b->address,
+                 b->n_insns, b->executed * b->n_insns, b->executed * b->cycles);
         qemu_plugin_outs(line);
     }
 }
@@ -102,41 +118,63 @@ static void on_start(unsigned int vcpu, void *unused) {
     (void)unused;
     open_region = true;
     count = 0;
+    cycles = 0;
 }
 
 static void on_stop(unsigned int vcpu, void *unused) {
-    char line[80];
+    char line[96];
     (void)vcpu;
     (void)unused;
     if (!open_region) {
         return;
     }
     open_region = false;
-    snprintf(line, sizeof line, "neurosurf-region %" PRIu64 " %" PRIu64 "\n", regions, count);
+    snprintf(line, sizeof line, "neurosurf-region %" PRIu64 " %" PRIu64 " %" PRIu64 "\n", regions, count,
+             cycles);
     qemu_plugin_outs(line);
     regions++;
+}
+
+/* The price of one instruction, read from its bytes (little-endian halfwords). */
+static unsigned price(const struct qemu_plugin_insn *insn) {
+    const uint8_t *bytes = qemu_plugin_insn_data(insn);
+    size_t size = qemu_plugin_insn_size(insn);
+    uint16_t hw1 = (uint16_t)(bytes[0] | bytes[1] << 8);
+    uint16_t hw2 = size == 4 ? (uint16_t)(bytes[2] | bytes[3] << 8) : 0;
+    return m4_cycles(hw1, hw2, size);
 }
 
 static void on_translate(qemu_plugin_id_t id, struct qemu_plugin_tb *tb) {
     size_t n = qemu_plugin_tb_n_insns(tb);
     (void)id;
-    void *data = (void *)(uintptr_t)n;
-    if (profile && n > 0 && block_count < PROFILE_SLOTS) {
-        struct block *b = &blocks[block_count++];
-        b->address = qemu_plugin_insn_vaddr(qemu_plugin_tb_get_insn(tb, 0));
-        b->n_insns = n;
-        data = b;
+    if (n == 0) {
+        return;
     }
-    qemu_plugin_register_vcpu_tb_exec_cb(tb, on_block, QEMU_PLUGIN_CB_NO_REGS, data);
+    /* Blocks live as long as QEMU may run them: never freed (a run translates a few thousand). */
+    struct block *b = calloc(1, sizeof *b);
+    if (b == NULL) {
+        fprintf(stderr, "insn_count: out of memory\n");
+        abort();
+    }
+    b->n_insns = n;
     for (size_t i = 0; i < n; i++) {
         struct qemu_plugin_insn *insn = qemu_plugin_tb_get_insn(tb, i);
         uint64_t at = qemu_plugin_insn_vaddr(insn) & ~(uint64_t)1;
+        if (i == 0) {
+            b->address = at;
+        }
+        b->fall_through = at + qemu_plugin_insn_size(insn);
+        b->cycles += price(insn);
         if (at == start_address) {
             qemu_plugin_register_vcpu_insn_exec_cb(insn, on_start, QEMU_PLUGIN_CB_NO_REGS, NULL);
         } else if (at == stop_address) {
             qemu_plugin_register_vcpu_insn_exec_cb(insn, on_stop, QEMU_PLUGIN_CB_NO_REGS, NULL);
         }
     }
+    if (profile && profiled_count < PROFILE_SLOTS) {
+        profiled[profiled_count++] = b;
+    }
+    qemu_plugin_register_vcpu_tb_exec_cb(tb, on_block, QEMU_PLUGIN_CB_NO_REGS, b);
 }
 
 __attribute__((visibility("default"))) int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info,

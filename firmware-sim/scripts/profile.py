@@ -7,7 +7,8 @@ Usage:
         prof.txt POINTS
 
 The profile's lines are `neurosurf-profile <block address> <instructions in the block>
-<instructions executed>` (the QEMU plugin's heaviest translation blocks over the whole run).
+<instructions executed> <estimated cycles>` (the QEMU plugin's heaviest translation blocks over
+the whole run; the cycles are not used here).
 Every instruction of a block is attributed to the function it was compiled from (the innermost
 inlined one, so kernels inlined into the evaluation count as themselves); the totals are divided
 by POINTS. A development aid: it needs `llvm-objdump` and `llvm-addr2line` (Debian: `llvm`).
@@ -49,7 +50,7 @@ def main():
     with open(profile) as lines:
         for line in lines:
             fields = line.split()
-            if len(fields) == 4 and fields[0] == "neurosurf-profile":
+            if len(fields) == 5 and fields[0] == "neurosurf-profile":
                 blocks.append((int(fields[1], 16), int(fields[2]), int(fields[3])))
     code = instruction_addresses(elf)
     spans = {}

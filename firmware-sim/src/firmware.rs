@@ -26,8 +26,12 @@ pub struct Footprint {
 
 /// A `--remap-path-prefix` flag as a TOML string, mapping `from` to `to`.
 fn remap(from: &Path, to: &str) -> String {
-    let flag = format!("--remap-path-prefix={}={to}", from.display());
-    format!("\"{}\"", flag.replace('\\', "\\\\").replace('"', "\\\""))
+    toml_string(&format!("--remap-path-prefix={}={to}", from.display()))
+}
+
+/// `text` as a TOML basic string.
+fn toml_string(text: &str) -> String {
+    format!("\"{}\"", text.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
 /// Cargo's home (its registry sources are compiled into the firmware).
@@ -60,9 +64,45 @@ impl Firmware {
     /// [`SimError::Build`] with the compiler output; [`SimError::Elf`] when the result lacks
     /// the markers.
     pub fn build(toolchain: &Toolchain, root: &Path) -> Result<Self, SimError> {
+        Self::build_with(toolchain, root, "target/firmware", &[])
+    }
+
+    /// As [`Firmware::build`], with the core's Cortex-M4F kernels named in `portable` turned
+    /// off (`--cfg neurosurf_portable="<kernel>"`, see the core's `src/arch/m4f.rs`): the
+    /// portable loops they replace run instead, with the same results. Built in
+    /// `target/firmware-portable`, which each call with other kernels rebuilds.
+    ///
+    /// # Errors
+    /// As [`Firmware::build`].
+    pub fn build_portable(
+        toolchain: &Toolchain,
+        root: &Path,
+        portable: &[&str],
+    ) -> Result<Self, SimError> {
+        let flags: Vec<String> = portable
+            .iter()
+            .map(|kernel| format!("--cfg=neurosurf_portable=\"{kernel}\""))
+            .collect();
+        Self::build_with(toolchain, root, "target/firmware-portable", &flags)
+    }
+
+    /// Builds the firmware into `target_dir` (relative to `root`) with extra rustc `flags`.
+    fn build_with(
+        toolchain: &Toolchain,
+        root: &Path,
+        target_dir: &str,
+        flags: &[String],
+    ) -> Result<Self, SimError> {
         let source = root.join("firmware-sim/firmware");
-        let target_dir = root.join("target/firmware");
-        let elf = build_elf(toolchain, root, &source, &target_dir, "neurosurf-firmware")?;
+        let target_dir = root.join(target_dir);
+        let elf = build_elf_flags(
+            toolchain,
+            root,
+            &source,
+            &target_dir,
+            "neurosurf-firmware",
+            flags,
+        )?;
         let memory = std::fs::read_to_string(source.join("memory.x"))
             .map_err(SimError::io(source.join("memory.x")))?;
         Self::read(&elf, &memory)
@@ -138,6 +178,18 @@ pub fn build_elf(
     target_dir: &Path,
     binary: &str,
 ) -> Result<PathBuf, SimError> {
+    build_elf_flags(toolchain, root, source, target_dir, binary, &[])
+}
+
+/// [`build_elf`] with extra rustc `flags`.
+fn build_elf_flags(
+    toolchain: &Toolchain,
+    root: &Path,
+    source: &Path,
+    target_dir: &Path,
+    binary: &str,
+    flags: &[String],
+) -> Result<PathBuf, SimError> {
     let mut command = Command::new(&toolchain.cargo);
     command
         .args(["build", "--release", "--quiet"])
@@ -162,6 +214,7 @@ pub fn build_elf(
     if let Some(home) = cargo_home() {
         remaps.push(remap(&home, "/cargo"));
     }
+    remaps.extend(flags.iter().map(|flag| toml_string(flag)));
     command.arg("--config").arg(format!(
         "target.{TARGET_TRIPLE}.rustflags=[{}]",
         remaps.join(", ")

@@ -13,6 +13,7 @@ use neurosurf_sim_protocol::{
     Status,
 };
 
+use crate::plugin::RegionCount;
 use crate::{Firmware, SimError, Toolchain, log, plugin, qemu};
 
 /// Environment variable naming a file that receives the instruction profile of each run
@@ -92,8 +93,9 @@ pub struct Run {
     pub words_per_point: usize,
     /// Stack high-water mark of the run, in bytes.
     pub stack_bytes: u32,
-    /// Instructions in every timed region; region 0 is empty (the markers' own cost).
-    pub regions: Vec<u64>,
+    /// Instructions and estimated cycles in every timed region; region 0 is empty (the
+    /// markers' own cost).
+    pub regions: Vec<RegionCount>,
     /// The decoded defmt log.
     pub log: Vec<String>,
 }
@@ -154,10 +156,23 @@ impl Run {
     /// Guest instructions per evaluated point, the markers' own cost removed: the exact,
     /// deterministic cost of one evaluation (plus its share of the loop around it).
     pub fn instructions_per_point(&self) -> f64 {
-        let Some((&empty, timed)) = self.regions.split_first() else {
+        self.per_point(|r| r.instructions)
+    }
+
+    /// Estimated Cortex-M4 cycles per evaluated point, the markers' own cost removed: the
+    /// instructions priced by the TRM's cycle table (see [`crate::plugin`]); deterministic,
+    /// but an estimate, not a measurement of any chip.
+    pub fn cycles_per_point(&self) -> f64 {
+        self.per_point(|r| r.cycles)
+    }
+
+    /// `field` of the timed regions, less that of the empty region 0, per point.
+    fn per_point(&self, field: impl Fn(&RegionCount) -> u64) -> f64 {
+        let Some((empty, timed)) = self.regions.split_first() else {
             return f64::NAN;
         };
-        let total: u64 = timed.iter().map(|&c| c.saturating_sub(empty)).sum();
+        let empty = field(empty);
+        let total: u64 = timed.iter().map(|c| field(c).saturating_sub(empty)).sum();
         total as f64 / self.count().max(1) as f64
     }
 }
@@ -205,6 +220,27 @@ impl Simulator {
     pub fn prepare_in(root: &Path) -> Result<Self, SimError> {
         let toolchain = Toolchain::find(root)?;
         let firmware = Firmware::build(&toolchain, root)?;
+        Self::with_firmware(toolchain, root, firmware)
+    }
+
+    /// As [`Simulator::prepare_in`] for the repository this crate is in, with the firmware of
+    /// [`Firmware::build_portable`]: the core's kernels named in `portable` turned off. Not
+    /// cached: each call rebuilds that firmware, so finish the runs of one before the next.
+    ///
+    /// # Errors
+    /// As [`Simulator::prepare`].
+    pub fn prepare_portable(portable: &[&str]) -> Result<Self, SimError> {
+        let root = crate::repository_root();
+        let toolchain = Toolchain::find(&root)?;
+        let firmware = Firmware::build_portable(&toolchain, &root, portable)?;
+        Self::with_firmware(toolchain, &root, firmware)
+    }
+
+    fn with_firmware(
+        toolchain: Toolchain,
+        root: &Path,
+        firmware: Firmware,
+    ) -> Result<Self, SimError> {
         let plugin = plugin::build(&toolchain, root)?;
         let table = log::table(&firmware.elf, &firmware.bytes)?;
         Ok(Simulator {

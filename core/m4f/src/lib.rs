@@ -1,57 +1,39 @@
 //! # neurosurf-m4f
 //!
-//! The dense-layer products of `neurosurf-core`'s width-9 implicit modules, written for the
-//! Cortex-M4F's single-precision FPU (FPv4-SP) in inline assembly, and the Q16.16 layers,
-//! transposes with the chain rule, and input normalization for its integer multiply–accumulate. On every other target this crate is
+//! The Q16.16 layers of `neurosurf-core`'s width-9 implicit modules, written for the
+//! Cortex-M4F's integer multiply–accumulate in inline assembly: the forward layers, the
+//! transposes with the chain rule, and the chain rule alone. On every other target this crate is
 //! empty and the core runs its portable loops.
 //!
-//! Why assembly: the portable loop compiles to three instructions per multiply–accumulate on the
-//! M4F (`vldr` of the weight, `vmul`, `vadd`), because LLVM neither merges the weight loads into
-//! `vldm` nor, for this core, emits `vmla`. Here a row of nine weights is one `vldmia` and each
-//! product one `vmla.f32`: with the loads, stores and the register save, about 1.2 instructions
-//! per multiply–accumulate. What is measured (by the simulator) is instructions; cycles are
-//! not. By the Cortex-M4 TRM's figures a multiply–accumulate costs about the same either way
-//! (`vldr` 2 + `vmul` 1 + `vadd` 1 against `vmla` 3 + a ninth of `vldmia`'s 1 + 9), but every
-//! kernel also saves and restores up to 28 FPU registers (`vpush`/`vpop`, 1 + n cycles each), so
-//! the cycle count is probably somewhat *worse*; that save goes away once the firmware's compiler
-//! accepts FPU register operands (see `layers.rs`).
+//! Only kernels that beat the portable loops by at least 10 % in the simulator's estimated
+//! cycles (the Cortex-M4 TRM's timings, `docs/target.md`) are here
+//! (`docs/performance/kernels.md`). `f32` has none: its portable loop is three instructions per
+//! multiply–accumulate (`vldr` 2 cycles + `vmul` 1 + `vadd` 1), and a `vldmia` + non-fused
+//! `vmla` kernel is not cheaper per product (`vmla` 3 + a ninth of `vldmia`'s 1 + 9) while it
+//! has to save the FPU registers it uses (Rust 1.96 refuses FPU register operands on this
+//! target), so such kernels were 7–25 % slower. The input normalization (nine products) has
+//! none either: it saved at most 1.5 %.
 //!
-//! **Same bits as the portable loops.** `vmla.f32` is the *non-fused* multiply–accumulate:
-//! `d = d + round(n·m)` with two roundings, exactly `acc + w * x` in Rust (`vfma`, the fused
-//! one, would not be). Every function sums in the order the core's portable kernels do: a
-//! forward row starts at its bias and adds inputs 0, 1, …; a transposed column starts at +0.0 and
-//! adds rows 0, 1, …. The simulator tests compare the target's results with the host's portable
-//! ones (`tests/tests/simulator.rs`) and require them equal bit for bit.
+//! **Same bits as the portable loops.** Every function computes exactly what the core's
+//! portable code does for its shape: the simulator tests compare the target's results with the
+//! host's portable ones (`tests/tests/simulator.rs`) and require them equal bit for bit.
 //!
 //! **Safety.** Each function takes references to fixed-size arrays, so the lengths the assembly
-//! reads are fixed by the types. The assembly reads through those pointers, writes exactly the
-//! result buffer it then returns (a `MaybeUninit` every element of which it stores), pushes and
-//! pops 88–112 bytes of stack, restores every FPU register it uses, and changes only the FPSCR's
-//! sticky exception flags (so no block claims `preserves_flags`). The Q16.16 blocks declare every
-//! general register they change, save r6, r7 and r11 (which Rust does not let them declare on
-//! every ARM target) on the stack for their duration when they use them (`q16_layer_9x9` also
-//! keeps its biases and pre-activations in 72 bytes below them, the fused 9×9 transpose its
-//! constants and mask in 16, sp staying 8-byte aligned), and change the APSR flags;
-//! `q16_times_slope_9` updates its `&mut` array in place. That is the whole unsafe surface,
-//! in two modules.
+//! reads are fixed by the types. The assembly reads through those pointers and writes exactly
+//! the result buffer it then returns (a `MaybeUninit` every element of which it stores). The
+//! blocks declare every general register they change, save r6, r7 and r11 (which Rust does not
+//! let them declare on every ARM target) on the stack for their duration when they use them
+//! (`q16_layer_9x9` also keeps its biases and pre-activations in 72 bytes below them, the fused
+//! 9×9 transpose its constants and mask in 16, sp staying 8-byte aligned), and change the APSR
+//! flags; `q16_times_slope_9` updates its `&mut` array in place. That is the whole unsafe
+//! surface, in one module.
 //!
 //! The kernels are compiled for bare-metal hard-float ARM (`target_arch = "arm"`,
-//! `target_abi = "eabihf"`, `target_os = "none"`: the Cortex-M4F/M7 targets); their bits are
-//! those of any VFP (every VFP `vmla` is non-fused), their instruction counts are the M4F's.
+//! `target_abi = "eabihf"`, `target_os = "none"`: the Cortex-M4F/M7 targets); their
+//! instruction counts are the M4F's.
 //!
-//! Shapes (`W` is row-major, one row per output neuron, as in the core's parameter layout;
-//! instructions counted from the source, the register save included):
-//!
-//! | function | computes | multiply–accumulates | instructions |
-//! |---|---|---:|---:|
-//! | `affine_9x9` | `b + W·x`, W 9×9 | 81 | 95 |
-//! | `affine_9x3` | `b + W·x`, W 9×3 | 27 | 41 |
-//! | `affine_1x9` | `b + w·x`, w 1×9 | 9 | 15 |
-//! | `transposed_9x9` | `Wᵀ·g`, W 9×9 | 81 | 95 |
-//! | `transposed_9x3` | `Wᵀ·g`, W 9×3 | 27 | 41 |
-//! | `transposed_1x9` | `wᵀ·g`, w 1×9 | 9 | 15 |
-//!
-//! **Q16.16** (`fixed_layers.rs`, `I16F16` in and out): every product an `smull` / `smlal` into
+//! The kernels (`fixed_layers.rs`, `I16F16` in and out; `W` is row-major, one row per output
+//! neuron, as in the core's parameter layout): every product an `smull` / `smlal` into
 //! a 64-bit accumulator (exact: the same sum as the portable `i64` loop), every sum rounded like
 //! the core's `Scalar::from_acc` (add 2¹⁵, shift by 16, saturate, the saturation out of line)
 //! or, before an activation, clamped to ±10, where the table has saturated.
@@ -71,7 +53,6 @@
 //!   test. A neuron outside it keeps its rounded sum and comes back in a mask, which the core
 //!   finishes on its portable saturating path. `q16_transposed_9x3` (back through a leaf's
 //!   first layer) reads columns 0 and 1 the same way.
-//! - `q16_normalize` is a leaf's input normalization x′ = A·(x − c) (`qsub`, three rows).
 //! - `q16_times_slope_9` is the chain rule alone on nine neurons, for node modules, whose
 //!   transposes have no kernel: the slope from the neuron's output and the product, each a
 //!   rounded high word (`smmulr`), 14 instructions a neuron with the constants in registers.
@@ -85,7 +66,6 @@
 //! | `q16_layer_9x3` | a(b + W·x), W 9×3 | 27 | 198 |
 //! | `q16_transposed_slope_1x9` | times_slope(round(wᵀ·g), a), w 1×9 | 9 (+ 27 products) | 140 |
 //! | `q16_transposed_9x3` | round(Wᵀ·g), W 9×3 | 27 | 85 |
-//! | `q16_normalize` | round(A·(x − c)) | 9 | 46 |
 //! | `q16_layer_1x9` | a(b + w·x), w 1×9 | 9 | 42 |
 //! | `q16_times_slope_9` | δᵢ ← round(δᵢ·a′(aᵢ)), 9 neurons (node modules) | (27 products) | 127 (from the source) |
 //!
@@ -93,25 +73,18 @@
 //! so that every column of its transposes saturates, at both ends, and every pre-activation
 //! is clamped; two models built so that the chain rule's δ leaves the fast range without
 //! saturating, so that its fallback changes the result — a leaf (the fused 9×9 transpose) and
-//! a node module's children (`q16_times_slope_9`); and a model whose normalized input
-//! saturates where it shows in Φ (row 0; rows 1 and 2 share its code).
+//! a node module's children (`q16_times_slope_9`).
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 mod fixed_layers;
-#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-mod layers;
 
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 pub use fixed_layers::{
-    ActivationTable, q16_layer_1x9, q16_layer_9x3, q16_layer_9x9, q16_normalize, q16_times_slope_9,
+    ActivationTable, q16_layer_1x9, q16_layer_9x3, q16_layer_9x9, q16_times_slope_9,
     q16_transposed_9x3, q16_transposed_slope_1x9, q16_transposed_slope_9x9,
-};
-#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-pub use layers::{
-    affine_1x9, affine_9x3, affine_9x9, transposed_1x9, transposed_9x3, transposed_9x9,
 };
 
 /// Whether this build has the kernels (bare-metal hard-float ARM: the Cortex-M4F/M7 targets).

@@ -2,15 +2,20 @@
 //! width-9 layers of an N = 9 implicit module, each with exactly the bits of the portable loop
 //! it replaces.
 //!
-//! - `f32`: the layer products (one `vldmia` per weight row, one non-fused `vmla` per product:
-//!   the same bits as `acc + w * x`), forward and transposed, 9×3, 9×9 and 1×9.
-//! - Q16.16: the forward layers (products, rounding and the activation table's lookup in one
-//!   kernel each), the 9×9 and 1×9 transposes fused with the chain rule on their sums, the 9×3
-//!   transpose, the chain rule alone through nine neurons, and the input normalization.
+//! Q16.16 only: the forward layers (products, rounding and the activation table's lookup in one
+//! kernel each), the 9×9 and 1×9 transposes fused with the chain rule on their sums, the 9×3
+//! transpose, and the chain rule alone through nine neurons. `f32` and the input normalization
+//! have no kernel: by the simulator's cycle estimate the portable loops are faster there
+//! (`docs/performance/kernels.md`).
 
 use neurosurf_m4f as m4f;
 
 use crate::scalar::Q16;
+
+// Every kernel is in use unless a comparison build turns it off with
+// `--cfg neurosurf_portable="<kernel>"` (`neurosurf sim-bench --kernel-comparison` does, to
+// price the portable loop it replaces): the `cfg` attributes and `cfg!` tests below leave the
+// default build's code as it would be without them.
 
 // The forward kernels hard-code the activation table's layout: 1 281 segments of two words,
 // H = 0 at index 640, one segment per 2¹⁰ bits of H.
@@ -18,49 +23,6 @@ const _: () = {
     use crate::scalar::activation_table::{FRACTION_BITS, LAST, SEGMENTS};
     assert!(FRACTION_BITS == 10 && LAST == 640 && SEGMENTS.len() == 1281);
 };
-
-/// `b + W·x` when a kernel exists for `(OUT, IN)`.
-#[inline(always)]
-pub(super) fn f32_affine<const IN: usize, const OUT: usize>(
-    w: &[[f32; IN]; OUT],
-    b: &[f32; OUT],
-    x: &[f32; IN],
-) -> Option<[f32; OUT]> {
-    let w = w.as_flattened();
-    match (OUT, IN) {
-        (9, 9) => resize(m4f::affine_9x9(
-            rows(w)?,
-            b.first_chunk()?,
-            x.first_chunk()?,
-        )),
-        (9, 3) => resize(m4f::affine_9x3(
-            rows(w)?,
-            b.first_chunk()?,
-            x.first_chunk()?,
-        )),
-        (1, 9) => resize([m4f::affine_1x9(
-            w.first_chunk()?,
-            b.first()?,
-            x.first_chunk()?,
-        )]),
-        _ => None,
-    }
-}
-
-/// `Wᵀ·g` when a kernel exists for `(OUT, IN)`.
-#[inline(always)]
-pub(super) fn f32_transposed<const IN: usize, const OUT: usize>(
-    w: &[[f32; IN]; OUT],
-    g: &[f32; OUT],
-) -> Option<[f32; IN]> {
-    let w = w.as_flattened();
-    match (OUT, IN) {
-        (9, 9) => resize(m4f::transposed_9x9(rows(w)?, g.first_chunk()?)),
-        (9, 3) => resize(m4f::transposed_9x3(rows(w)?, g.first_chunk()?)),
-        (1, 9) => resize(m4f::transposed_1x9(w.first_chunk()?, g.first()?)),
-        _ => None,
-    }
-}
 
 /// `Wᵀ·g`, each output rounded as `from_acc`, when a kernel exists for `(OUT, IN)`.
 #[inline(always)]
@@ -70,6 +32,7 @@ pub(super) fn q16_transposed<const IN: usize, const OUT: usize>(
 ) -> Option<[Q16; IN]> {
     let w = w.as_flattened();
     match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "q16_transposed_9x3"))]
         (9, 3) => resize(m4f::q16_transposed_9x3(rows(w)?, g.first_chunk()?)),
         _ => None,
     }
@@ -85,6 +48,9 @@ pub(super) fn q16_times_slope<const N: usize>(
     offset: i32,
     square: i32,
 ) -> Option<u32> {
+    if cfg!(neurosurf_portable = "q16_times_slope_9") {
+        return None;
+    }
     let delta: &mut [Q16; 9] = delta.as_mut_slice().try_into().ok()?;
     let a: &[Q16; 9] = a.as_slice().try_into().ok()?;
     Some(m4f::q16_times_slope_9(delta, a, offset, square))
@@ -101,18 +67,21 @@ pub(super) fn q16_layer<const IN: usize, const OUT: usize>(
 ) -> Option<[Q16; OUT]> {
     let w = w.as_flattened();
     match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "q16_layer_9x9"))]
         (9, 9) => resize(m4f::q16_layer_9x9(
             rows(w)?,
             b.first_chunk()?,
             x.first_chunk()?,
             table,
         )),
+        #[cfg(not(neurosurf_portable = "q16_layer_9x3"))]
         (9, 3) => resize(m4f::q16_layer_9x3(
             rows(w)?,
             b.first_chunk()?,
             x.first_chunk()?,
             table,
         )),
+        #[cfg(not(neurosurf_portable = "q16_layer_1x9"))]
         (1, 9) => resize([m4f::q16_layer_1x9(
             w.first_chunk()?,
             *b.first()?,
@@ -135,22 +104,17 @@ pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
     square: i32,
 ) -> Option<([Q16; IN], u32)> {
     let w = w.as_flattened();
-    let a = a.first_chunk()?;
-    let (out, slow) = match (OUT, IN) {
+    let a: &[Q16; 9] = a.first_chunk()?;
+    let (out, slow): ([Q16; 9], u32) = match (OUT, IN) {
+        #[cfg(not(neurosurf_portable = "q16_transposed_slope_9x9"))]
         (9, 9) => m4f::q16_transposed_slope_9x9(rows(w)?, g.first_chunk()?, a, offset, square),
+        #[cfg(not(neurosurf_portable = "q16_transposed_slope_1x9"))]
         (1, 9) => {
             m4f::q16_transposed_slope_1x9(w.first_chunk()?, *g.first()?, a, offset, square)?
         }
         _ => return None,
     };
     Some((resize(out)?, slow))
-}
-
-/// A module's normalized position x′ = A·(x − c) (`normalization` = [c, A row by row]), as the
-/// core's `normalized_input`, when a kernel exists.
-#[inline(always)]
-pub(super) fn q16_normalize(normalization: &[Q16; 12], x: &[Q16; 3]) -> Option<[Q16; 3]> {
-    Some(m4f::q16_normalize(normalization, x))
 }
 
 /// The first `R` rows of `C` values of a row-major matrix.

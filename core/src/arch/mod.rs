@@ -42,22 +42,14 @@ pub trait Kernels: Sized + Copy {
     /// module alive. At other widths `LANE_GROUP` applies: loops with run-time bounds amortize
     /// their set-up over the lanes.
     const GRADIENT_LANE_GROUP: usize;
+    /// `LANE_GROUP` for field batches at the width the target kernels are written for, N = 9
+    /// (`crate::dense::KERNEL_WIDTH`).
+    const KERNEL_WIDTH_LANE_GROUP: usize = Self::LANE_GROUP;
 
-    /// `b + W·x` (W row-major, one row per output), each output the bias accumulating `mac`
-    /// over the inputs in order and rounded by `from_acc` (exact for `f32`, whose accumulator
-    /// is an `f32`). (f32 on a Cortex-M4F: the width-9 layers.)
-    #[inline(always)]
-    fn affine_kernel<const IN: usize, const OUT: usize>(
-        w: &[[Self; IN]; OUT],
-        b: &[Self; OUT],
-        x: &[Self; IN],
-    ) -> Option<[Self; OUT]> {
-        let _ = (w, b, x);
-        None
-    }
-    /// A whole forward layer: output j is `activation_from_acc` of the accumulation
-    /// `affine_kernel` describes. (Q16.16 on a Cortex-M4F: the width-9 hidden layers, whose
-    /// rounding and table lookup the kernel does too.)
+    /// A whole forward layer (W row-major, one row per output): output j is
+    /// `activation_from_acc` of the bias accumulating `mac` over the inputs in order.
+    /// (Q16.16 on a Cortex-M4F: the width-9 layers, whose rounding and table lookup the kernel
+    /// does too.)
     #[inline(always)]
     fn layer_kernel<const IN: usize, const OUT: usize>(
         w: &[[Self; IN]; OUT],
@@ -68,7 +60,7 @@ pub trait Kernels: Sized + Copy {
         None
     }
     /// `Wᵀ·g`: each output `from_acc` of `ZERO.to_acc()` accumulating `mac` over the rows in
-    /// order. (f32 and Q16.16 on a Cortex-M4F: the width-9 transposes.)
+    /// order. (Q16.16 on a Cortex-M4F: the 9×3 transpose.)
     #[inline(always)]
     fn transposed_kernel<const IN: usize, const OUT: usize>(
         w: &[[Self; IN]; OUT],
@@ -84,14 +76,6 @@ pub trait Kernels: Sized + Copy {
         let _ = (delta, a);
         false
     }
-    /// A module's normalized position x′ = A·(x − c) for one point (`normalization` is
-    /// [c₀, c₁, c₂, then A row by row]); x′ᵣ is
-    /// `from_acc(ZERO.to_acc() + Σₖ mac(A[r][k], x[k].sub(c[k])))`. (Q16.16 on a Cortex-M4F.)
-    #[inline(always)]
-    fn normalization_kernel(normalization: &[Self; 12], x: &[Self; 3]) -> Option<[Self; 3]> {
-        let _ = (normalization, x);
-        None
-    }
     /// `transposed_kernel` followed by `times_slope` on each output with `a[i]`. (Q16.16 on a
     /// Cortex-M4F: the 9×9 and 1×9 transposes of the backward pass, the chain rule on the
     /// column sums while they are in registers.)
@@ -106,36 +90,27 @@ pub trait Kernels: Sized + Copy {
     }
 }
 
+/// No kernels: on the Cortex-M4F the portable loops cost fewer estimated cycles than assembly
+/// layer products (`docs/performance/kernels.md`).
 impl Kernels for f32 {
-    const TARGET_KERNELS: bool = neurosurf_m4f::AVAILABLE;
+    const TARGET_KERNELS: bool = false;
     /// Eight `f32` accumulators (and their inputs) fit the FPU's 32 registers.
     const LANE_GROUP: usize = 8;
     /// Eight on 64-bit hosts (the lanes vectorize); one on 32-bit targets: on the Cortex-M4F
     /// the backward pass's eight-lane layers (288 bytes each) are zeroed and copied in memory,
-    /// and with N = 9 compiled in, point by point costs fewer instructions (measured: 1978 vs
-    /// 1997 per point for the N = 9 leaf, 10 916 vs 11 389 for the three-leaf head) and a third
-    /// of the stack. (At run-time widths eight lanes stay cheaper: width 16, 4356 vs 6397.)
+    /// and with N = 9 compiled in, point by point costs fewer estimated cycles (measured: 2 675
+    /// vs 2 863 per point for the N = 9 leaf, 15 710 vs 17 510 for the three-leaf head) and
+    /// less than half the stack. (At run-time widths eight lanes stay cheaper: width 16, 4356
+    /// vs 6397 instructions.)
     const GRADIENT_LANE_GROUP: usize = if cfg!(target_pointer_width = "64") {
         8
     } else {
         1
     };
-
-    #[inline(always)]
-    fn affine_kernel<const IN: usize, const OUT: usize>(
-        w: &[[f32; IN]; OUT],
-        b: &[f32; OUT],
-        x: &[f32; IN],
-    ) -> Option<[f32; OUT]> {
-        target::f32_affine(w, b, x)
-    }
-    #[inline(always)]
-    fn transposed_kernel<const IN: usize, const OUT: usize>(
-        w: &[[f32; IN]; OUT],
-        g: &[f32; OUT],
-    ) -> Option<[f32; IN]> {
-        target::f32_transposed(w, g)
-    }
+    /// Eight on 64-bit hosts; one on 32-bit targets: on the Cortex-M4F eight lanes of the N = 9
+    /// head cost more estimated cycles per point than one (11 084 against 10 780; the leaf
+    /// alone is even, 1 859 against 1 862) and 5 KiB more stack.
+    const KERNEL_WIDTH_LANE_GROUP: usize = Self::GRADIENT_LANE_GROUP;
 }
 
 impl Kernels for Q16 {
@@ -175,10 +150,6 @@ impl Kernels for Q16 {
         };
         finish_times_slope(delta, a, slow);
         true
-    }
-    #[inline(always)]
-    fn normalization_kernel(normalization: &[Q16; 12], x: &[Q16; 3]) -> Option<[Q16; 3]> {
-        target::q16_normalize(normalization, x)
     }
     #[inline(always)]
     fn transposed_slope_kernel<const IN: usize, const OUT: usize>(

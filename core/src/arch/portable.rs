@@ -4,23 +4,6 @@
 use crate::scalar::Q16;
 
 #[inline(always)]
-pub(super) fn f32_affine<const IN: usize, const OUT: usize>(
-    _: &[[f32; IN]; OUT],
-    _: &[f32; OUT],
-    _: &[f32; IN],
-) -> Option<[f32; OUT]> {
-    None
-}
-
-#[inline(always)]
-pub(super) fn f32_transposed<const IN: usize, const OUT: usize>(
-    _: &[[f32; IN]; OUT],
-    _: &[f32; OUT],
-) -> Option<[f32; IN]> {
-    None
-}
-
-#[inline(always)]
 pub(super) fn q16_transposed<const IN: usize, const OUT: usize>(
     _: &[[Q16; IN]; OUT],
     _: &[Q16; OUT],
@@ -56,10 +39,5 @@ pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
     _: i32,
     _: i32,
 ) -> Option<([Q16; IN], u32)> {
-    None
-}
-
-#[inline(always)]
-pub(super) fn q16_normalize(_: &[Q16; 12], _: &[Q16; 3]) -> Option<[Q16; 3]> {
     None
 }

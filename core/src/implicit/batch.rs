@@ -1,11 +1,12 @@
 //! Batch evaluation: [`LANES`] points at a time in structure-of-arrays form, so every
 //! multiply–accumulate of a weight runs over contiguous lanes (the parallel-hardware intent of
 //! both Carcenac and Wyvill–Cao: one weight, many points) — for the scalars where that pays on
-//! the machine (`Kernels::LANE_GROUP`, `Kernels::GRADIENT_LANE_GROUP`): on 64-bit hosts
-//! always; on a Cortex-M4F never for Q16.16 (eight 64-bit accumulators do not fit its register
-//! file), not for the `f32` field and gradient at a width compiled as a constant (its
-//! eight-lane backward layers are zeroed and copied in memory), and not for the `f32` field at
-//! N = 9, where single points have the M4F assembly kernels: those batches run point by point.
+//! the machine (`Kernels::LANE_GROUP`, `Kernels::GRADIENT_LANE_GROUP`,
+//! `Kernels::KERNEL_WIDTH_LANE_GROUP`): on 64-bit hosts always; on a Cortex-M4F never for
+//! Q16.16 (eight 64-bit accumulators do not fit its register file), not for the `f32` field and
+//! gradient at a width compiled as a constant (its eight-lane backward layers are zeroed and
+//! copied in memory), and not for the `f32` field at N = 9 (eight lanes cost more estimated
+//! cycles there): those batches run point by point.
 
 use super::eval::{FieldGradient, ModuleView};
 use super::model::ImplicitModel;
@@ -15,7 +16,8 @@ use crate::error::LengthMismatch;
 use crate::scalar::Scalar;
 
 /// Points evaluated together by the batch functions (for scalars whose
-/// `Kernels::LANE_GROUP` or `Kernels::GRADIENT_LANE_GROUP` is 1: one at a time).
+/// `Kernels::LANE_GROUP`, `Kernels::GRADIENT_LANE_GROUP` or `Kernels::KERNEL_WIDTH_LANE_GROUP`
+/// is 1: one at a time).
 pub const LANES: usize = 8;
 
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
@@ -56,11 +58,8 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn field_batch(&self, points: &[[S; 3]], out: &mut [S]) -> Result<(), LengthMismatch> {
         check_lengths(points.len(), out.len())?;
-        // Where the scalar has target kernels for this width, single points use them and
-        // eight lanes do not: one at a time is then cheaper (f32 at N = 9 on the M4F: 1 122
-        // instructions per point against 1 212).
-        let group = if S::TARGET_KERNELS && self.model.width == KERNEL_WIDTH {
-            1
+        let group = if self.model.width == KERNEL_WIDTH {
+            S::KERNEL_WIDTH_LANE_GROUP
         } else {
             S::LANE_GROUP
         };

@@ -236,16 +236,6 @@ fn unscaled_input<S: Scalar, const L: usize>(params: &[S], points: &[[S; 3]; L])
     let Some(normalization) = params.get(..NORMALIZATION_LEN) else {
         return input;
     };
-    if S::TARGET_KERNELS
-        && L == 1
-        && let (Some(normalization), Some(point)) = (normalization.first_chunk(), points.first())
-        && let Some(normalized) = S::normalization_kernel(normalization, point)
-    {
-        for (slot, value) in input.iter_mut().zip(normalized) {
-            *slot = [value; L];
-        }
-        return input;
-    }
     let (center, axes) = normalization.split_at(3);
     for (row, lanes) in axes.chunks_exact(3).zip(input.iter_mut()) {
         for (slot, point) in lanes.iter_mut().zip(points) {
