@@ -57,3 +57,8 @@ pub mod parametric;
 pub mod scalar;
 
 pub use error::{BlobError, LengthMismatch, Quantity};
+
+/// Every target kernel against its portable loop, for the simulator's kernel check
+/// (`firmware-sim`); not part of the API.
+#[doc(hidden)]
+pub use arch::kernel_check;

@@ -274,6 +274,30 @@ fn q16_on_the_target_equals_q16_on_the_host_bit_for_bit() {
     assert_target_equals_host(ScalarKind::Q16_16, Precision::Q16, 21);
 }
 
+/// Every run ends with the firmware's kernel check: each Q16.16 kernel (3 forward layers, the
+/// 9×3 transpose, the chain rule through nine neurons, 2 fused transposes) against the portable
+/// loop it replaces, on 5 edge cases and 59 seeded random inputs (`neurosurf_core::kernel_check`).
+/// A mismatch ends the run with `Status::KernelMismatch` and the kernel's name in the log.
+/// Checked once by dropping the 9×3 transpose's rounding (`adds lo, lo, #32768`): every run then
+/// fails with "transposed 9x3 differs from its portable loop in case 5".
+#[test]
+fn every_kernel_matches_its_portable_loop_on_the_target() {
+    let trained = torus();
+    let bytes = blob(&trained, ScalarKind::Q16_16);
+    let points = as_f32(&queries(&TORUS, 3));
+    let job = Job::field_gradient(&bytes, ScalarKind::Q16_16, &points);
+    let run = simulator().run(&job).unwrap_or_else(|e| panic!("{e}"));
+    let line = run
+        .log
+        .iter()
+        .find(|line| line.contains("kernel check:"))
+        .unwrap_or_else(|| panic!("no kernel check in the log:\n{}", run.log.join("\n")));
+    assert!(
+        line.contains(&format!("{} kernel calls match", 7 * 64)),
+        "not every kernel was checked: {line}"
+    );
+}
+
 /// The Q16.16 transposed kernels' out-of-line saturation, on the target against the host: a
 /// torus leaf with every weight at ±1000 and zero biases, queried at its box centre (where
 /// every pre-activation is 0, so every slope is a′(0) ≈ 1.144) and next to it. At the centre,

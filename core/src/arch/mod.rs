@@ -9,6 +9,8 @@
 
 use crate::scalar::Q16;
 
+pub mod kernel_check;
+
 /// Chooses the kernels' module: the target condition, written once.
 macro_rules! select_target {
     ($target:item $portable:item) => {

@@ -61,6 +61,8 @@ pub enum Status {
     BlobRejected = 3,
     /// A semihosting file operation failed (the host side of the files).
     HostIo = 4,
+    /// A target kernel computed other bits than its portable loop (the log names it).
+    KernelMismatch = 5,
     /// The firmware panicked (a bug: the core never panics).
     Panic = 101,
     /// The CPU took a HardFault (a bug).
@@ -80,6 +82,7 @@ impl Status {
             2 => Status::BadRequest,
             3 => Status::BlobRejected,
             4 => Status::HostIo,
+            5 => Status::KernelMismatch,
             101 => Status::Panic,
             102 => Status::HardFault,
             _ => return None,
@@ -93,6 +96,9 @@ impl Status {
             Status::BadRequest => "the firmware rejected the request",
             Status::BlobRejected => "the firmware rejected the blob",
             Status::HostIo => "a semihosting file operation failed",
+            Status::KernelMismatch => {
+                "a target kernel differs from its portable loop (the log names the kernel)"
+            }
             Status::Panic => "the firmware panicked",
             Status::HardFault => "the firmware took a HardFault",
         }
@@ -359,6 +365,7 @@ mod tests {
             Status::BadRequest,
             Status::BlobRejected,
             Status::HostIo,
+            Status::KernelMismatch,
             Status::Panic,
             Status::HardFault,
         ] {
