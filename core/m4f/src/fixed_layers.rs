@@ -19,6 +19,9 @@
 //! follows the frame pointer) is wrong; it is right again after the block. r9 is used as an
 //! ordinary register: targets that reserve it (the RWPI relocation model) do not build this
 //! crate.
+//!
+//! The macros that build the assembly text are `#[rustfmt::skip]`, so that each source line is
+//! one line of assembly (`"ldr r4, [r0, #(4*", $i, ")]\n",`) rather than one fragment.
 #![allow(unsafe_code)]
 
 use core::arch::asm;
@@ -29,44 +32,25 @@ use fixed::types::I16F16;
 /// Row `$j` of a column pair: W[`$j`][`$c`] and W[`$j`][`$c` + 1] by one `ldrd` (row stride
 /// `$stride` bytes, W at r12) into r9/r10, times g (in `$g`) into the accumulators r6:r5 and
 /// r8:r7; `$op` is `smull` for the first row, else `smlal`.
+#[rustfmt::skip]
 macro_rules! pair_row {
     ($op:literal, $c:literal, $j:literal, $g:literal, $stride:literal) => {
         concat!(
-            "ldrd r9, r10, [r12, #(4*",
-            $c,
-            " + ",
-            $stride,
-            "*",
-            $j,
-            ")]\n",
-            $op,
-            " r5, r6, r9, ",
-            $g,
-            "\n",
-            $op,
-            " r7, r8, r10, ",
-            $g,
-            "\n",
+            "ldrd r9, r10, [r12, #(4*", $c, " + ", $stride, "*", $j, ")]\n",
+            $op, " r5, r6, r9, ", $g, "\n",
+            $op, " r7, r8, r10, ", $g, "\n",
         )
     };
 }
 
 /// Row `$j` of a single column: W[`$j`][`$c`] by `ldr` into r9 (row stride `$stride` bytes, W
 /// at r12), times g (in `$g`) into r6:r5.
+#[rustfmt::skip]
 macro_rules! single_row {
     ($op:literal, $c:literal, $j:literal, $g:literal, $stride:literal) => {
         concat!(
-            "ldr r9, [r12, #(4*",
-            $c,
-            " + ",
-            $stride,
-            "*",
-            $j,
-            ")]\n",
-            $op,
-            " r5, r6, r9, ",
-            $g,
-            "\n",
+            "ldr r9, [r12, #(4*", $c, " + ", $stride, "*", $j, ")]\n",
+            $op, " r5, r6, r9, ", $g, "\n",
         )
     };
 }
@@ -75,21 +59,14 @@ macro_rules! single_row {
 /// ([`pair_row!`] also sums column `$c` + 1 into r8:r7): g₀…g₄ and then g₅…g₈ (at r11) in
 /// r0–r4, since nine values of g and two 64-bit accumulators do not fit the registers
 /// together. Uses r9 and r10.
+#[rustfmt::skip]
 macro_rules! column_sums {
     ($row:ident, $c:literal, $stride:literal) => {
         concat!(
             "ldm r11, {{r0-r4}}\n",
-            $row!("smull", $c, "0", "r0", $stride),
-            $row!("smlal", $c, "1", "r1", $stride),
-            $row!("smlal", $c, "2", "r2", $stride),
-            $row!("smlal", $c, "3", "r3", $stride),
-            $row!("smlal", $c, "4", "r4", $stride),
-            "add r9, r11, #20\n",
+            $row!("smull", $c, "0", "r0", $stride), $row!("smlal", $c, "1", "r1", $stride), $row!("smlal", $c, "2", "r2", $stride), $row!("smlal", $c, "3", "r3", $stride), $row!("smlal", $c, "4", "r4", $stride), "add r9, r11, #20\n",
             "ldm r9, {{r0-r3}}\n",
-            $row!("smlal", $c, "5", "r0", $stride),
-            $row!("smlal", $c, "6", "r1", $stride),
-            $row!("smlal", $c, "7", "r2", $stride),
-            $row!("smlal", $c, "8", "r3", $stride),
+            $row!("smlal", $c, "5", "r0", $stride), $row!("smlal", $c, "6", "r1", $stride), $row!("smlal", $c, "7", "r2", $stride), $row!("smlal", $c, "8", "r3", $stride),
         )
     };
 }
@@ -97,50 +74,26 @@ macro_rules! column_sums {
 /// `$lo` ← the rounded sum `$hi`:`$lo` (2¹⁵ already added) shifted to Q16.16, and the flags
 /// "equal" exactly when that fits 32 bits: when bits 15… of the high word all equal the
 /// result's sign bit. `$scratch` is scratch.
+#[rustfmt::skip]
 macro_rules! shift_and_check {
     ($lo:literal, $hi:literal, $scratch:literal) => {
         concat!(
-            "lsr ",
-            $lo,
-            ", ",
-            $lo,
-            ", #16\n",
-            "orr ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $hi,
-            ", lsl #16\n",
-            "asr ",
-            $scratch,
-            ", ",
-            $hi,
-            ", #15\n",
-            "cmp ",
-            $scratch,
-            ", ",
-            $lo,
-            ", asr #31\n",
+            "lsr ", $lo, ", ", $lo, ", #16\n",
+            "orr ", $lo, ", ", $lo, ", ", $hi, ", lsl #16\n",
+            "asr ", $scratch, ", ", $hi, ", #15\n",
+            "cmp ", $scratch, ", ", $lo, ", asr #31\n",
         )
     };
 }
 
 /// `$lo` ← i32::MAX, or i32::MIN when the sum (high word `$hi`) is negative: the saturation of
 /// a sum that does not fit.
+#[rustfmt::skip]
 macro_rules! saturated_word {
     ($lo:literal, $hi:literal) => {
         concat!(
-            "mvn ",
-            $lo,
-            ", #0x80000000\n",
-            "eor ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $hi,
-            ", asr #31\n",
+            "mvn ", $lo, ", #0x80000000\n",
+            "eor ", $lo, ", ", $lo, ", ", $hi, ", asr #31\n",
         )
     };
 }
@@ -148,31 +101,16 @@ macro_rules! saturated_word {
 /// Rounds the sum `$hi`:`$lo` to Q16.16 like `Scalar::from_acc` — ((`$hi`:`$lo`) + 2¹⁵) >> 16
 /// when that fits 32 bits, else the end of the range on `$hi`'s side (label 1`$c`, out of
 /// line: [`saturate!`], back at 2`$c`) — and stores it at lr + 4·`$c`. Uses r9.
+#[rustfmt::skip]
 macro_rules! round_and_store {
     ($c:literal, $lo:literal, $hi:literal) => {
         concat!(
-            "adds ",
-            $lo,
-            ", ",
-            $lo,
-            ", #32768\n",
-            "adc ",
-            $hi,
-            ", ",
-            $hi,
-            ", #0\n",
+            "adds ", $lo, ", ", $lo, ", #32768\n",
+            "adc ", $hi, ", ", $hi, ", #0\n",
             shift_and_check!($lo, $hi, "r9"),
-            "bne 1",
-            $c,
-            "f\n",
-            "2",
-            $c,
-            ":\n",
-            "str ",
-            $lo,
-            ", [lr, #(4*",
-            $c,
-            ")]\n",
+            "bne 1", $c, "f\n",
+            "2", $c, ":\n",
+            "str ", $lo, ", [lr, #(4*", $c, ")]\n",
         )
     };
 }
@@ -228,15 +166,12 @@ pub fn q16_transposed_9x3(w: &[[I16F16; 3]; 9], g: &[I16F16; 9]) -> [I16F16; 3] 
 /// The chain rule through neuron `$i` (see [`q16_times_slope_9`]): δ at r0 + 4·`$i`, a at
 /// r1 + 4·`$i`, the constants in r2 (square·2¹⁶) and r3 (offset·2¹⁴); a value outside the fast
 /// range branches to label 1`$i` (out of line), which marks it in r12 and comes back to 2`$i`.
+#[rustfmt::skip]
 macro_rules! slope9 {
     ($i:literal) => {
         concat!(
-            "ldr r4, [r0, #(4*",
-            $i,
-            ")]\n",
-            "ldr r5, [r1, #(4*",
-            $i,
-            ")]\n",
+            "ldr r4, [r0, #(4*", $i, ")]\n",
+            "ldr r5, [r1, #(4*", $i, ")]\n",
             // −2 ≤ a < 2 and |δ| < 2²⁹ bits at once: (a + 2¹⁷) as u32 < 2¹⁸ and
             // (δ + 2²⁹) as u32 < 2³⁰ exactly when their OR, the second shifted right by 12,
             // is below 2¹⁸. (a = 2 exactly goes out of line: the fallback gives the same
@@ -245,9 +180,7 @@ macro_rules! slope9 {
             "add r8, r4, #0x20000000\n",
             "orr lr, lr, r8, lsr #12\n",
             "cmp lr, #0x40000\n",
-            "bhs 1",
-            $i,
-            "f\n",
+            "bhs 1", $i, "f\n",
             // a′·2¹⁴ = offset·2¹⁴ − round(square·2¹⁶ · round((a·2⁸)²/2³²)/2³²)·2¹⁴
             "lsl r5, r5, #8\n",
             "smmulr r5, r5, r5\n",
@@ -256,34 +189,21 @@ macro_rules! slope9 {
             // round((δ·2²)·(a′·2¹⁴)/2³²)
             "lsl r4, r4, #2\n",
             "smmulr r4, r4, r5\n",
-            "str r4, [r0, #(4*",
-            $i,
-            ")]\n",
-            "2",
-            $i,
-            ":\n",
+            "str r4, [r0, #(4*", $i, ")]\n",
+            "2", $i, ":\n",
         )
     };
 }
 
 /// The out-of-line branch of [`slope9!`] (mask in r12) and [`single_slope!`] (mask in r5) for
 /// neuron `$i`: sets bit `$i` of the mask register `$mask`, the value unchanged.
+#[rustfmt::skip]
 macro_rules! slope_slow {
     ($mask:literal, $i:literal) => {
         concat!(
-            "1",
-            $i,
-            ":\n",
-            "orr ",
-            $mask,
-            ", ",
-            $mask,
-            ", #(1 << ",
-            $i,
-            ")\n",
-            "b 2",
-            $i,
-            "b\n",
+            "1", $i, ":\n",
+            "orr ", $mask, ", ", $mask, ", #(1 << ", $i, ")\n",
+            "b 2", $i, "b\n",
         )
     };
 }
@@ -352,12 +272,11 @@ pub fn q16_times_slope_9(
 /// Q32.32 pair at sp + 8·`$j`, the weights read in order from r12, two at a time): H = bias +
 /// Σᵢ W[j][i]·xᵢ in r10:r9 (Q32.32, in order, the rounding's half included), clamped by
 /// [`clamp_pre_activation!`] and stored at sp + 4·`$j` (a pair row j has read already).
+#[rustfmt::skip]
 macro_rules! layer_row9 {
     ($j:literal) => {
         concat!(
-            "ldrd r9, r10, [sp, #(8*",
-            $j,
-            ")]\n",
+            "ldrd r9, r10, [sp, #(8*", $j, ")]\n",
             "ldm r12!, {{r11, lr}}\n",
             "smlal r9, r10, r11, r0\n",
             "smlal r9, r10, lr, r1\n",
@@ -373,9 +292,7 @@ macro_rules! layer_row9 {
             "ldr lr, [r12], #4\n",
             "smlal r9, r10, lr, r8\n",
             clamp_pre_activation!($j, "lr"),
-            "str r9, [sp, #(4*",
-            $j,
-            ")]\n",
+            "str r9, [sp, #(4*", $j, ")]\n",
         )
     };
 }
@@ -386,12 +303,11 @@ macro_rules! layer_row9 {
 /// by [`clamp_pre_activation!`] into r9, then a(H) by [`table_activation!`] (2⁹ in r7), stored at
 /// r11 + 4·`$j`. With three inputs there are registers to spare, so the row needs no second
 /// pass.
+#[rustfmt::skip]
 macro_rules! layer_row3 {
     ($j:literal) => {
         concat!(
-            "ldr r10, [r8, #(4*",
-            $j,
-            ")]\n",
+            "ldr r10, [r8, #(4*", $j, ")]\n",
             // bias·2¹⁶ + 2¹⁵: the rounding's half folded into the bias's low word.
             "orr r9, lr, r10, lsl #16\n",
             "asr r10, r10, #16\n",
@@ -401,9 +317,7 @@ macro_rules! layer_row3 {
             "smlal r9, r10, r6, r2\n",
             clamp_pre_activation!($j, "r4"),
             table_activation!("r9", "r4", "r5", "r6", "r7", "r10"),
-            "str r5, [r11, #(4*",
-            $j,
-            ")]\n",
+            "str r5, [r11, #(4*", $j, ")]\n",
         )
     };
 }
@@ -413,42 +327,32 @@ macro_rules! layer_row3 {
 /// bits), else ±10 (label 1`$j`, out of line: [`saturated_pre_activation!`], back at label
 /// 2`$j`), where the table has saturated: both give `activation_from_acc`'s value. `$scratch`
 /// is scratch.
+#[rustfmt::skip]
 macro_rules! clamp_pre_activation {
     ($j:literal, $scratch:literal) => {
         concat!(
-            "add ",
-            $scratch,
-            ", r10, #10\n",
-            "cmp ",
-            $scratch,
-            ", #20\n",
-            "bhs 1",
-            $j,
-            "f\n",
+            "add ", $scratch, ", r10, #10\n",
+            "cmp ", $scratch, ", #20\n",
+            "bhs 1", $j, "f\n",
             "lsr r9, r9, #16\n",
             "orr r9, r9, r10, lsl #16\n",
-            "2",
-            $j,
-            ":\n",
+            "2", $j, ":\n",
         )
     };
 }
 
 /// The out-of-line branch of [`clamp_pre_activation!`] for row `$j`: ±10 in Q16.16 bits, the sign
 /// of the high word r10.
+#[rustfmt::skip]
 macro_rules! saturated_pre_activation {
     ($j:literal) => {
         concat!(
-            "1",
-            $j,
-            ":\n",
+            "1", $j, ":\n",
             "mov r9, #0xa0000\n",
             "cmp r10, #0\n",
             "it lt\n",
             "rsblt r9, r9, #0\n",
-            "b 2",
-            $j,
-            "b\n",
+            "b 2", $j, "b\n",
         )
     };
 }
@@ -458,92 +362,43 @@ macro_rules! saturated_pre_activation {
 /// H >> 10, interpolated by the fraction H & 1023 and rounded with 2⁹ (in `$half`) less one
 /// when H < 0 — the core's symmetric interpolation, bit for bit (the core's `SEGMENTS` docs
 /// show why). `$index`, `$rise` and `$round` are scratch.
+#[rustfmt::skip]
 macro_rules! table_activation {
     ($h:literal, $index:literal, $lo:literal, $rise:literal, $half:literal, $round:literal) => {
         concat!(
-            "asr ",
-            $index,
-            ", ",
-            $h,
-            ", #10\n",
-            "add ",
-            $index,
-            ", r3, ",
-            $index,
-            ", lsl #3\n",
-            "ldrd ",
-            $lo,
-            ", ",
-            $rise,
-            ", [",
-            $index,
-            "]\n",
-            "ubfx ",
-            $index,
-            ", ",
-            $h,
-            ", #0, #10\n",
-            "add ",
-            $round,
-            ", ",
-            $half,
-            ", ",
-            $h,
-            ", asr #31\n",
-            "mla ",
-            $rise,
-            ", ",
-            $rise,
-            ", ",
-            $index,
-            ", ",
-            $round,
-            "\n",
-            "add ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $rise,
-            ", asr #10\n",
+            "asr ", $index, ", ", $h, ", #10\n",
+            "add ", $index, ", r3, ", $index, ", lsl #3\n",
+            "ldrd ", $lo, ", ", $rise, ", [", $index, "]\n",
+            "ubfx ", $index, ", ", $h, ", #0, #10\n",
+            "add ", $round, ", ", $half, ", ", $h, ", asr #31\n",
+            "mla ", $rise, ", ", $rise, ", ", $index, ", ", $round, "\n",
+            "add ", $lo, ", ", $lo, ", ", $rise, ", asr #10\n",
         )
     };
 }
 
 /// Output `$j` = a(H) for the H at sp + 4·`$j` ([`table_activation!`], 2⁹ in r6), stored at
 /// r2 + 4·`$j`.
+#[rustfmt::skip]
 macro_rules! activation {
     ($j:literal) => {
         concat!(
-            "ldr r0, [sp, #(4*",
-            $j,
-            ")]\n",
+            "ldr r0, [sp, #(4*", $j, ")]\n",
             table_activation!("r0", "r1", "r4", "r5", "r6", "r9"),
-            "str r4, [r2, #(4*",
-            $j,
-            ")]\n",
+            "str r4, [r2, #(4*", $j, ")]\n",
         )
     };
 }
 
 /// Bias `$j` (in `$b`) as the Q32.32 pair (bias·2¹⁶ + 2¹⁵, bias >> 16) at sp + 8·`$j`, with
 /// 2¹⁵ in lr: the accumulator a row starts from. Uses r11.
+#[rustfmt::skip]
 macro_rules! bias_pair {
     ($b:literal, $j:literal) => {
         concat!(
-            "orr r11, lr, ",
-            $b,
-            ", lsl #16\n",
-            "asr ",
-            $b,
-            ", ",
-            $b,
-            ", #16\n",
-            "strd r11, ",
-            $b,
-            ", [sp, #(8*",
-            $j,
-            ")]\n",
+            "orr r11, lr, ", $b, ", lsl #16\n",
+            "asr ", $b, ", ", $b, ", #16\n",
+            "strd r11, ", $b, ", [sp, #(8*", $j, ")]\n",
         )
     };
 }
@@ -771,58 +626,31 @@ pub fn q16_layer_1x9(
 /// a′ = offset − round(square·round(a²/2¹⁶)/2¹⁶), as [`slope9!`]; stores δ at lr + 4·`$c`.
 /// Outside that range label 1`$c` (out of line, [`slope_tail_slow!`]) stores t instead and
 /// marks the column. Uses r3, r4 and r9.
+#[rustfmt::skip]
 macro_rules! slope_tail {
     ($c:literal, $lo:literal, $hi:literal) => {
         concat!(
-            "ldr r3, [r2, #(4*",
-            $c,
-            ")]\n",
+            "ldr r3, [r2, #(4*", $c, ")]\n",
             // −2 ≤ a < 2 and −2¹³ ≤ high word < 2¹³ (t in [−2²⁹, 2²⁹) bits) at once:
             // (a + 2¹⁷) as u32 < 2¹⁸ and (high + 2¹³) as u32 < 2¹⁴ exactly when the first
             // shifted right by 4, ORed with the second, is below 2¹⁴.
             "add r4, r3, #0x20000\n",
-            "add r9, ",
-            $hi,
-            ", #0x2000\n",
+            "add r9, ", $hi, ", #0x2000\n",
             "orr r4, r9, r4, lsr #4\n",
             "cmp r4, #0x4000\n",
-            "bhs 1",
-            $c,
-            "f\n",
+            "bhs 1", $c, "f\n",
             // t·2² = (sum >> 16) << 2, in range by the test above.
-            "bfc ",
-            $lo,
-            ", #0, #16\n",
-            "lsr ",
-            $lo,
-            ", ",
-            $lo,
-            ", #14\n",
-            "orr ",
-            $lo,
-            ", ",
-            $lo,
-            ", ",
-            $hi,
-            ", lsl #18\n",
+            "bfc ", $lo, ", #0, #16\n",
+            "lsr ", $lo, ", ", $lo, ", #14\n",
+            "orr ", $lo, ", ", $lo, ", ", $hi, ", lsl #18\n",
             // a′·2¹⁴, then round((t·2²)·(a′·2¹⁴)/2³²), as slope9!.
             "lsl r3, r3, #8\n",
             "smmulr r3, r3, r3\n",
             "smmulr r3, r3, r0\n",
             "sub r3, r1, r3, lsl #14\n",
-            "smmulr ",
-            $lo,
-            ", ",
-            $lo,
-            ", r3\n",
-            "2",
-            $c,
-            ":\n",
-            "str ",
-            $lo,
-            ", [lr, #(4*",
-            $c,
-            ")]\n",
+            "smmulr ", $lo, ", ", $lo, ", r3\n",
+            "2", $c, ":\n",
+            "str ", $lo, ", [lr, #(4*", $c, ")]\n",
         )
     };
 }
@@ -830,28 +658,19 @@ macro_rules! slope_tail {
 /// The out-of-line branch of [`slope_tail!`] for column `$c`: t = the rounded sum saturated to
 /// Q16.16 (as `Scalar::from_acc`) into `$lo`, bit `$c` set in the mask at sp + 12; back to
 /// 2`$c`.
+#[rustfmt::skip]
 macro_rules! slope_tail_slow {
     ($c:literal, $lo:literal, $hi:literal) => {
         concat!(
-            "1",
-            $c,
-            ":\n",
+            "1", $c, ":\n",
             shift_and_check!($lo, $hi, "r3"),
-            "beq 4",
-            $c,
-            "f\n",
+            "beq 4", $c, "f\n",
             saturated_word!($lo, $hi),
-            "4",
-            $c,
-            ":\n",
+            "4", $c, ":\n",
             "ldr r3, [sp, #12]\n",
-            "orr r3, r3, #(1 << ",
-            $c,
-            ")\n",
+            "orr r3, r3, #(1 << ", $c, ")\n",
             "str r3, [sp, #12]\n",
-            "b 2",
-            $c,
-            "b\n",
+            "b 2", $c, "b\n",
         )
     };
 }
@@ -859,6 +678,7 @@ macro_rules! slope_tail_slow {
 /// Columns `$c` and `$c1` = `$c` + 1 of a fused 9×9 transpose ([`column_sums!`] by
 /// [`pair_row!`]), then [`slope_tail!`] on each column with the constants and the pointer to a
 /// (sp + 0…8) in r0–r2.
+#[rustfmt::skip]
 macro_rules! slope_pair {
     ($c:literal, $c1:literal) => {
         concat!(
@@ -950,34 +770,25 @@ pub fn q16_transposed_slope_9x9(
 /// of (wᵢ·2⁴)·(g·2¹²) (g·2¹² in r0, w at r12), then with a = `a[$i]` (at r1; r3 = square·2¹⁶, r4 = offset·2¹⁴) the
 /// chain rule's fast path when −2 ≤ a < 2 (t is small enough by the weight bound), else t
 /// and bit `$i` of r5 (label 1`$i`, out of line); stored at r2 + 4·`$i`.
+#[rustfmt::skip]
 macro_rules! single_slope {
     ($i:literal) => {
         concat!(
-            "ldr r9, [r12, #(4*",
-            $i,
-            ")]\n",
+            "ldr r9, [r12, #(4*", $i, ")]\n",
             "lsl r9, r9, #4\n",
             "smmulr r9, r9, r0\n",
-            "ldr r10, [r1, #(4*",
-            $i,
-            ")]\n",
+            "ldr r10, [r1, #(4*", $i, ")]\n",
             "add lr, r10, #0x20000\n",
             "cmp lr, #0x40000\n",
-            "bhs 1",
-            $i,
-            "f\n",
+            "bhs 1", $i, "f\n",
             "lsl r9, r9, #2\n",
             "lsl r10, r10, #8\n",
             "smmulr r10, r10, r10\n",
             "smmulr r10, r10, r3\n",
             "sub r10, r4, r10, lsl #14\n",
             "smmulr r9, r9, r10\n",
-            "2",
-            $i,
-            ":\n",
-            "str r9, [r2, #(4*",
-            $i,
-            ")]\n",
+            "2", $i, ":\n",
+            "str r9, [r2, #(4*", $i, ")]\n",
         )
     };
 }
