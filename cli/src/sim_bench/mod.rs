@@ -3,7 +3,6 @@
 //! and field+gradient (position and position+direction for parametric models), single points
 //! and lane batches, with the firmware's flash, RAM and stack.
 
-use neurosurf_trainer::geometry::vector::inner;
 use neurosurf_trainer::io::write_atomic;
 use std::path::{Path, PathBuf};
 
@@ -13,34 +12,26 @@ use neurosurf_firmware_sim::{Footprint, Job, Mode, Op, Simulator, TARGET_MACHINE
 use rayon::prelude::*;
 use serde::Serialize;
 
-use neurosurf_core::caoen::{Blending, Domain, MAX_SHARPNESS};
-use neurosurf_trainer::caoen::{self, cube_directions, fit_shape, from_key_points};
-use neurosurf_trainer::compare::{
-    EvaluationPoints, ParameterSet, SURFACE_SAMPLES, fibonacci_sphere,
-};
-use neurosurf_trainer::curve::{
-    CurveOptions, SampleCurve, SampleOptions, curve_to_blob, reconstruct_curve, sample_curve,
-};
+use neurosurf_trainer::compare::{EvaluationPoints, ParameterSet, SURFACE_SAMPLES};
 use neurosurf_trainer::evaluate::LoadedModel;
-use neurosurf_trainer::implicit::{
-    self, FitRequest, ImplicitNetwork, ImplicitOptions, TrainingSummary,
-};
-use neurosurf_trainer::parametric::{
-    SampleSurface, TopologyOptions, fit_network, network_to_blob, sample_surface,
-};
-use neurosurf_trainer::sample::{Shape, sample_shape};
+use neurosurf_trainer::implicit::{self, ImplicitNetwork, ImplicitOptions, TrainingSummary};
 use neurosurf_trainer::table::{Align, Table};
 
 use super::output;
 use super::target;
+
+mod built_in;
+mod stored;
 
 /// Points per run: one timed chunk of the firmware.
 const POINTS: usize = 64;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Extra model blobs to measure after the two built-in ones (a torus, one leaf of width 9;
-    /// the 3-feature head with tree ((0,1),2)). Each is run as it is stored, in both scalars.
+    /// Extra model blobs to measure after the built-in ones (a torus, one leaf of width 9; the
+    /// 3-feature head with tree ((0,1),2); a curve, a surface network and four Cao En spheres,
+    /// stored in `cli/src/sim_bench/subjects.json`). Each is run as it is stored, in both
+    /// scalars.
     models: Vec<PathBuf>,
     /// Print JSON instead of the tables.
     #[arg(long)]
@@ -57,6 +48,12 @@ pub struct Args {
     /// (`docs/performance/kernels.md`). Builds one firmware per group.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["markdown", "json"])]
     kernel_comparison: Option<PathBuf>,
+    /// Instead of measuring: train the built-in subjects again (fixed seeds) and write them to
+    /// this file (`cli/src/sim_bench/subjects.json`, built into the binary). Training is not
+    /// bit-for-bit the same on every machine, so the committed subjects, not fresh ones, are
+    /// what `docs/performance/target.md` measures.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["markdown", "json", "kernel_comparison", "models"])]
+    retrain: Option<PathBuf>,
 }
 
 /// The groups of Cortex-M4F kernels `--kernel-comparison` turns off one group at a time
@@ -281,7 +278,7 @@ fn percent(x: f64) -> String {
 
 /// A model to measure: its blob for each scalar, its evaluation points (or parameters), and
 /// its two ops (the value alone, and with its derivative).
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 struct Subject {
     name: String,
     path: PathBuf,
@@ -324,8 +321,16 @@ struct Bench {
 }
 
 pub fn run(args: &Args) -> Result<()> {
+    if let Some(path) = &args.retrain {
+        stored::write(&built_in::train()?, path)?;
+        println!(
+            "wrote {}; build `neurosurf` again to measure these subjects",
+            path.display()
+        );
+        return Ok(());
+    }
     let simulator = target::simulator()?;
-    let mut subjects = built_in()?;
+    let mut subjects = stored::load()?;
     for path in &args.models {
         let bytes = target::read_blob(path)?;
         if let Some(parametric) = parametric(path, &bytes)? {
@@ -391,206 +396,6 @@ pub fn run(args: &Args) -> Result<()> {
     }
     print!("{}", report(&bench, false));
     Ok(())
-}
-
-/// The two built-in models, trained with fixed seeds, stored in both scalars: the networks
-/// alone, and the head again with its sign guards.
-fn built_in() -> Result<Vec<Subject>> {
-    let torus = Shape::Torus {
-        major: 1.0,
-        minor: 0.4,
-    };
-    let specs = [
-        ("torus (1 leaf, N=9)", torus, 96, 11, None),
-        ("head ((0,1),2), N=9", Shape::Head, 99, 5, Some("((0,1),2)")),
-    ];
-    let mut subjects = Vec::new();
-    for (name, shape, count, seed, tree) in specs {
-        let request = FitRequest {
-            tree: tree.map(str::parse).transpose()?,
-            ..FitRequest::default()
-        };
-        let options = ImplicitOptions {
-            width: 9,
-            ..ImplicitOptions::default()
-        };
-        let trained = implicit::fit(
-            sample_shape(&shape, count, seed)?,
-            &request,
-            &options,
-            &|_| {},
-        )
-        .with_context(|| format!("cannot train the {name} model"))?;
-        // The network alone (the kernels' yardstick), then, for the head, with the sign
-        // guards training gave it: what they add.
-        let guards = trained.network.guards().len();
-        let alone = trained.network.clone().with_guards(Vec::new());
-        let mut variants = vec![(name.to_string(), &alone)];
-        if tree.is_some() && guards > 0 {
-            variants.push((format!("{name} + {guards} sign guards"), &trained.network));
-        }
-        for (name, network) in variants {
-            let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
-                .into_iter()
-                .map(|scalar| {
-                    Ok((
-                        scalar,
-                        implicit::to_blob(network, Some(&trained.summary), scalar)?,
-                    ))
-                })
-                .collect::<Result<Vec<_>>>()?;
-            subjects.push(Subject {
-                path: PathBuf::from(format!("<built-in {name}>")),
-                name,
-                points: points(network, box_size(Some(&trained.summary))),
-                arity: 3,
-                blobs,
-                ops: [Op::Field, Op::FieldGradient],
-            });
-        }
-    }
-    subjects.push(spiral_curve()?);
-    subjects.push(wavy_network()?);
-    for (keys, blending) in [
-        (26, Blending::Exponential),
-        (26, Blending::Compact),
-        (104, Blending::Exponential),
-        (104, Blending::Compact),
-    ] {
-        subjects.push(cao_en_sphere(keys, blending)?);
-    }
-    Ok(subjects)
-}
-
-/// A Cao En sphere network with `n` key points (26: the paper's cube directions; otherwise a
-/// Fibonacci set), targets on a bent ellipsoid, V fitted through them, in both scalars, at
-/// [`POINTS`] Fibonacci sphere points. Exponential blending with q = 4 (26 keys) or 12 (104);
-/// compact blending, normalized, with q from the spacing, each cap reaching √3 times the widest gap between
-/// a key and its nearest neighbour.
-fn cao_en_sphere(n: usize, blending: Blending) -> Result<Subject> {
-    let keys = if n == 26 {
-        cube_directions()
-    } else {
-        fibonacci_sphere(n)
-    };
-    let targets: Vec<Vec<f64>> = keys
-        .iter()
-        .map(|k| vec![1.3 * k[0], 0.8 * k[1] + 0.25 * k[0] * k[0], 0.6 * k[2]])
-        .collect();
-    let q = match blending {
-        Blending::Compact => {
-            // The widest gap to a nearest key, at angle d: the cap edge 1 − cos r = 3 (1 − cos d).
-            let nearest = keys
-                .iter()
-                .enumerate()
-                .map(|(i, a)| {
-                    keys.iter()
-                        .enumerate()
-                        .filter(|&(j, _)| j != i)
-                        .map(|(_, b)| inner(a, b))
-                        .fold(-1.0_f64, f64::max)
-                })
-                .fold(1.0_f64, f64::min);
-            (1.0 / (3.0 * (1.0 - nearest))).clamp(0.5, MAX_SHARPNESS)
-        }
-        _ if n == 26 => 4.0,
-        _ => 12.0,
-    };
-    // Compact blending in the rational form, as recommended for it (see `Blending::Compact`).
-    let normalized = blending == Blending::Compact;
-    let built = from_key_points(Domain::Sphere, blending, normalized, &keys, &targets, q)?;
-    let network = fit_shape(&built, &keys, &targets)?;
-    let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
-        .into_iter()
-        .map(|scalar| Ok((scalar, caoen::to_blob(&network, scalar, &[])?)))
-        .collect::<Result<Vec<_>>>()?;
-    let kind = match blending {
-        Blending::Compact => "compact normalized",
-        _ => "exponential",
-    };
-    let name = format!("Cao En sphere, {n} keys, {kind} q = {q:.2}");
-    Ok(Subject {
-        path: PathBuf::from(format!("<built-in {name}>")),
-        name,
-        blobs,
-        points: fibonacci_sphere(POINTS)
-            .iter()
-            .flatten()
-            .map(|&c| c as f32)
-            .collect(),
-        arity: 3,
-        ops: [Op::Position, Op::PositionDirection],
-    })
-}
-
-/// The approximating spline of 200 noisy points on a two-turn spiral (fixed seed), in both
-/// scalars, at [`POINTS`] parameters spread over [0, 1].
-fn spiral_curve() -> Result<Subject> {
-    let sample = sample_curve(
-        SampleCurve::Spiral,
-        &SampleOptions {
-            count: 200,
-            seed: 3,
-            ..SampleOptions::default()
-        },
-    )?;
-    let fit = reconstruct_curve(
-        &sample.curve_points()?,
-        &CurveOptions::new(SampleCurve::Spiral.topology(), 3),
-    )?;
-    let curve = &fit.approximation.curve;
-    let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
-        .into_iter()
-        .map(|scalar| Ok((scalar, curve_to_blob(curve, None, scalar)?)))
-        .collect::<Result<Vec<_>>>()?;
-    let name = format!("spiral curve ({} control points)", curve.control.len());
-    Ok(Subject {
-        path: PathBuf::from(format!("<built-in {name}>")),
-        name,
-        blobs,
-        points: (0..POINTS)
-            .map(|i| i as f32 / (POINTS - 1) as f32)
-            .collect(),
-        arity: 1,
-        ops: [Op::Position, Op::PositionDirection],
-    })
-}
-
-/// A surface network (Yumer & Kara) fitted to 400 points of the wavy test patch at their
-/// true parameters (fixed seed; the search's pick), in both scalars, at [`POINTS`] parameters
-/// over its (u, v) box.
-fn wavy_network() -> Result<Subject> {
-    let sample = sample_surface(SampleSurface::Wavy, 400, 0.0, 3)?;
-    let fit = fit_network(
-        &sample.points,
-        &sample.parameters,
-        &TopologyOptions::default(),
-    )?;
-    let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
-        .into_iter()
-        .map(|scalar| Ok((scalar, network_to_blob(&fit.network, None, scalar)?)))
-        .collect::<Result<Vec<_>>>()?;
-    let hidden: Vec<String> = fit
-        .network
-        .hidden_sizes()
-        .iter()
-        .map(usize::to_string)
-        .collect();
-    let name = format!("wavy surface network ({}, tan-sig)", hidden.join(" × "));
-    let side = (POINTS as f64).sqrt().ceil() as usize;
-    Ok(Subject {
-        path: PathBuf::from(format!("<built-in {name}>")),
-        name,
-        blobs,
-        points: (0..POINTS)
-            .flat_map(|i| {
-                let t = |k: usize| (2 * k) as f32 / (side - 1) as f32 - 1.0;
-                [t(i % side), t(i / side)]
-            })
-            .collect(),
-        arity: 2,
-        ops: [Op::Position, Op::PositionDirection],
-    })
 }
 
 /// A parametric blob (curve, spline surface, Cao En network, surface network) as a subject, measured at the
@@ -674,7 +479,7 @@ fn report(bench: &Bench, markdown: bool) -> String {
             "# The core on the simulated Cortex-M4F\n\nWritten by `neurosurf sim-bench --markdown \
              docs/performance/target.md`; `scripts/test.sh` checks that the file matches a fresh \
              run (instruction counts, and the cycle estimates made from them, are exact and \
-             repeatable). Estimated cycles price every executed instruction with the Cortex-M4 \
+             repeatable for the models and points stored in `cli/src/sim_bench/subjects.json`). Estimated cycles price every executed instruction with the Cortex-M4 \
              TRM's timing tables on zero-wait-state memory; see `docs/target.md` for the \
              assumptions. ",
         );
