@@ -4,12 +4,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
+use neurosurf_core::BlobError;
 use neurosurf_core::blob::{self, ModelKind};
-use neurosurf_core::caoen::CaoEnModel;
-use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
-use neurosurf_core::implicit::ImplicitModel;
-use neurosurf_core::parametric::SurfaceNetworkModel;
-use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+use neurosurf_core::model::{self, Model, ModelVisitor};
+use neurosurf_core::scalar::{Scalar, ScalarKind};
 use neurosurf_firmware_sim::{Job, Mode, Op, Run, Simulator};
 use neurosurf_trainer::evaluate::Precision;
 
@@ -110,51 +108,24 @@ pub fn run(simulator: &Simulator, job: &Job<'_>, model: &Path) -> Result<Run> {
 }
 
 /// Multiply–accumulates of one evaluation of the blob in `scalar`, as the host's core counts
-/// them: with the gradient or not (implicit models), with the tangent or not (curves), with
-/// the normal or not (spline surfaces, Cao En networks, surface networks).
+/// them ([`Model::mac_count`]): the value alone, or with its derivative (gradient, tangent or
+/// normal).
 pub fn mac_count(
     bytes: &[u8],
     scalar: ScalarKind,
     derivative: bool,
     model: &Path,
 ) -> Result<usize> {
-    let kind = blob::parse(bytes).map(|(header, _)| header.model);
-    let count = match (kind, scalar) {
-        (Ok(ModelKind::Curve), ScalarKind::Q16_16) => {
-            BSplineCurve::<Q16>::from_blob(bytes).map(|c| c.mac_count(derivative))
-        }
-        (Ok(ModelKind::Curve), _) => {
-            BSplineCurve::<f32>::from_blob(bytes).map(|c| c.mac_count(derivative))
-        }
-        (Ok(ModelKind::SplineSurface), ScalarKind::Q16_16) => {
-            BSplineSurface::<Q16>::from_blob(bytes).map(|s| surface_macs(&s, derivative))
-        }
-        (Ok(ModelKind::SplineSurface), _) => {
-            BSplineSurface::<f32>::from_blob(bytes).map(|s| surface_macs(&s, derivative))
-        }
-        (Ok(ModelKind::CaoEn), ScalarKind::Q16_16) => {
-            CaoEnModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))
-        }
-        (Ok(ModelKind::CaoEn), _) => {
-            CaoEnModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
-        }
-        (Ok(ModelKind::SurfaceNetwork), ScalarKind::Q16_16) => {
-            SurfaceNetworkModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))
-        }
-        (Ok(ModelKind::SurfaceNetwork), _) => {
-            SurfaceNetworkModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
-        }
-        (Ok(ModelKind::Implicit), ScalarKind::Q16_16) => {
-            ImplicitModel::<Q16>::from_blob(bytes).map(|m| m.mac_count(derivative))
-        }
-        (Ok(ModelKind::Implicit), _) => {
-            ImplicitModel::<f32>::from_blob(bytes).map(|m| m.mac_count(derivative))
-        }
-        (Ok(ModelKind::Rbf), _) => bail!(
-            "{}: an RBF model runs on the host only (the core has no RBF evaluator)",
-            model.display()
-        ),
-        (Err(e), _) => Err(e),
+    let kind = blob::parse(bytes)
+        .map(|(header, _)| header.model)
+        .with_context(|| format!("{}: not a model blob", model.display()))?;
+    let Some(count) = model::visit(kind, scalar, MacCount { bytes, derivative }) else {
+        bail!(
+            "{}: a {} model does not run on the target in {} (RBF models run on the host only)",
+            model.display(),
+            kind.name(),
+            scalar.name()
+        );
     };
     count.with_context(|| {
         format!(
@@ -165,13 +136,17 @@ pub fn mac_count(
     })
 }
 
-/// A surface's position, plus its normal when asked (what the target's
-/// position+direction op computes).
-fn surface_macs<S: Scalar>(surface: &BSplineSurface<S>, normal: bool) -> usize {
-    surface.mac_count(false)
-        + if normal {
-            surface.normal_mac_count()
-        } else {
-            0
-        }
+/// [`mac_count`] for the model type the blob names.
+struct MacCount<'a> {
+    bytes: &'a [u8],
+    derivative: bool,
+}
+
+impl ModelVisitor for MacCount<'_> {
+    type Output = Result<usize, BlobError>;
+    fn visit<S: Scalar, M: Model<S>>(self) -> Self::Output {
+        let mut model = Box::<M>::default();
+        model.load_blob(self.bytes)?;
+        Ok(model.mac_count(self.derivative))
+    }
 }

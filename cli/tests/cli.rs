@@ -428,7 +428,7 @@ fn info_counts_the_nodes_normalization_and_position_inputs() {
     let text = ok(&["info", s(&model)]);
     assert!(text.contains("parameters   1064"), "{text}");
     assert!(
-        text.contains("MACs         954 per field, 1908 per field+gradient"),
+        text.contains("MACs         954 per value, 1908 with the derivative"),
         "{text}"
     );
 

@@ -38,6 +38,7 @@ use crate::curve::{BSplineCurve, BSplineSurface};
 use crate::implicit::ImplicitModel;
 use crate::parametric::SurfaceNetworkModel;
 use crate::scalar::{Q16, Scalar, ScalarKind};
+use core::mem::{align_of, size_of};
 
 /// The most numbers an input point has over all kinds (a Cao En hypersphere's source point).
 pub const MAX_INPUTS: usize = MAX_SOURCE_DIMENSION;
@@ -77,6 +78,26 @@ pub trait Model<S: Scalar>: Default {
     /// ones read as 0) and writes the first [`Model::output_len`] numbers of `out` (as many
     /// as fit).
     fn evaluate(&self, input: &[S], full: bool, out: &mut [S]);
+
+    /// Evaluates `inputs[i]` into `out[i]` for as many points as both hold, bit for bit as
+    /// [`Model::evaluate`] does one point at a time. Kinds with a batch path (several points
+    /// per pass over the parameters, [`LANES`](crate::implicit::LANES) at a time) take it.
+    fn evaluate_batch(&self, inputs: &[[S; MAX_INPUTS]], full: bool, out: &mut [[S; MAX_OUTPUTS]]) {
+        for (input, out) in inputs.iter().zip(out.iter_mut()) {
+            self.evaluate(input, full, out);
+        }
+    }
+
+    /// Multiply–accumulates of one evaluation, the value alone or (`full`) with its
+    /// derivative: the lower bound of its cost.
+    fn mac_count(&self, full: bool) -> usize;
+
+    /// What the model holds, in one line (for example `3 modules, width 9, tree ((0,1),2)`),
+    /// for `neurosurf info` and logs.
+    ///
+    /// # Errors
+    /// Only those of `f`.
+    fn describe(&self, f: &mut dyn core::fmt::Write) -> core::fmt::Result;
 }
 
 /// Code generic over the model type, run by [`visit`] with the type a blob names.
@@ -87,16 +108,18 @@ pub trait ModelVisitor {
     fn visit<S: Scalar, M: Model<S>>(self) -> Self::Output;
 }
 
-/// Runs `visitor` with the model type of `kind` stored as `scalar` (`f32` or Q16.16, at the
-/// core's default capacities); `None` for a kind the core does not evaluate (the RBF baseline)
-/// or a scalar the core does not evaluate in.
-pub fn visit<V: ModelVisitor>(
-    kind: ModelKind,
-    scalar: ScalarKind,
-    visitor: V,
-) -> Option<V::Output> {
-    macro_rules! registry {
-        ($($kind:ident => $model:ident,)*) => {
+/// The registry: every kind the core evaluates and its model type. [`visit`] dispatches on
+/// it, and [`MAX_MODEL_BYTES`] and [`MAX_MODEL_ALIGN`] cover every type in it.
+macro_rules! registry {
+    ($($kind:ident => $model:ident,)*) => {
+        /// Runs `visitor` with the model type of `kind` stored as `scalar` (`f32` or Q16.16, at
+        /// the core's default capacities); `None` for a kind the core does not evaluate (the
+        /// RBF baseline) or a scalar the core does not evaluate in.
+        pub fn visit<V: ModelVisitor>(
+            kind: ModelKind,
+            scalar: ScalarKind,
+            visitor: V,
+        ) -> Option<V::Output> {
             match (kind, scalar) {
                 $(
                     (ModelKind::$kind, ScalarKind::F32) => Some(visitor.visit::<f32, $model<f32>>()),
@@ -104,14 +127,70 @@ pub fn visit<V: ModelVisitor>(
                 )*
                 _ => None,
             }
+        }
+
+        /// The largest model type [`visit`] hands out, in bytes: storage that holds any of them
+        /// (a firmware's one static slot for whatever blob it is given).
+        pub const MAX_MODEL_BYTES: usize = {
+            let mut bytes = 0;
+            $(
+                bytes = max(bytes, size_of::<$model<f32>>());
+                bytes = max(bytes, size_of::<$model<Q16>>());
+            )*
+            bytes
         };
-    }
-    registry! {
-        Implicit => ImplicitModel,
-        Curve => BSplineCurve,
-        SplineSurface => BSplineSurface,
-        CaoEn => CaoEnModel,
-        SurfaceNetwork => SurfaceNetworkModel,
+
+        /// The strictest alignment among the model types [`visit`] hands out.
+        pub const MAX_MODEL_ALIGN: usize = {
+            let mut align = 1;
+            $(
+                align = max(align, align_of::<$model<f32>>());
+                align = max(align, align_of::<$model<Q16>>());
+            )*
+            align
+        };
+    };
+}
+
+registry! {
+    Implicit => ImplicitModel,
+    Curve => BSplineCurve,
+    SplineSurface => BSplineSurface,
+    CaoEn => CaoEnModel,
+    SurfaceNetwork => SurfaceNetworkModel,
+}
+
+const fn max(a: usize, b: usize) -> usize {
+    if a > b { a } else { b }
+}
+
+/// Points a kind's batch path is given at a time by [`batch`].
+pub(crate) const BATCH_CHUNK: usize = 16;
+
+/// [`Model::evaluate_batch`] through a kind's own batch call: up to [`BATCH_CHUNK`] points at a
+/// time are turned into the call's inputs by `input`, evaluated by `run`, and their results
+/// written by `output`.
+pub(crate) fn batch<S: Scalar, I: Copy + Default, R: Copy + Default>(
+    inputs: &[[S; MAX_INPUTS]],
+    out: &mut [[S; MAX_OUTPUTS]],
+    input: impl Fn(&[S; MAX_INPUTS]) -> I,
+    run: impl Fn(&[I], &mut [R]),
+    output: impl Fn(&R, &mut [S; MAX_OUTPUTS]),
+) {
+    let mut xs = [I::default(); BATCH_CHUNK];
+    let mut rs = [R::default(); BATCH_CHUNK];
+    for (inputs, out) in inputs.chunks(BATCH_CHUNK).zip(out.chunks_mut(BATCH_CHUNK)) {
+        let n = inputs.len().min(out.len());
+        let (Some(xs), Some(rs)) = (xs.get_mut(..n), rs.get_mut(..n)) else {
+            return;
+        };
+        for (x, input_point) in xs.iter_mut().zip(inputs) {
+            *x = input(input_point);
+        }
+        run(xs, rs);
+        for (r, out) in rs.iter().zip(out) {
+            output(r, out);
+        }
     }
 }
 
@@ -125,10 +204,28 @@ pub(crate) fn point<S: Scalar, const N: usize>(input: &[S]) -> [S; N] {
 }
 
 /// Writes `values` into `out`, as many as fit.
-pub(crate) fn write<S: Scalar>(out: &mut [S], values: impl IntoIterator<Item = S>) {
+pub(crate) fn write<S: Scalar, const N: usize>(out: &mut [S], values: [S; N]) {
+    let n = out.len().min(N);
+    if let (Some(out), Some(values)) = (out.get_mut(..n), values.get(..n)) {
+        out.copy_from_slice(values);
+    }
+}
+
+/// Writes `values` into `out`, as many as fit (for results whose length is known at run time).
+pub(crate) fn write_each<S: Scalar>(out: &mut [S], values: impl IntoIterator<Item = S>) {
     for (slot, v) in out.iter_mut().zip(values) {
         *slot = v;
     }
+}
+
+/// Two triples as one result: a position and its tangent or normal.
+pub(crate) fn pair<S: Scalar>([x, y, z]: [S; 3], [u, v, w]: [S; 3]) -> [S; 6] {
+    [x, y, z, u, v, w]
+}
+
+/// `"closed"` or `"open"`.
+pub(crate) fn open_or_closed(closed: bool) -> &'static str {
+    if closed { "closed" } else { "open" }
 }
 
 /// A normal's three numbers, (0, 0, 0) where there is none.

@@ -8,7 +8,7 @@ use neurosurf_core::blob::{self, ModelKind};
 use neurosurf_core::caoen::CaoEnModel;
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::implicit::ImplicitModel;
-use neurosurf_core::model::{self, MAX_OUTPUTS, Model, ModelVisitor};
+use neurosurf_core::model::{self, MAX_INPUTS, MAX_OUTPUTS, Model, ModelVisitor};
 use neurosurf_core::parametric::SurfaceNetworkModel;
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
 
@@ -158,4 +158,67 @@ fn the_trait_path_gives_what_each_models_own_api_gives() {
     }
     assert!(kinds >= 10, "{kinds} blobs of the five evaluated kinds");
     assert!(model::visit(ModelKind::Implicit, ScalarKind::F64, Evaluate(b"")).is_none());
+}
+
+/// `evaluate_batch` at `count` seeded points in [−2, 2]ⁿ, against `evaluate` point by point:
+/// the words of every point that differ, as (point, full).
+struct BatchAgainstSingle<'a> {
+    bytes: &'a [u8],
+    count: usize,
+}
+
+impl ModelVisitor for BatchAgainstSingle<'_> {
+    type Output = Vec<(usize, bool)>;
+    fn visit<S: Scalar, M: Model<S>>(self) -> Self::Output {
+        let mut m = Box::<M>::default();
+        m.load_blob(self.bytes).unwrap();
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            ((state >> 40) as f32 / (1 << 24) as f32) * 4.0 - 2.0
+        };
+        let inputs: Vec<[S; MAX_INPUTS]> = (0..self.count)
+            .map(|_| [(); MAX_INPUTS].map(|()| S::from_f32_saturating(next())))
+            .collect();
+        let mut differing = Vec::new();
+        for full in [false, true] {
+            let mut batch = vec![[S::ZERO; MAX_OUTPUTS]; self.count];
+            m.evaluate_batch(&inputs, full, &mut batch);
+            for (i, (input, got)) in inputs.iter().zip(&batch).enumerate() {
+                let mut single = [S::ZERO; MAX_OUTPUTS];
+                m.evaluate(input, full, &mut single);
+                let n = m.output_len(full);
+                if got[..n] != single[..n] {
+                    differing.push((i, full));
+                }
+            }
+        }
+        differing
+    }
+}
+
+/// The batch path gives the single path's bits, on counts that fill no chunk, one chunk and a
+/// chunk and a bit (the core converts 16 points at a time and evaluates 8 lanes at a time).
+#[test]
+fn the_batch_path_gives_what_the_single_path_gives() {
+    for (name, bytes) in corpus() {
+        let (header, _) = blob::parse(&bytes).unwrap();
+        for scalar in [ScalarKind::F32, ScalarKind::Q16_16] {
+            for count in [1, 7, 16, 37] {
+                let run = BatchAgainstSingle {
+                    bytes: &bytes,
+                    count,
+                };
+                if let Some(differing) = model::visit(header.model, scalar, run) {
+                    assert!(
+                        differing.is_empty(),
+                        "{name} in {} at {count} points: {differing:?}",
+                        scalar.name()
+                    );
+                }
+            }
+        }
+    }
 }

@@ -476,13 +476,82 @@ impl<S: Scalar, const K: usize> crate::model::Model<S> for CaoEnModel<S, K> {
             )
         };
         let normal = full.then(|| crate::model::normal_or_zero(normal));
-        crate::model::write(
+        crate::model::write_each(
             out,
             outputs
                 .into_iter()
                 .take(p)
                 .chain(normal.into_iter().flatten()),
         );
+    }
+
+    fn evaluate_batch(
+        &self,
+        inputs: &[[S; crate::model::MAX_INPUTS]],
+        full: bool,
+        out: &mut [[S; crate::model::MAX_OUTPUTS]],
+    ) {
+        let p = self.target_dimension();
+        let x = |input: &[S; crate::model::MAX_INPUTS]| {
+            crate::model::point::<S, MAX_SOURCE_DIMENSION>(input)
+        };
+        if full && p == 3 {
+            crate::model::batch(
+                inputs,
+                out,
+                x,
+                |x, points| {
+                    // Lengths agree by construction: nothing to report.
+                    let _ = self.eval_normal_batch(x, points);
+                },
+                |point: &super::CaoEnPoint<S>, out| {
+                    let normal = crate::model::normal_or_zero(point.normal);
+                    crate::model::write(out, crate::model::pair(point.position, normal));
+                },
+            );
+        } else {
+            crate::model::batch(
+                inputs,
+                out,
+                x,
+                |x, outputs| {
+                    let _ =
+                        self.eval_batch::<MAX_SOURCE_DIMENSION, MAX_TARGET_DIMENSION>(x, outputs);
+                },
+                |outputs: &[S; MAX_TARGET_DIMENSION], out| {
+                    let normal = full.then_some([S::ZERO; 3]);
+                    crate::model::write_each(
+                        out,
+                        outputs
+                            .iter()
+                            .copied()
+                            .take(p)
+                            .chain(normal.into_iter().flatten()),
+                    );
+                },
+            );
+        }
+    }
+
+    fn mac_count(&self, full: bool) -> usize {
+        CaoEnModel::mac_count(self, full)
+    }
+
+    fn describe(&self, f: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(
+            f,
+            "{} key points, {:?} {}-D → {}-D, {:?} blending{}",
+            self.key_count(),
+            self.domain(),
+            self.source_dimension(),
+            self.target_dimension(),
+            self.blending(),
+            if self.is_normalized() {
+                ", normalized"
+            } else {
+                ""
+            }
+        )
     }
 }
 

@@ -289,9 +289,57 @@ impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineCurve<S, C> {
         let [t] = crate::model::point(input);
         if full {
             let p = self.eval(t);
-            crate::model::write(out, p.position.into_iter().chain(p.tangent));
+            crate::model::write(out, crate::model::pair(p.position, p.tangent));
         } else {
             crate::model::write(out, self.position(t));
         }
+    }
+
+    fn evaluate_batch(
+        &self,
+        inputs: &[[S; crate::model::MAX_INPUTS]],
+        full: bool,
+        out: &mut [[S; crate::model::MAX_OUTPUTS]],
+    ) {
+        let t = |input: &[S; crate::model::MAX_INPUTS]| crate::model::point::<S, 1>(input)[0];
+        if full {
+            crate::model::batch(
+                inputs,
+                out,
+                t,
+                |t, points| {
+                    // Lengths agree by construction: nothing to report.
+                    let _ = self.eval_batch(t, points);
+                },
+                |p: &CurvePoint<S>, out| {
+                    crate::model::write(out, crate::model::pair(p.position, p.tangent));
+                },
+            );
+        } else {
+            crate::model::batch(
+                inputs,
+                out,
+                t,
+                |t, positions| {
+                    let _ = self.position_batch(t, positions);
+                },
+                |&p: &[S; 3], out| crate::model::write(out, p),
+            );
+        }
+    }
+
+    fn mac_count(&self, full: bool) -> usize {
+        BSplineCurve::mac_count(self, full)
+    }
+
+    fn describe(&self, f: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(
+            f,
+            "{} control points, {}-D, {}, {} segments",
+            self.control_count(),
+            self.dimension(),
+            crate::model::open_or_closed(self.is_closed()),
+            self.segments()
+        )
     }
 }

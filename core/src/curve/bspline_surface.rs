@@ -379,9 +379,74 @@ impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineSurface<S, C> 
         let position = self.position(uv);
         if full {
             let normal = crate::model::normal_or_zero(self.normal(uv));
-            crate::model::write(out, position.into_iter().chain(normal));
+            crate::model::write(out, crate::model::pair(position, normal));
         } else {
             crate::model::write(out, position);
         }
+    }
+
+    fn evaluate_batch(
+        &self,
+        inputs: &[[S; crate::model::MAX_INPUTS]],
+        full: bool,
+        out: &mut [[S; crate::model::MAX_OUTPUTS]],
+    ) {
+        let uv = |input: &[S; crate::model::MAX_INPUTS]| crate::model::point::<S, 2>(input);
+        if full {
+            crate::model::batch(
+                inputs,
+                out,
+                uv,
+                |uv, points: &mut [([S; 3], Option<[S; 3]>)]| {
+                    let mut positions = [[S::ZERO; 3]; crate::model::BATCH_CHUNK];
+                    let mut normals = [None; crate::model::BATCH_CHUNK];
+                    let (Some(positions), Some(normals)) =
+                        (positions.get_mut(..uv.len()), normals.get_mut(..uv.len()))
+                    else {
+                        return;
+                    };
+                    // Lengths agree by construction: nothing to report.
+                    let _ = self.position_batch(uv, positions);
+                    let _ = self.normal_batch(uv, normals);
+                    for ((slot, &p), &n) in
+                        points.iter_mut().zip(positions.iter()).zip(normals.iter())
+                    {
+                        *slot = (p, n);
+                    }
+                },
+                |&(p, n), out| {
+                    let normal = crate::model::normal_or_zero(n);
+                    crate::model::write(out, crate::model::pair(p, normal));
+                },
+            );
+        } else {
+            crate::model::batch(
+                inputs,
+                out,
+                uv,
+                |uv, positions| {
+                    let _ = self.position_batch(uv, positions);
+                },
+                |&p: &[S; 3], out| crate::model::write(out, p),
+            );
+        }
+    }
+
+    fn mac_count(&self, full: bool) -> usize {
+        if full {
+            BSplineSurface::mac_count(self, false) + self.normal_mac_count()
+        } else {
+            BSplineSurface::mac_count(self, false)
+        }
+    }
+
+    fn describe(&self, f: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        let ([count_u, count_v], [closed_u, closed_v]) = (self.counts(), self.is_closed());
+        write!(
+            f,
+            "{count_u} × {count_v} control points, {} × {}",
+            crate::model::open_or_closed(closed_u),
+            crate::model::open_or_closed(closed_v)
+        )
     }
 }

@@ -528,9 +528,64 @@ impl<S: Scalar, const P: usize, const M: usize> crate::model::Model<S> for Impli
         let x = crate::model::point(input);
         if full {
             let fg = self.field_gradient(x);
-            crate::model::write(out, [fg.value].into_iter().chain(fg.gradient));
+            let [gx, gy, gz] = fg.gradient;
+            crate::model::write(out, [fg.value, gx, gy, gz]);
         } else {
             crate::model::write(out, [self.field(x)]);
         }
+    }
+
+    fn evaluate_batch(
+        &self,
+        inputs: &[[S; crate::model::MAX_INPUTS]],
+        full: bool,
+        out: &mut [[S; crate::model::MAX_OUTPUTS]],
+    ) {
+        let x = |input: &[S; crate::model::MAX_INPUTS]| crate::model::point::<S, 3>(input);
+        if full {
+            crate::model::batch(
+                inputs,
+                out,
+                x,
+                |x, fg| {
+                    // Lengths agree by construction: nothing to report.
+                    let _ = self.field_gradient_batch(x, fg);
+                },
+                |fg: &super::FieldGradient<S>, out| {
+                    let [gx, gy, gz] = fg.gradient;
+                    crate::model::write(out, [fg.value, gx, gy, gz]);
+                },
+            );
+        } else {
+            crate::model::batch(
+                inputs,
+                out,
+                x,
+                |x, phi| {
+                    let _ = self.field_batch(x, phi);
+                },
+                |&phi: &S, out| crate::model::write(out, [phi]),
+            );
+        }
+    }
+
+    fn mac_count(&self, full: bool) -> usize {
+        ImplicitModel::mac_count(self, full)
+    }
+
+    fn describe(&self, f: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        let origin = self.frame().origin().map(S::to_f32);
+        write!(
+            f,
+            "{} module{}, width {}, {} sign guards, frame model = (x − ({}, {}, {})) · 2^{}",
+            self.module_count(),
+            if self.module_count() == 1 { "" } else { "s" },
+            self.width(),
+            self.guard_count(),
+            origin[0],
+            origin[1],
+            origin[2],
+            self.frame().shift()
+        )
     }
 }

@@ -266,9 +266,55 @@ impl<S: Scalar, const P: usize> crate::model::Model<S> for SurfaceNetworkModel<S
         if full {
             let p = self.eval(uv);
             let normal = crate::model::normal_or_zero(p.normal);
-            crate::model::write(out, p.position.into_iter().chain(normal));
+            crate::model::write(out, crate::model::pair(p.position, normal));
         } else {
             crate::model::write(out, self.position(uv));
         }
+    }
+
+    fn evaluate_batch(
+        &self,
+        inputs: &[[S; crate::model::MAX_INPUTS]],
+        full: bool,
+        out: &mut [[S; crate::model::MAX_OUTPUTS]],
+    ) {
+        let uv = |input: &[S; crate::model::MAX_INPUTS]| crate::model::point::<S, 2>(input);
+        if full {
+            crate::model::batch(
+                inputs,
+                out,
+                uv,
+                |uv, points| {
+                    // Lengths agree by construction: nothing to report.
+                    let _ = self.eval_batch(uv, points);
+                },
+                |p: &super::SurfaceNetworkPoint<S>, out| {
+                    let normal = crate::model::normal_or_zero(p.normal);
+                    crate::model::write(out, crate::model::pair(p.position, normal));
+                },
+            );
+        } else {
+            crate::model::batch(
+                inputs,
+                out,
+                uv,
+                |uv, positions| {
+                    let _ = self.position_batch(uv, positions);
+                },
+                |&p: &[S; 3], out| crate::model::write(out, p),
+            );
+        }
+    }
+
+    fn mac_count(&self, full: bool) -> usize {
+        SurfaceNetworkModel::mac_count(self, full)
+    }
+
+    fn describe(&self, f: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(f, "hidden layers")?;
+        for (i, size) in self.hidden_sizes().iter().enumerate() {
+            write!(f, "{}{size}", if i == 0 { " " } else { " × " })?;
+        }
+        write!(f, ", {:?}", self.activation())
     }
 }

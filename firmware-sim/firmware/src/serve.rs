@@ -1,14 +1,11 @@
 //! One run: read the request and the blob from the host, evaluate, write the answer.
 
-use core::mem::MaybeUninit;
+use core::mem::{MaybeUninit, align_of, size_of};
 
 use neurosurf_core::BlobError;
 use neurosurf_core::blob::{self, ModelKind};
-use neurosurf_core::caoen::{CaoEnModel, CaoEnPoint, MAX_TARGET_DIMENSION};
-use neurosurf_core::curve::{BSplineCurve, BSplineSurface, CurvePoint};
-use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
-use neurosurf_core::parametric::{SurfaceNetworkModel, SurfaceNetworkPoint};
-use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+use neurosurf_core::model::{self, MAX_INPUTS, MAX_OUTPUTS, Model, ModelVisitor};
+use neurosurf_core::scalar::{Scalar, ScalarKind};
 use neurosurf_sim_protocol::{
     CHUNK_POINTS, MAX_ARITY, MAX_BLOB_BYTES, MODEL_FILE, Mode, Op, REQUEST_FILE, RESULT_FILE,
     RequestHeader, ResultTrailer, Status,
@@ -19,12 +16,10 @@ use crate::semihosting::HostFile;
 use crate::slot::Slot;
 use crate::stack;
 
-// A request point is a Cao En source point at its widest, and a result fits `stream`'s buffer.
-const _: () = assert!(MAX_ARITY == neurosurf_core::caoen::MAX_SOURCE_DIMENSION);
+// A request point is a model's input at its widest.
+const _: () = assert!(MAX_ARITY == MAX_INPUTS);
 
 static BLOB: Slot<[u8; MAX_BLOB_BYTES]> = Slot::new([0; MAX_BLOB_BYTES]);
-static IMPLICIT_F32: Slot<MaybeUninit<ImplicitModel<f32>>> = Slot::new(MaybeUninit::uninit());
-static IMPLICIT_Q16: Slot<MaybeUninit<ImplicitModel<Q16>>> = Slot::new(MaybeUninit::uninit());
 
 /// NUL-terminated copies of the protocol's file names, for SYS_OPEN.
 macro_rules! c_name {
@@ -130,7 +125,7 @@ fn serve(out: &mut HostFile) -> Answer {
         Ok(blob) => blob,
         Err(status) => return Answer::failed(status),
     };
-    let model = match blob::parse(blob) {
+    let kind = match blob::parse(blob) {
         Ok((blob_header, _)) => blob_header.model,
         Err(e) => return reject(out, e),
     };
@@ -141,53 +136,34 @@ fn serve(out: &mut HostFile) -> Answer {
         header.scalar,
         blob.len()
     );
-    let scalar = ScalarKind::from_code(header.scalar);
-    if !matches!(scalar, Some(ScalarKind::F32 | ScalarKind::Q16_16)) {
-        defmt::error!(
-            "scalar code {=u8} is not evaluated on the target",
-            header.scalar
-        );
+    let Some(scalar) = ScalarKind::from_code(header.scalar) else {
+        defmt::error!("unknown scalar code {=u8}", header.scalar);
         return Answer::failed(Status::BadRequest);
-    }
-    let q16 = scalar == Some(ScalarKind::Q16_16);
-    let parametric = matches!(
-        model,
-        ModelKind::Curve | ModelKind::SplineSurface | ModelKind::CaoEn | ModelKind::SurfaceNetwork
-    );
-    let served = parametric || model == ModelKind::Implicit;
-    if served && header.op.is_parametric() != parametric {
-        defmt::error!(
-            "op {=u8} does not apply to {=str} models",
-            header.op as u8,
-            model.name()
-        );
-        return Answer::failed(Status::BadRequest);
-    }
+    };
     let io = Io {
         header: &header,
         request: &mut request,
-        out,
+        out: &mut *out,
     };
-    match (model, q16) {
-        (ModelKind::Implicit, false) => serve_implicit(&IMPLICIT_F32, blob, io),
-        (ModelKind::Implicit, true) => serve_implicit(&IMPLICIT_Q16, blob, io),
-        (ModelKind::Curve, false) => serve_curve::<f32>(blob, io),
-        (ModelKind::Curve, true) => serve_curve::<Q16>(blob, io),
-        (ModelKind::SplineSurface, false) => serve_surface::<f32>(blob, io),
-        (ModelKind::SplineSurface, true) => serve_surface::<Q16>(blob, io),
-        (ModelKind::CaoEn, false) => serve_caoen::<f32>(blob, io),
-        (ModelKind::CaoEn, true) => serve_caoen::<Q16>(blob, io),
-        (ModelKind::SurfaceNetwork, false) => serve_network::<f32>(blob, io),
-        (ModelKind::SurfaceNetwork, true) => serve_network::<Q16>(blob, io),
-        // The RBF baseline is evaluated by the host trainer only.
-        (ModelKind::Rbf, _) => reject(
-            io.out,
-            BlobError::WrongModelKind {
-                expected: ModelKind::Implicit,
-                found: ModelKind::Rbf,
-            },
-        ),
-    }
+    model::visit(kind, scalar, Serve { blob, io }).unwrap_or_else(|| {
+        // The kind or the scalar is not evaluated on the target: the RBF baseline runs on
+        // the host only, f64 is not a target scalar.
+        if kind == ModelKind::Rbf {
+            reject(
+                out,
+                BlobError::WrongModelKind {
+                    expected: ModelKind::Implicit,
+                    found: kind,
+                },
+            )
+        } else {
+            defmt::error!(
+                "scalar {=str} is not evaluated on the target",
+                scalar.name()
+            );
+            Answer::failed(Status::BadRequest)
+        }
+    })
 }
 
 /// The request being served: its header, the rest of its file, and the result file.
@@ -235,384 +211,102 @@ fn reject(out: &mut HostFile, error: BlobError) -> Answer {
     }
 }
 
-/// Loads an implicit model in place (in its static slot: no stack copy of the 32 KiB
-/// parameters) and streams the points through it.
-fn serve_implicit<S: Scalar>(
-    slot: &'static Slot<MaybeUninit<ImplicitModel<S>>>,
-    blob: &[u8],
-    io: Io<'_>,
-) -> Answer {
-    let Some(slot) = slot.take() else {
-        return Answer::failed(Status::HostIo);
-    };
-    let model = slot.write(ImplicitModel::new());
-    if let Err(e) = model.load(blob) {
-        return reject(io.out, e);
-    }
-    defmt::info!(
-        "implicit model: {=usize} modules, width {=usize}, {=usize} parameters, {=usize} MACs per field+gradient",
-        model.module_count(),
-        model.width(),
-        model.parameter_count(),
-        model.mac_count(true)
-    );
-    let model = &*model;
-    let point = |p: [S; MAX_ARITY]| [p[0], p[1], p[2]];
-    match (io.header.op, io.header.mode) {
-        (Op::Field, Mode::Batch) => stream(
-            io,
-            1,
-            point,
-            |p, out| model.field_batch(p, out).is_ok(),
-            |v: &S| [*v],
-        ),
-        (Op::Field, _) => stream(
-            io,
-            1,
-            point,
-            |p, out| each(p, out, |&p| model.field(p)),
-            |v: &S| [*v],
-        ),
-        (_, Mode::Batch) => stream(
-            io,
-            4,
-            point,
-            |p, out| model.field_gradient_batch(p, out).is_ok(),
-            field_gradient_words,
-        ),
-        _ => stream(
-            io,
-            4,
-            point,
-            |p, out| each(p, out, |&p| model.field_gradient(p)),
-            field_gradient_words,
-        ),
-    }
+/// One request for whatever model type the blob names ([`model::visit`]): the model is
+/// loaded in place in the static [`MODEL`] slot (no stack copy of up to 32 KiB of parameters),
+/// then the points stream through it.
+struct Serve<'a> {
+    blob: &'static [u8],
+    io: Io<'a>,
 }
 
-/// Loads a curve (on the stack: at most 6 KiB) and streams the parameters t through it.
-#[inline(never)]
-fn serve_curve<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
-    let mut curve = BSplineCurve::<S>::new();
-    if let Err(e) = curve.load(blob) {
-        return reject(io.out, e);
-    }
-    defmt::info!(
-        "curve: dimension {=usize}, {=usize} control points, {=usize} segments",
-        curve.dimension(),
-        curve.control_count(),
-        curve.segments()
-    );
-    let curve = &curve;
-    let t = |p: [S; MAX_ARITY]| p[0];
-    match (io.header.op, io.header.mode) {
-        (Op::Position, Mode::Batch) => stream(
-            io,
-            3,
-            t,
-            |t, out| curve.position_batch(t, out).is_ok(),
-            |p: &[S; 3]| *p,
-        ),
-        (Op::Position, _) => stream(
-            io,
-            3,
-            t,
-            |t, out| each(t, out, |&t| curve.position(t)),
-            |p: &[S; 3]| *p,
-        ),
-        (_, Mode::Batch) => stream(
-            io,
-            6,
-            t,
-            |t, out| curve.eval_batch(t, out).is_ok(),
-            curve_words,
-        ),
-        _ => stream(
-            io,
-            6,
-            t,
-            |t, out| each(t, out, |&t| curve.eval(t)),
-            curve_words,
-        ),
-    }
-}
+impl ModelVisitor for Serve<'_> {
+    type Output = Answer;
 
-/// Loads a spline surface (on the stack: at most 12 KiB) and streams the parameters (u, v)
-/// through it.
-#[inline(never)]
-fn serve_surface<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
-    let mut surface = BSplineSurface::<S>::new();
-    if let Err(e) = surface.load(blob) {
-        return reject(io.out, e);
-    }
-    let [count_u, count_v] = surface.counts();
-    defmt::info!(
-        "spline surface: {=usize} × {=usize} control points",
-        count_u,
-        count_v
-    );
-    let surface = &surface;
-    let uv = |p: [S; MAX_ARITY]| [p[0], p[1]];
-    match (io.header.op, io.header.mode) {
-        (Op::Position, Mode::Batch) => stream(
-            io,
-            3,
-            uv,
-            |uv, out| surface.position_batch(uv, out).is_ok(),
-            |p: &[S; 3]| *p,
-        ),
-        (Op::Position, _) => stream(
-            io,
-            3,
-            uv,
-            |uv, out| each(uv, out, |&uv| surface.position(uv)),
-            |p: &[S; 3]| *p,
-        ),
-        (_, Mode::Batch) => stream(
-            io,
-            6,
-            uv,
-            |uv, out| surface_batch(surface, uv, out),
-            surface_words,
-        ),
-        _ => stream(
-            io,
-            6,
-            uv,
-            |uv, out| each(uv, out, |&uv| (surface.position(uv), surface.normal(uv))),
-            surface_words,
-        ),
-    }
-}
-
-/// Loads a surface network (on the stack: at most 5 KiB) and streams the parameters (u, v)
-/// through it: the position, then (for `PositionDirection`) the unit normal.
-#[inline(never)]
-fn serve_network<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
-    let mut network = SurfaceNetworkModel::<S>::new();
-    if let Err(e) = network.load(blob) {
-        return reject(io.out, e);
-    }
-    defmt::info!(
-        "surface network: hidden layers {=[u8]}, {=usize} MACs per position+normal",
-        network.hidden_sizes(),
-        network.mac_count(true)
-    );
-    let network = &network;
-    let uv = |p: [S; MAX_ARITY]| [p[0], p[1]];
-    let words = |p: &SurfaceNetworkPoint<S>| surface_words(&(p.position, p.normal));
-    match (io.header.op, io.header.mode) {
-        (Op::Position, Mode::Batch) => stream(
-            io,
-            3,
-            uv,
-            |uv, out| network.position_batch(uv, out).is_ok(),
-            |p: &[S; 3]| *p,
-        ),
-        (Op::Position, _) => stream(
-            io,
-            3,
-            uv,
-            |uv, out| each(uv, out, |&uv| network.position(uv)),
-            |p: &[S; 3]| *p,
-        ),
-        (_, Mode::Batch) => stream(
-            io,
-            6,
-            uv,
-            |uv, out| network.eval_batch(uv, out).is_ok(),
-            words,
-        ),
-        _ => stream(
-            io,
-            6,
-            uv,
-            |uv, out| each(uv, out, |&uv| network.eval(uv)),
-            words,
-        ),
-    }
-}
-
-/// Loads a Cao En network (on the stack: at most 19 KiB) and streams the source points
-/// through it: every output, then (for `PositionDirection`) the unit normal.
-#[inline(never)]
-fn serve_caoen<S: Scalar>(blob: &[u8], io: Io<'_>) -> Answer {
-    let mut network = CaoEnModel::<S>::new();
-    if let Err(e) = network.load(blob) {
-        return reject(io.out, e);
-    }
-    let p = network.target_dimension();
-    defmt::info!(
-        "Cao En network: {=usize} key points, {=usize} → {=usize} dimensions",
-        network.key_count(),
-        network.source_dimension(),
-        p
-    );
-    let network = &network;
-    let x = |x: [S; MAX_ARITY]| x;
-    let outputs = |y: &[S; MAX_TARGET_DIMENSION]| *y;
-    match (io.header.op, io.header.mode) {
-        (Op::Position, Mode::Batch) => stream(
-            io,
-            p,
-            x,
-            |x, out| network.eval_batch(x, out).is_ok(),
-            outputs,
-        ),
-        (Op::Position, _) => stream(
-            io,
-            p,
-            x,
-            |x, out| each(x, out, |x| network.eval(x)),
-            outputs,
-        ),
-        (_, Mode::Batch) => stream(
-            io,
-            p + 3,
-            x,
-            |x, out| caoen_batch(network, x, out),
-            caoen_words(p),
-        ),
-        _ => stream(
-            io,
-            p + 3,
-            x,
-            |x, out| each(x, out, |x| caoen_single(network, x)),
-            caoen_words(p),
-        ),
-    }
-}
-
-/// Every output and the unit normal of every source point, through the network's batch calls:
-/// one pass with the Jacobian for a shape (p = 3, whose position comes with the normal), one
-/// without for other networks (which have no normal).
-fn caoen_batch<S: Scalar>(
-    network: &CaoEnModel<S>,
-    x: &[[S; MAX_ARITY]],
-    out: &mut [CaoEnResult<S>],
-) -> bool {
-    if network.target_dimension() == 3 {
-        let mut points = [CaoEnPoint::default(); CHUNK_POINTS];
-        let Some(points) = points.get_mut(..x.len()) else {
-            return false;
+    fn visit<S: Scalar, M: Model<S>>(self) -> Answer {
+        let Serve { blob, io } = self;
+        let op = io.header.op;
+        // Field ops ask implicit models, position ops parametric ones.
+        if op.is_parametric() == (M::KIND == ModelKind::Implicit) {
+            defmt::error!(
+                "op {=u8} does not apply to {=str} models",
+                op as u8,
+                M::KIND.name()
+            );
+            return Answer::failed(Status::BadRequest);
+        }
+        let Some(storage) = MODEL.take() else {
+            return Answer::failed(Status::HostIo);
         };
-        if network.eval_normal_batch(x, points).is_err() {
-            return false;
+        let model = place::<S, M>(storage);
+        if let Err(e) = model.load_blob(blob) {
+            return reject(io.out, e);
         }
-        for (slot, point) in out.iter_mut().zip(points.iter()) {
-            *slot = caoen_result(point);
+        let full = matches!(op, Op::FieldGradient | Op::PositionDirection);
+        defmt::info!(
+            "{=str} model: {=usize} inputs, {=usize} outputs, {=usize} MACs per evaluation",
+            M::KIND.name(),
+            model.input_len(),
+            model.output_len(full),
+            model.mac_count(full)
+        );
+        let model = &*model;
+        let words = model.output_len(full);
+        if io.header.mode == Mode::Batch {
+            stream(io, words, |inputs, out| {
+                model.evaluate_batch(inputs, full, out)
+            })
+        } else {
+            stream(io, words, |inputs, out| {
+                for (input, out) in inputs.iter().zip(out.iter_mut()) {
+                    model.evaluate(input, full, out);
+                }
+            })
         }
-    } else {
-        let mut outputs = [[S::ZERO; MAX_TARGET_DIMENSION]; CHUNK_POINTS];
-        let Some(outputs) = outputs.get_mut(..x.len()) else {
-            return false;
-        };
-        if network.eval_batch(x, outputs).is_err() {
-            return false;
-        }
-        for (slot, &y) in out.iter_mut().zip(outputs.iter()) {
-            *slot = (y, None);
-        }
-    }
-    true
-}
-
-/// One source point, as [`caoen_batch`] computes it.
-fn caoen_single<S: Scalar>(network: &CaoEnModel<S>, x: &[S; MAX_ARITY]) -> CaoEnResult<S> {
-    if network.target_dimension() == 3 {
-        caoen_result(&network.eval_normal(x))
-    } else {
-        (network.eval(x), None)
     }
 }
 
-/// A shape's position and normal as the eight-output result.
-fn caoen_result<S: Scalar>(point: &CaoEnPoint<S>) -> CaoEnResult<S> {
-    let mut y = [S::ZERO; MAX_TARGET_DIMENSION];
-    for (slot, &v) in y.iter_mut().zip(&point.position) {
-        *slot = v;
+/// Storage for any model type [`model::visit`] hands out.
+#[repr(C, align(8))]
+struct ModelStorage(MaybeUninit<[u8; model::MAX_MODEL_BYTES]>);
+
+const _: () = assert!(model::MAX_MODEL_ALIGN <= 8);
+
+static MODEL: Slot<ModelStorage> = Slot::new(ModelStorage(MaybeUninit::uninit()));
+
+/// A fresh `M` in `storage` (the [`MODEL`] slot).
+fn place<S: Scalar, M: Model<S>>(storage: &mut ModelStorage) -> &mut M {
+    const {
+        assert!(size_of::<M>() <= model::MAX_MODEL_BYTES);
+        assert!(align_of::<M>() <= 8);
     }
-    (y, point.normal)
-}
-
-/// A Cao En network's outputs and unit normal at one source point.
-type CaoEnResult<S> = ([S; MAX_TARGET_DIMENSION], Option<[S; 3]>);
-
-/// The p outputs, then the normal (0, 0, 0 where it does not exist).
-fn caoen_words<S: Scalar>(p: usize) -> impl Fn(&CaoEnResult<S>) -> [S; MAX_TARGET_DIMENSION + 3] {
-    move |(y, normal)| {
-        let mut words = [S::ZERO; MAX_TARGET_DIMENSION + 3];
-        let normal = normal.unwrap_or([S::ZERO; 3]);
-        for (word, &v) in words.iter_mut().zip(y.iter().take(p).chain(&normal)) {
-            *word = v;
-        }
-        words
+    let slot: *mut M = (storage as *mut ModelStorage).cast();
+    // SAFETY: the storage is large and aligned enough for an `M` (checked above, at compile
+    // time), the exclusive borrow of it is moved into the returned one, so nothing else
+    // refers to it, and it is written before the reference is made.
+    unsafe {
+        slot.write(M::default());
+        &mut *slot
     }
 }
 
-/// Position and normal of every `uv`, through the surface's batch calls.
-fn surface_batch<S: Scalar>(
-    surface: &BSplineSurface<S>,
-    uv: &[[S; 2]],
-    out: &mut [([S; 3], Option<[S; 3]>)],
-) -> bool {
-    let mut positions = [[S::ZERO; 3]; CHUNK_POINTS];
-    let mut normals = [None; CHUNK_POINTS];
-    let (Some(positions), Some(normals)) =
-        (positions.get_mut(..uv.len()), normals.get_mut(..uv.len()))
-    else {
-        return false;
-    };
-    if surface.position_batch(uv, positions).is_err() || surface.normal_batch(uv, normals).is_err()
-    {
-        return false;
-    }
-    for ((slot, &p), &n) in out.iter_mut().zip(positions.iter()).zip(normals.iter()) {
-        *slot = (p, n);
-    }
-    true
-}
-
-fn field_gradient_words<S: Scalar>(fg: &FieldGradient<S>) -> [S; 4] {
-    [fg.value, fg.gradient[0], fg.gradient[1], fg.gradient[2]]
-}
-
-fn curve_words<S: Scalar>(point: &CurvePoint<S>) -> [S; 6] {
-    let ([x, y, z], [tx, ty, tz]) = (point.position, point.tangent);
-    [x, y, z, tx, ty, tz]
-}
-
-fn surface_words<S: Scalar>(&(position, normal): &([S; 3], Option<[S; 3]>)) -> [S; 6] {
-    let ([x, y, z], [nx, ny, nz]) = (position, normal.unwrap_or([S::ZERO; 3]));
-    [x, y, z, nx, ny, nz]
-}
-
-/// The single-point path: `f` at every input, in order.
-fn each<I, R>(inputs: &[I], out: &mut [R], f: impl Fn(&I) -> R) -> bool {
-    for (slot, input) in out.iter_mut().zip(inputs) {
-        *slot = f(input);
-    }
-    true
-}
+/// Results encoded and written to the host at a time.
+const WRITE_POINTS: usize = 16;
 
 /// Streams the request's points through `evaluate`, chunk by chunk: each point is decoded to
-/// `S` (missing coordinates 0) and turned into the model's input by `input` (outside the timed
-/// region), the chunk is evaluated inside a timed region, and each result is written as the
-/// first `words` (≤ `W`) words of `encode`.
-fn stream<S: Scalar, I: Copy + Default, R: Copy + Default, const W: usize>(
+/// `S` (missing coordinates 0) outside the timed region, the chunk is evaluated inside a timed
+/// region, and each result is written as its first `words` words.
+fn stream<S: Scalar>(
     io: Io<'_>,
     words: usize,
-    input: impl Fn([S; MAX_ARITY]) -> I,
-    mut evaluate: impl FnMut(&[I], &mut [R]) -> bool,
-    encode: impl Fn(&R) -> [S; W],
+    mut evaluate: impl FnMut(&[[S; MAX_INPUTS]], &mut [[S; MAX_OUTPUTS]]),
 ) -> Answer {
     let header = io.header;
-    let words = words.min(W);
+    let words = words.min(MAX_OUTPUTS);
     let point_bytes = header.point_bytes();
-    let mut raw = [0_u8; CHUNK_POINTS * 4 * MAX_ARITY];
-    let mut inputs = [I::default(); CHUNK_POINTS];
-    let mut results = [R::default(); CHUNK_POINTS];
-    let mut encoded = [0_u8; CHUNK_POINTS * 4 * (MAX_TARGET_DIMENSION + 3)];
+    let mut raw = [0_u8; CHUNK_POINTS * 4 * MAX_INPUTS];
+    let mut inputs = [[S::ZERO; MAX_INPUTS]; CHUNK_POINTS];
+    let mut results = [[S::ZERO; MAX_OUTPUTS]; CHUNK_POINTS];
+    let mut encoded = [0_u8; WRITE_POINTS * 4 * MAX_OUTPUTS];
     let mut remaining = header.count as usize;
     let mut written = 0_u32;
     while remaining > 0 {
@@ -621,28 +315,27 @@ fn stream<S: Scalar, I: Copy + Default, R: Copy + Default, const W: usize>(
         if io.request.read_exact(raw).is_err() {
             return Answer::failed(Status::HostIo);
         }
-        for (slot, bytes) in inputs.iter_mut().zip(raw.chunks_exact(point_bytes)) {
-            let mut point = [S::ZERO; MAX_ARITY];
+        for (point, bytes) in inputs.iter_mut().zip(raw.chunks_exact(point_bytes)) {
+            *point = [S::ZERO; MAX_INPUTS];
             for (c, b) in point.iter_mut().zip(bytes.chunks_exact(4)) {
                 *c = S::from_f32_saturating(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
             }
-            *slot = input(point);
         }
         let results = &mut results[..n];
-        if !timed(|| evaluate(inputs, results)) {
-            return Answer::failed(Status::BadRequest);
-        }
-        let mut len = 0;
-        for result in results.iter() {
-            for v in encode(result).into_iter().take(words) {
-                encoded[len..len + 4].copy_from_slice(&v.to_le_bytes());
-                len += 4;
+        timed(|| evaluate(inputs, results));
+        for results in results.chunks(WRITE_POINTS) {
+            let mut len = 0;
+            for result in results {
+                for v in &result[..words] {
+                    encoded[len..len + 4].copy_from_slice(&v.to_le_bytes());
+                    len += 4;
+                }
             }
+            if io.out.write_all(&encoded[..len]).is_err() {
+                return Answer::failed(Status::HostIo);
+            }
+            written += len as u32;
         }
-        if io.out.write_all(&encoded[..len]).is_err() {
-            return Answer::failed(Status::HostIo);
-        }
-        written += len as u32;
         remaining -= n;
     }
     defmt::info!("evaluated {=u32} points", header.count);

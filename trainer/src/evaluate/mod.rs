@@ -141,6 +141,34 @@ impl LoadedModel {
         }
     }
 
+    /// The scalar the parameters are stored in (`f64` for the RBF baseline).
+    pub fn stored_as(&self) -> ScalarKind {
+        match self {
+            LoadedModel::Implicit { decoded, .. } => decoded.stored_as,
+            LoadedModel::Rbf(_) => ScalarKind::F64,
+            LoadedModel::Curve { decoded, .. } => decoded.stored_as,
+            LoadedModel::SplineSurface { decoded, .. } => decoded.stored_as,
+            LoadedModel::CaoEn { decoded, .. } => decoded.stored_as,
+            LoadedModel::SurfaceNetwork { decoded, .. } => decoded.stored_as,
+        }
+    }
+
+    /// The numbers the model stores: weights, biases and guards; control point coordinates;
+    /// key points, their weights and targets.
+    pub fn parameter_count(&self) -> usize {
+        match self {
+            LoadedModel::Implicit { decoded, .. } => decoded.network.params().len(),
+            LoadedModel::Rbf(rbf) => rbf.parameter_count(),
+            LoadedModel::Curve { decoded, .. } => decoded.curve.control.len() * 3,
+            LoadedModel::SplineSurface { decoded, .. } => decoded.surface.control.len() * 3,
+            LoadedModel::CaoEn { decoded, .. } => {
+                let n = &decoded.network;
+                n.key_count() * (n.source_dimension() + n.target_dimension() + 1)
+            }
+            LoadedModel::SurfaceNetwork { decoded, .. } => decoded.network.parameter_count(),
+        }
+    }
+
     /// The blob as read.
     pub fn bytes(&self) -> Option<&[u8]> {
         match self {
