@@ -151,14 +151,37 @@ impl ModelVisitor for Exercise<'_> {
         let mixed = SPECIAL
             .iter()
             .map(|&v| core::array::from_fn(|k| if k % 2 == 0 { v } else { 0.25 }));
-        for point in special.chain(mixed).chain(self.inputs) {
-            let input = point.map(S::from_f32_saturating);
-            let mut out = [S::ZERO; MAX_OUTPUTS];
-            for full in [false, true] {
-                model.evaluate(&input, full, &mut out);
+        let inputs: Vec<[S; MAX_INPUTS]> = special
+            .chain(mixed)
+            .chain(self.inputs)
+            .map(|point| point.map(S::from_f32_saturating))
+            .collect();
+        for full in [false, true] {
+            let mut single = vec![[S::ZERO; MAX_OUTPUTS]; inputs.len()];
+            for (input, out) in inputs.iter().zip(&mut single) {
+                model.evaluate(input, full, out);
             }
             // A short output buffer takes what fits.
-            model.evaluate(&input, true, &mut out[..1]);
+            if let Some(input) = inputs.first() {
+                model.evaluate(input, full, &mut [S::ZERO; 1]);
+            }
+            // The batch path gives the single path's bits, and a short `out` what fits.
+            let mut batch = vec![[S::ZERO; MAX_OUTPUTS]; inputs.len()];
+            model.evaluate_batch(&inputs, full, &mut batch);
+            let n = model.output_len(full);
+            for (i, (b, s)) in batch.iter().zip(&single).enumerate() {
+                // Equal words, any NaN equal to any NaN (payloads are not results).
+                let same = b[..n].iter().zip(&s[..n]).all(|(x, y)| {
+                    let (x, y) = (x.to_f32(), y.to_f32());
+                    x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan())
+                });
+                assert!(
+                    same,
+                    "{:?}: batch and single differ at point {i} (full: {full})",
+                    M::KIND
+                );
+            }
+            model.evaluate_batch(&inputs, full, &mut batch[..inputs.len() / 2]);
         }
         true
     }
