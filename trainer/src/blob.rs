@@ -6,12 +6,9 @@ use std::path::Path;
 
 use neurosurf_core::BlobError;
 use neurosurf_core::blob::{self, ModelKind};
-use neurosurf_core::caoen::CaoEnModel;
-use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::frame::{FramePayload, MAX_FRAME_SHIFT, MAX_Q16_ORIGIN};
-use neurosurf_core::implicit::ImplicitModel;
-use neurosurf_core::parametric::SurfaceNetworkModel;
-use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
+use neurosurf_core::model::{self, Model, ModelVisitor};
+use neurosurf_core::scalar::{Scalar, ScalarKind};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
@@ -159,21 +156,33 @@ pub fn check_loads(bytes: &[u8], path: &Path) -> Result<()> {
         source,
     };
     let (header, _) = blob::parse(bytes).map_err(rejected)?;
-    match header.model {
-        ModelKind::Implicit => {
-            loads::<ImplicitModel<f32>, ImplicitModel<Q16>>(bytes, header.scalar)
-        }
-        ModelKind::Rbf => return crate::rbf::RbfModel::from_blob(bytes, path).map(|_| ()),
-        ModelKind::Curve => loads::<BSplineCurve<f32>, BSplineCurve<Q16>>(bytes, header.scalar),
-        ModelKind::SplineSurface => {
-            loads::<BSplineSurface<f32>, BSplineSurface<Q16>>(bytes, header.scalar)
-        }
-        ModelKind::CaoEn => loads::<CaoEnModel<f32>, CaoEnModel<Q16>>(bytes, header.scalar),
-        ModelKind::SurfaceNetwork => {
-            loads::<SurfaceNetworkModel<f32>, SurfaceNetworkModel<Q16>>(bytes, header.scalar)
-        }
+    if header.model == ModelKind::Rbf {
+        return crate::rbf::RbfModel::from_blob(bytes, path).map(|_| ());
     }
-    .map_err(rejected)
+    // Loaded in the scalar it is stored in; the core reads f64 parameters as f32.
+    let scalar = match header.scalar {
+        ScalarKind::Q16_16 => ScalarKind::Q16_16,
+        _ => ScalarKind::F32,
+    };
+    match model::visit(header.model, scalar, Load(bytes)) {
+        Some(loaded) => loaded.map_err(rejected),
+        None => Err(Error::invalid(format!(
+            "{}: the core does not load {} blobs",
+            path.display(),
+            header.model.name()
+        ))),
+    }
+}
+
+/// Loads a blob into the model type it names, boxed: some models are tens of kilobytes, held on
+/// the heap here as a firmware holds them in a static.
+struct Load<'a>(&'a [u8]);
+
+impl ModelVisitor for Load<'_> {
+    type Output = core::result::Result<(), BlobError>;
+    fn visit<S: Scalar, M: Model<S>>(self) -> Self::Output {
+        Box::<M>::default().load_blob(self.0)
+    }
 }
 
 /// Writes `bytes` to `path` atomically once [`check_loads`] accepts them; nothing is written
@@ -184,42 +193,6 @@ pub fn check_loads(bytes: &[u8], path: &Path) -> Result<()> {
 pub fn write_checked(path: &Path, bytes: &[u8]) -> Result<()> {
     check_loads(bytes, path)?;
     write_atomic(path, bytes)
-}
-
-/// A model type the core loads from a blob.
-trait Loads: Sized {
-    fn load(bytes: &[u8]) -> core::result::Result<(), BlobError>;
-}
-
-macro_rules! loads_impl {
-    ($($model:ident),*) => {$(
-        impl<S: Scalar> Loads for $model<S> {
-            fn load(bytes: &[u8]) -> core::result::Result<(), BlobError> {
-                // Boxed: some models are tens of kilobytes, held on the heap here as a
-                // firmware holds them in a static.
-                let mut model = Box::new($model::<S>::new());
-                model.load(bytes)
-            }
-        }
-    )*};
-}
-loads_impl!(
-    ImplicitModel,
-    BSplineCurve,
-    BSplineSurface,
-    CaoEnModel,
-    SurfaceNetworkModel
-);
-
-/// Loads through `F` (f32) or `Q` (Q16.16), whichever the blob stores.
-fn loads<F: Loads, Q: Loads>(
-    bytes: &[u8],
-    scalar: ScalarKind,
-) -> core::result::Result<(), BlobError> {
-    match scalar {
-        ScalarKind::Q16_16 => Q::load(bytes),
-        _ => F::load(bytes),
-    }
 }
 
 #[cfg(test)]
