@@ -223,6 +223,25 @@ pub(crate) fn pair<S: Scalar>([x, y, z]: [S; 3], [u, v, w]: [S; 3]) -> [S; 6] {
     [x, y, z, u, v, w]
 }
 
+/// [`batch`] for a kind whose value is a position: `run` fills one per input (the lengths
+/// agree by construction, so its length error never happens).
+pub(crate) fn positions<S: Scalar, I: Copy + Default, E>(
+    inputs: &[[S; MAX_INPUTS]],
+    out: &mut [[S; MAX_OUTPUTS]],
+    input: impl Fn(&[S; MAX_INPUTS]) -> I,
+    run: impl Fn(&[I], &mut [[S; 3]]) -> Result<(), E>,
+) {
+    batch(
+        inputs,
+        out,
+        input,
+        |x, positions| {
+            let _ = run(x, positions);
+        },
+        |&p: &[S; 3], out| write(out, p),
+    );
+}
+
 /// `"closed"` or `"open"`.
 pub(crate) fn open_or_closed(closed: bool) -> &'static str {
     if closed { "closed" } else { "open" }

@@ -316,15 +316,9 @@ impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineCurve<S, C> {
                 },
             );
         } else {
-            crate::model::batch(
-                inputs,
-                out,
-                t,
-                |t, positions| {
-                    let _ = self.position_batch(t, positions);
-                },
-                |&p: &[S; 3], out| crate::model::write(out, p),
-            );
+            crate::model::positions(inputs, out, t, |t, positions| {
+                self.position_batch(t, positions)
+            });
         }
     }
 

@@ -420,15 +420,9 @@ impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineSurface<S, C> 
                 },
             );
         } else {
-            crate::model::batch(
-                inputs,
-                out,
-                uv,
-                |uv, positions| {
-                    let _ = self.position_batch(uv, positions);
-                },
-                |&p: &[S; 3], out| crate::model::write(out, p),
-            );
+            crate::model::positions(inputs, out, uv, |uv, positions| {
+                self.position_batch(uv, positions)
+            });
         }
     }
 

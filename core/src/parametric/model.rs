@@ -294,15 +294,9 @@ impl<S: Scalar, const P: usize> crate::model::Model<S> for SurfaceNetworkModel<S
                 },
             );
         } else {
-            crate::model::batch(
-                inputs,
-                out,
-                uv,
-                |uv, positions| {
-                    let _ = self.position_batch(uv, positions);
-                },
-                |&p: &[S; 3], out| crate::model::write(out, p),
-            );
+            crate::model::positions(inputs, out, uv, |uv, positions| {
+                self.position_batch(uv, positions)
+            });
         }
     }
 
