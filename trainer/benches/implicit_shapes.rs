@@ -386,6 +386,7 @@ fn shapes(
                     "threshold" => options.lm.threshold = v,
                     "window" => options.lm.stagnation_window = v as usize,
                     "decrease" => options.lm.stagnation_decrease = v,
+                    "node_decrease" => options.node_stagnation_decrease = v,
                     other => panic!("unknown setting {other}"),
                 }
             }

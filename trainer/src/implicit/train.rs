@@ -29,7 +29,7 @@ use super::tree::TreeSpec;
 use crate::error::{Error, Result};
 use crate::points::PointSet;
 use crate::render::{Aabb, DEFAULT_INFLATE, Region};
-use crate::solve::{LmReport, StopReason, levenberg_marquardt};
+use crate::solve::{LmOptions, LmReport, StopReason, levenberg_marquardt};
 
 /// Outcome of one leaf's training: module index, its box, its weights, its report.
 type TrainedLeaf = (usize, Normalization, Vec<f64>, ModuleReport);
@@ -672,10 +672,17 @@ fn fit_module(
         points: data.len(),
     });
     let problem = ModuleProblem::new(data, options.width, options.gamma);
+    let lm_options = match feature {
+        Some(_) => options.lm,
+        None => LmOptions {
+            stagnation_decrease: options.node_stagnation_decrease,
+            ..options.lm
+        },
+    };
     let lm: LmReport = levenberg_marquardt(
         &problem,
         &mut params,
-        &options.lm,
+        &lm_options,
         &mut |iteration, error| {
             progress(Progress::Iteration {
                 module,
@@ -835,6 +842,12 @@ fn check_options(o: &ImplicitOptions) -> Result<()> {
             o.clearance,
             0.0,
             0.5,
+        ),
+        (
+            "node stagnation decrease",
+            o.node_stagnation_decrease,
+            0.0,
+            1.0,
         ),
     ];
     for (name, value, lo, hi) in ranges {
