@@ -12,7 +12,7 @@ use neurosurf_trainer::compare::{
     CompareRow, EvaluationPoints, Measured, ParameterSet, PointSource, Quantities, SURFACE_SAMPLES,
     comparison_table, comparison_table_of,
 };
-use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision, geometry_columns};
+use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision};
 use neurosurf_trainer::implicit::ImplicitOptions;
 use neurosurf_trainer::io::read_mesh;
 use neurosurf_trainer::io::{read_parameters, read_query_points, write_atomic};
@@ -67,7 +67,7 @@ struct Report<'a> {
 
 pub fn run(args: &Args) -> Result<()> {
     let model = LoadedModel::read(&args.model)?;
-    if geometry_columns(&model).is_some() {
+    if model.geometry_columns().is_some() {
         return run_parametric(args, &model);
     }
     let LoadedModel::Implicit { bytes, decoded } = &model else {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision, geometry_columns};
+use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision};
 use neurosurf_trainer::io::{read_parameters, read_query_points};
 
 use super::output;
@@ -41,7 +41,7 @@ struct Row {
 
 pub fn run(args: &Args) -> Result<()> {
     let model = LoadedModel::read(&args.model)?;
-    if let Some(columns) = geometry_columns(&model) {
+    if let Some(columns) = model.geometry_columns() {
         let parameters = read_parameters(&args.points, model.query_arity())?;
         let rows = model
             .evaluate_geometry(&parameters, args.scalar)

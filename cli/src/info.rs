@@ -109,7 +109,9 @@ pub fn run(args: &Args) -> Result<()> {
             info.leaves = Some(net.subtree_leaves(net.root()).len());
             info.training = decoded.metadata.as_ref().and_then(|m| m.summary.as_ref());
         }
-        LoadedModel::Rbf(rbf) => info.centers = Some(RbfModel::centers(rbf).len()),
+        LoadedModel::Rbf { decoded, .. } => {
+            info.centers = Some(RbfModel::centers(decoded).len());
+        }
         LoadedModel::Curve { decoded, .. } => info.fit = decoded.summary.as_ref(),
         LoadedModel::SplineSurface { decoded, .. } => info.fit = decoded.summary.as_ref(),
         LoadedModel::SurfaceNetwork { decoded, .. } => {

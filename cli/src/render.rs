@@ -104,7 +104,7 @@ impl Surface {
                     box_size,
                 })
             }
-            LoadedModel::Rbf(model) => Ok(Surface::Rbf(model)),
+            LoadedModel::Rbf { decoded, .. } => Ok(Surface::Rbf(*decoded)),
             _ => bail!(
                 "{} is not an implicit model or an RBF (render and mesh need a field)",
                 path.display()

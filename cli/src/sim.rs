@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use neurosurf_firmware_sim::{Footprint, Job, Op};
 use serde::Serialize;
 
-use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision, geometry_columns};
+use neurosurf_trainer::evaluate::{Geometry, LoadedModel, Precision};
 use neurosurf_trainer::io::{read_parameters, read_query_points};
 
 use super::eval::{write_csv, write_geometry};
@@ -59,7 +59,7 @@ pub fn run(args: &Args) -> Result<()> {
     // model, so a corrupt blob is judged by the target's own core.
     let parametric = LoadedModel::from_bytes(bytes.clone(), &args.model)
         .ok()
-        .filter(|m| geometry_columns(m).is_some());
+        .filter(|m| m.geometry_columns().is_some());
     let (points, arity) = match &parametric {
         Some(model) => (
             read_parameters(&args.points, model.query_arity())?,
@@ -102,7 +102,7 @@ pub fn run(args: &Args) -> Result<()> {
             log: &run.log,
         });
     }
-    if let Some(columns) = parametric.as_ref().and_then(geometry_columns) {
+    if let Some(columns) = parametric.as_ref().and_then(LoadedModel::geometry_columns) {
         let rows: Vec<Geometry> = run.geometry().into_iter().map(Geometry::from).collect();
         return write_geometry(&columns, &points, &rows, false);
     }

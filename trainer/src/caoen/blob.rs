@@ -118,3 +118,65 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<(CaoEnNetwork, Vec<u8>, Sc
     };
     Ok((network, payload.metadata.to_vec(), header.scalar))
 }
+
+/// A Cao En blob read back into the trainer.
+#[derive(Clone, Debug)]
+pub struct DecodedCaoEn {
+    /// The network, words widened to `f64` exactly.
+    pub network: CaoEnNetwork,
+    /// The blob's metadata (opaque bytes).
+    pub metadata: Vec<u8>,
+    /// How the words were stored.
+    pub stored_as: ScalarKind,
+}
+
+impl crate::evaluate::HostModel for DecodedCaoEn {
+    const KIND: ModelKind = ModelKind::CaoEn;
+    const OUTPUT: crate::evaluate::Output = crate::evaluate::Output::Geometry;
+
+    fn from_blob(bytes: &[u8], path: &Path) -> Result<Self> {
+        let (network, metadata, stored_as) = from_blob(bytes, path)?;
+        Ok(DecodedCaoEn {
+            network,
+            metadata,
+            stored_as,
+        })
+    }
+
+    fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    fn parameter_count(&self) -> usize {
+        let n = &self.network;
+        n.key_count() * (n.source_dimension() + n.target_dimension() + 1)
+    }
+
+    fn query_arity(&self) -> usize {
+        self.network.source_dimension()
+    }
+
+    fn geometry(&self, p: &[f64]) -> Option<crate::evaluate::Geometry> {
+        let m = self.network.source_dimension();
+        let x: Vec<f64> = (0..m).map(|k| p.get(k).copied().unwrap_or(0.0)).collect();
+        Some(crate::evaluate::Geometry {
+            output: self.network.position(&x),
+            direction: self.network.normal(&x).unwrap_or([0.0; 3]),
+        })
+    }
+
+    fn geometry_columns(&self) -> Option<Vec<String>> {
+        let (m, p) = (
+            self.network.source_dimension(),
+            self.network.target_dimension(),
+        );
+        let mut columns: Vec<String> = (1..=m).map(|i| format!("s{i}")).collect();
+        if p == 3 {
+            columns.extend(crate::evaluate::columns(&["x", "y", "z"]));
+        } else {
+            columns.extend((1..=p).map(|i| format!("y{i}")));
+        }
+        columns.extend(crate::evaluate::columns(&["nx", "ny", "nz"]));
+        Some(columns)
+    }
+}

@@ -52,7 +52,7 @@ mod teapot;
 mod texture;
 mod topology;
 
-pub use blob::{from_blob, to_blob};
+pub use blob::{DecodedCaoEn, from_blob, to_blob};
 pub use capacity::check_key_count;
 pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
 pub use distort::Distortion;

@@ -296,6 +296,77 @@ fn not_loadable(what: &str, error: BlobError) -> Error {
     Error::invalid(format!("the core would not load this {what}: {error}"))
 }
 
+impl crate::evaluate::HostModel for DecodedCurve {
+    const KIND: ModelKind = ModelKind::Curve;
+    const OUTPUT: crate::evaluate::Output = crate::evaluate::Output::Geometry;
+
+    fn from_blob(bytes: &[u8], path: &Path) -> Result<Self> {
+        curve_from_blob(bytes, path)
+    }
+
+    fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    fn parameter_count(&self) -> usize {
+        self.curve.control.len() * 3
+    }
+
+    fn query_arity(&self) -> usize {
+        1
+    }
+
+    fn geometry(&self, p: &[f64]) -> Option<crate::evaluate::Geometry> {
+        let t = p.first().copied().unwrap_or(0.0);
+        Some(crate::evaluate::geometry(
+            self.curve.point(t),
+            self.curve.tangent(t),
+        ))
+    }
+
+    fn geometry_columns(&self) -> Option<Vec<String>> {
+        Some(crate::evaluate::columns(&[
+            "t", "x", "y", "z", "tx", "ty", "tz",
+        ]))
+    }
+}
+
+impl crate::evaluate::HostModel for DecodedSurface {
+    const KIND: ModelKind = ModelKind::SplineSurface;
+    const OUTPUT: crate::evaluate::Output = crate::evaluate::Output::Geometry;
+
+    fn from_blob(bytes: &[u8], path: &Path) -> Result<Self> {
+        surface_from_blob(bytes, path)
+    }
+
+    fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    fn parameter_count(&self) -> usize {
+        self.surface.control.len() * 3
+    }
+
+    fn query_arity(&self) -> usize {
+        2
+    }
+
+    fn geometry(&self, p: &[f64]) -> Option<crate::evaluate::Geometry> {
+        let at = |k: usize| p.get(k).copied().unwrap_or(0.0);
+        let (u, v) = (at(0), at(1));
+        Some(crate::evaluate::geometry(
+            self.surface.point(u, v),
+            self.surface.normal(u, v).unwrap_or([0.0; 3]),
+        ))
+    }
+
+    fn geometry_columns(&self) -> Option<Vec<String>> {
+        Some(crate::evaluate::columns(&[
+            "u", "v", "x", "y", "z", "nx", "ny", "nz",
+        ]))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,7 +4,7 @@
 //! at parameters, in `f64` (the trainer's reference) or through the core in `f32` or Q16.16.
 
 use super::through_core::core_outputs;
-use super::{LoadedModel, Precision};
+use super::{LoadedModel, Output, Precision};
 use crate::error::{Error, Result};
 
 /// The outputs and direction at one parameter, in `f64` whatever the precision it was
@@ -21,36 +21,6 @@ pub struct Geometry {
 impl From<(Vec<f64>, [f64; 3])> for Geometry {
     fn from((output, direction): (Vec<f64>, [f64; 3])) -> Self {
         Geometry { output, direction }
-    }
-}
-
-/// The CSV columns of `neurosurf eval` for a parametric model, `None` for field models:
-/// `t,x,y,z,tx,ty,tz` for a curve, `u,v,x,y,z,nx,ny,nz` for a spline surface or a surface
-/// network, and for a Cao En
-/// network its source coordinates `s1…sm`, its outputs (`x,y,z` when p = 3, else `y1…yp`)
-/// and `nx,ny,nz`.
-pub fn geometry_columns(model: &LoadedModel) -> Option<Vec<String>> {
-    let names = |list: &[&str]| list.iter().map(|c| (*c).to_string()).collect();
-    match model {
-        LoadedModel::Curve { .. } => Some(names(&["t", "x", "y", "z", "tx", "ty", "tz"])),
-        LoadedModel::SplineSurface { .. } | LoadedModel::SurfaceNetwork { .. } => {
-            Some(names(&["u", "v", "x", "y", "z", "nx", "ny", "nz"]))
-        }
-        LoadedModel::CaoEn { decoded, .. } => {
-            let (m, p) = (
-                decoded.network.source_dimension(),
-                decoded.network.target_dimension(),
-            );
-            let mut columns: Vec<String> = (1..=m).map(|i| format!("s{i}")).collect();
-            if p == 3 {
-                columns.extend(names(&["x", "y", "z"]));
-            } else {
-                columns.extend((1..=p).map(|i| format!("y{i}")));
-            }
-            columns.extend(names(&["nx", "ny", "nz"]));
-            Some(columns)
-        }
-        _ => None,
     }
 }
 
@@ -72,66 +42,41 @@ impl LoadedModel {
             .iter()
             .map(|p| p.iter().map(|&c| f64::from(c as f32)).collect())
             .collect();
-        let at = |p: &[f64], k: usize| p.get(k).copied().unwrap_or(0.0);
-        match (self, precision) {
-            (
-                LoadedModel::Curve { bytes, .. }
-                | LoadedModel::SplineSurface { bytes, .. }
-                | LoadedModel::SurfaceNetwork { bytes, .. }
-                | LoadedModel::CaoEn { bytes, .. },
-                Precision::F32 | Precision::Q16,
-            ) => Ok(core_outputs(bytes, self.kind(), precision, &rounded)?
-                .into_iter()
-                .map(|o| Geometry {
-                    output: o.value,
-                    direction: std::array::from_fn(|k| o.derivative.get(k).copied().unwrap_or(0.0)),
-                })
-                .collect()),
-            (LoadedModel::Curve { decoded, .. }, Precision::F64) => Ok(rounded
-                .iter()
-                .map(|p| {
-                    let t = at(p, 0);
-                    geometry(decoded.curve.point(t), decoded.curve.tangent(t))
-                })
-                .collect()),
-            (LoadedModel::SplineSurface { decoded, .. }, Precision::F64) => Ok(rounded
-                .iter()
-                .map(|p| {
-                    let s = &decoded.surface;
-                    let (u, v) = (at(p, 0), at(p, 1));
-                    geometry(s.point(u, v), s.normal(u, v).unwrap_or([0.0; 3]))
-                })
-                .collect()),
-            (LoadedModel::SurfaceNetwork { decoded, .. }, Precision::F64) => Ok(rounded
-                .iter()
-                .map(|p| {
-                    let point = decoded.network.evaluate(at(p, 0), at(p, 1));
-                    geometry(point.position, point.normal())
-                })
-                .collect()),
-            (LoadedModel::CaoEn { decoded, .. }, Precision::F64) => {
-                let network = &decoded.network;
-                let m = network.source_dimension();
-                Ok(rounded
-                    .iter()
-                    .map(|p| {
-                        let x: Vec<f64> = (0..m).map(|k| at(p, k)).collect();
-                        Geometry {
-                            output: network.position(&x),
-                            direction: network.normal(&x).unwrap_or([0.0; 3]),
-                        }
-                    })
-                    .collect())
-            }
-            _ => Err(Error::invalid(format!(
+        if self.output() != Output::Geometry {
+            return Err(Error::invalid(format!(
                 "a {} model has a field, not a parametric geometry",
                 self.kind().name()
-            ))),
+            )));
         }
+        if precision == Precision::F64 {
+            return Ok(rounded
+                .iter()
+                .map(|p| {
+                    self.geometry_f64(p).unwrap_or_else(|| Geometry {
+                        output: Vec::new(),
+                        direction: [0.0; 3],
+                    })
+                })
+                .collect());
+        }
+        let Some(bytes) = self.bytes() else {
+            return Err(Error::invalid(format!(
+                "the {} model is host-only: it evaluates in f64, not {precision}",
+                self.kind().name()
+            )));
+        };
+        Ok(core_outputs(bytes, self.kind(), precision, &rounded)?
+            .into_iter()
+            .map(|o| Geometry {
+                output: o.value,
+                direction: std::array::from_fn(|k| o.derivative.get(k).copied().unwrap_or(0.0)),
+            })
+            .collect())
     }
 }
 
-fn geometry(position: [f64; 3], direction: [f64; 3]) -> Geometry {
+/// A position and its direction as a [`Geometry`].
+pub(crate) fn geometry(position: [f64; 3], direction: [f64; 3]) -> Geometry {
     Geometry {
         output: position.to_vec(),
         direction,

@@ -325,3 +325,28 @@ pub fn from_blob(bytes: &[u8], path: &Path) -> Result<DecodedImplicit> {
         stored_as,
     })
 }
+
+impl crate::evaluate::HostModel for DecodedImplicit {
+    const KIND: ModelKind = ModelKind::Implicit;
+    const OUTPUT: crate::evaluate::Output = crate::evaluate::Output::Field;
+
+    fn from_blob(bytes: &[u8], path: &Path) -> Result<Self> {
+        from_blob(bytes, path)
+    }
+
+    fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    fn parameter_count(&self) -> usize {
+        self.network.params().len()
+    }
+
+    fn query_arity(&self) -> usize {
+        3
+    }
+
+    fn field(&self, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
+        Some(self.network.eval(x))
+    }
+}

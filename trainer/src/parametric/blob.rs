@@ -225,3 +225,36 @@ pub fn network_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedNetwork> {
         stored_as: header.scalar,
     })
 }
+
+impl crate::evaluate::HostModel for DecodedNetwork {
+    const KIND: ModelKind = ModelKind::SurfaceNetwork;
+    const OUTPUT: crate::evaluate::Output = crate::evaluate::Output::Geometry;
+
+    fn from_blob(bytes: &[u8], path: &Path) -> Result<Self> {
+        network_from_blob(bytes, path)
+    }
+
+    fn stored_as(&self) -> ScalarKind {
+        self.stored_as
+    }
+
+    fn parameter_count(&self) -> usize {
+        self.network.parameter_count()
+    }
+
+    fn query_arity(&self) -> usize {
+        2
+    }
+
+    fn geometry(&self, p: &[f64]) -> Option<crate::evaluate::Geometry> {
+        let at = |k: usize| p.get(k).copied().unwrap_or(0.0);
+        let point = self.network.evaluate(at(0), at(1));
+        Some(crate::evaluate::geometry(point.position, point.normal()))
+    }
+
+    fn geometry_columns(&self) -> Option<Vec<String>> {
+        Some(crate::evaluate::columns(&[
+            "u", "v", "x", "y", "z", "nx", "ny", "nz",
+        ]))
+    }
+}

@@ -156,3 +156,29 @@ impl RbfModel {
         ))
     }
 }
+
+impl crate::evaluate::HostModel for RbfModel {
+    const KIND: ModelKind = ModelKind::Rbf;
+    const OUTPUT: crate::evaluate::Output = crate::evaluate::Output::Field;
+    const ON_TARGET: bool = false;
+
+    fn from_blob(bytes: &[u8], path: &Path) -> Result<Self> {
+        RbfModel::from_blob(bytes, path)
+    }
+
+    fn stored_as(&self) -> ScalarKind {
+        ScalarKind::F64
+    }
+
+    fn parameter_count(&self) -> usize {
+        RbfModel::parameter_count(self)
+    }
+
+    fn query_arity(&self) -> usize {
+        3
+    }
+
+    fn field(&self, x: [f64; 3]) -> Option<(f64, [f64; 3])> {
+        Some(self.field_gradient(x))
+    }
+}
