@@ -1,7 +1,7 @@
 //! The least-squares problem of one module: its control points' inputs and target gradients,
 //! and the points that constrain only its value (off-surface and sign points).
 //!
-//! About 660 lines, 200 of them the tests that hold the lane-wise rows to the one-point
+//! About 700 lines, 200 of them the tests that hold the lane-wise rows to the one-point
 //! Jacobian.
 
 use super::jacobian::{

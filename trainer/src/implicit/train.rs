@@ -1,7 +1,7 @@
 //! Training a module tree: every leaf on its feature's points (in parallel), then every node
 //! on the union of its leaves' points with its children frozen (Carcenac §3, §5).
 //!
-//! This file is long (about 690 lines) because it holds the whole schedule — leaves, nodes,
+//! This file is long (about 870 lines) because it holds the whole schedule — leaves, nodes,
 //! warm starts — and the assembly of every module's training data, which share one setting.
 
 use std::time::Instant;

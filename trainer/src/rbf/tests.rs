@@ -1,6 +1,6 @@
 //! Tests of the RBF baseline: interpolation, gradient, fidelity on a torus, errors, blobs.
 //!
-//! One file for the baseline's tests (about 860 lines): each test builds on the same sampled
+//! One file for the baseline's tests (about 820 lines): each test builds on the same sampled
 //! shapes and blob helpers.
 
 use std::f64::consts::PI;

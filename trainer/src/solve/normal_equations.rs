@@ -2,7 +2,7 @@
 //! time (SYRK tiles, in f64 or f32, AVX2 + FMA when the CPU has them), and the damped system
 //! (A + μI)Δ = b solved by a blocked Cholesky factorization.
 //!
-//! This file is long (about 780 lines, 300 of them tests) because each kernel has a portable
+//! This file is long (about 730 lines, 300 of them tests) because each kernel has a portable
 //! and an AVX2 + FMA build that must agree, and the tests that check they do sit beside them.
 
 #[cfg(test)]
