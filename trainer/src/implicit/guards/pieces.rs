@@ -19,7 +19,7 @@ const BRIDGE_PUSH: f64 = 2.0;
 const BRIDGE_STEP: f64 = 0.5;
 
 /// Guards for the pieces of `network`'s zero set that the points do not explain: `field` is
-/// the network's own (the core's, or a [`super::GridCache`]'s), meshed at [`GUARD_RESOLUTION`].
+/// the network's own (the core's, or a [`crate::implicit::GridCache`]'s), meshed at [`GUARD_RESOLUTION`].
 ///
 /// Each control point belongs to the piece with the nearest triangle. A piece no control point
 /// belongs to is stray: guards on the winding number's side cover its vertices, the first at
