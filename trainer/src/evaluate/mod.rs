@@ -30,6 +30,19 @@ impl LoadedModel {
         Self::from_bytes(bytes, path)
     }
 
+    /// The blob for the core to evaluate in `precision`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the kind when it is host-only.
+    fn for_core(&self, precision: Precision) -> Result<&[u8]> {
+        self.bytes().ok_or_else(|| {
+            Error::invalid(format!(
+                "the {} model is host-only: it evaluates in f64, not {precision}",
+                self.kind().name()
+            ))
+        })
+    }
+
     /// Φ and ∇Φ at every point in `precision`.
     ///
     /// # Errors
@@ -49,12 +62,7 @@ impl LoadedModel {
                 .map(|&p| self.field_f64(p).unwrap_or((f64::NAN, [f64::NAN; 3])))
                 .collect());
         }
-        let Some(bytes) = self.bytes() else {
-            return Err(Error::invalid(format!(
-                "the {} model is host-only: it evaluates in f64, not {precision}",
-                self.kind().name()
-            )));
-        };
+        let bytes = self.for_core(precision)?;
         let points: Vec<Vec<f64>> = points.iter().map(|p| p.to_vec()).collect();
         Ok(core_outputs(bytes, self.kind(), precision, &points)?
             .into_iter()

@@ -59,12 +59,7 @@ impl LoadedModel {
                 })
                 .collect());
         }
-        let Some(bytes) = self.bytes() else {
-            return Err(Error::invalid(format!(
-                "the {} model is host-only: it evaluates in f64, not {precision}",
-                self.kind().name()
-            )));
-        };
+        let bytes = self.for_core(precision)?;
         Ok(core_outputs(bytes, self.kind(), precision, &rounded)?
             .into_iter()
             .map(|o| Geometry {
