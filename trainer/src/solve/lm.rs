@@ -80,7 +80,9 @@ pub struct LmOptions {
     /// Give up when μ grows past this without a decrease of E_s.
     pub mu_max: f64,
     /// Stop as stagnated when E_s fell by less than [`Self::stagnation_decrease`] (relative)
-    /// over this many accepted iterations (10); 0 never stops so.
+    /// over this many accepted iterations (10), unless E_s, falling on at that rate, reaches
+    /// the threshold within the iterations left (a slow last approach still converges); 0
+    /// never stops so.
     pub stagnation_window: usize,
     /// The relative decrease of E_s over [`Self::stagnation_window`] iterations below which
     /// training has stagnated (0.02).
@@ -100,6 +102,26 @@ impl Default for LmOptions {
             stagnation_window: 10,
             stagnation_decrease: 0.02,
         }
+    }
+}
+
+/// E_s over the last stagnation window: where it was, where it is, and the iterations left.
+struct Course {
+    error: f64,
+    before: f64,
+    window: usize,
+    remaining: usize,
+}
+
+impl Course {
+    /// Whether E_s, falling on geometrically at the window's rate, reaches `threshold`
+    /// within the iterations left.
+    fn reaches(&self, threshold: f64) -> bool {
+        if !(self.error < self.before && threshold > 0.0) {
+            return false;
+        }
+        let windows = (threshold / self.error).ln() / (self.error / self.before).ln();
+        windows * self.window as f64 <= self.remaining as f64
     }
 }
 
@@ -178,12 +200,20 @@ pub fn levenberg_marquardt(
             stop = StopReason::IterationLimit;
             break;
         }
-        if window > 0
-            && iterations >= window
-            && error > (1.0 - options.stagnation_decrease) * history[iterations % window]
-        {
-            stop = StopReason::Stagnated;
-            break;
+        if window > 0 && iterations >= window {
+            let before = history[iterations % window];
+            let course = Course {
+                error,
+                before,
+                window,
+                remaining: options.max_iterations - iterations,
+            };
+            if error > (1.0 - options.stagnation_decrease) * before
+                && !course.reaches(options.threshold)
+            {
+                stop = StopReason::Stagnated;
+                break;
+            }
         }
         if window > 0 {
             // Read again `window` iterations from now.
@@ -238,5 +268,36 @@ pub fn levenberg_marquardt(
         criterion: error + decay_energy(params),
         stop,
         evaluations,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Course;
+
+    fn course(error: f64, before: f64, remaining: usize) -> Course {
+        Course {
+            error,
+            before,
+            window: 10,
+            remaining,
+        }
+    }
+
+    #[test]
+    fn a_slow_last_approach_is_on_course_when_the_iterations_left_suffice() {
+        // 1 % per 10 iterations from 1.2e-5: 1e-5 after 19 windows, 190 iterations.
+        assert!(course(1.2e-5, 1.2e-5 / 0.99, 2000).reaches(1e-5));
+        assert!(course(1.2e-5, 1.2e-5 / 0.99, 190).reaches(1e-5));
+        assert!(!course(1.2e-5, 1.2e-5 / 0.99, 170).reaches(1e-5));
+    }
+
+    #[test]
+    fn far_above_the_threshold_or_not_falling_is_off_course() {
+        // 0.5 % per window from 3e-4 needs about 6 800 iterations.
+        assert!(!course(3e-4, 3e-4 / 0.995, 2000).reaches(1e-5));
+        assert!(!course(1.1e-5, 1.1e-5, 2000).reaches(1e-5));
+        assert!(!course(1.1e-5, 1.0e-5, 2000).reaches(1e-5));
+        assert!(!course(1.1e-5, 1.2e-5, 2000).reaches(0.0));
     }
 }
