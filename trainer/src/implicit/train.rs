@@ -674,8 +674,11 @@ fn fit_module(
     let problem = ModuleProblem::new(data, options.width, options.gamma);
     let lm_options = match feature {
         Some(_) => options.lm,
+        // A node only blends children that fit their points: at its larger stagnation
+        // decrease, the projection would carry it far down toward the threshold.
         None => LmOptions {
             stagnation_decrease: options.node_stagnation_decrease,
+            finish_on_course: false,
             ..options.lm
         },
     };

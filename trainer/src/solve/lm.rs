@@ -80,13 +80,20 @@ pub struct LmOptions {
     /// Give up when μ grows past this without a decrease of E_s.
     pub mu_max: f64,
     /// Stop as stagnated when E_s fell by less than [`Self::stagnation_decrease`] (relative)
-    /// over this many accepted iterations (10), unless E_s, falling on at that rate, reaches
-    /// the threshold within the iterations left (a slow last approach still converges); 0
-    /// never stops so.
+    /// over this many accepted iterations (10), unless [`Self::finish_on_course`]; 0 never
+    /// stops so.
     pub stagnation_window: usize,
     /// The relative decrease of E_s over [`Self::stagnation_window`] iterations below which
     /// training has stagnated (0.02).
     pub stagnation_decrease: f64,
+    /// Do not stop as stagnated while E_s, falling on at the window's rate, reaches the
+    /// threshold within the iterations left: a slow last approach still converges (true).
+    #[serde(default = "finish_on_course_default")]
+    pub finish_on_course: bool,
+}
+
+fn finish_on_course_default() -> bool {
+    true
 }
 
 impl Default for LmOptions {
@@ -101,6 +108,7 @@ impl Default for LmOptions {
             mu_max: 1e12,
             stagnation_window: 10,
             stagnation_decrease: 0.02,
+            finish_on_course: true,
         }
     }
 }
@@ -209,7 +217,7 @@ pub fn levenberg_marquardt(
                 remaining: options.max_iterations - iterations,
             };
             if error > (1.0 - options.stagnation_decrease) * before
-                && !course.reaches(options.threshold)
+                && !(options.finish_on_course && course.reaches(options.threshold))
             {
                 stop = StopReason::Stagnated;
                 break;
