@@ -46,7 +46,8 @@ use probe::Probe;
 /// checked, as a fraction of the bounding diagonal.
 pub const GUARD_CLEARANCE: f64 = 0.02;
 /// Cells along the longest side of the grid the guards are placed on and the mesh is checked
-/// on: the resolution `neurosurf mesh` uses by default.
+/// on: the resolution the stray-surface and mesh-piece figures are measured at (`neurosurf
+/// mesh --resolution 96`; its default, 128, is finer).
 pub const GUARD_RESOLUTION: usize = 96;
 /// The guard grid has at least this many cells along every side (a flat shape's thin side
 /// too): finer than the 48 points per side of [`crate::quality::stray_surface`].
