@@ -27,8 +27,8 @@ const BRIDGE_STEP: f64 = 0.5;
 /// points. A piece with points of its own that is not the largest is a part the network cut
 /// off (a limb at a sparsely sampled joint): when the shortest segment to the largest piece
 /// is shorter than the sample spacing there and nothing on it is clearly outside (by the
-/// winding number, half a spacing or more from the points), inside guards along it join
-/// them. Every guard stops [`PIECE_SUPPORT`] of the diagonal short of the points and pushes Φ
+/// winding number, half a spacing or more from the points; not asked of a segment shorter
+/// than a mesh cell), inside guards along it join them. Every guard stops [`PIECE_SUPPORT`] of the diagonal short of the points and pushes Φ
 /// to its side by `push` where it is meant to; what no guard fits is left alone. Returns the
 /// number of pieces found and the guards.
 pub fn guard_stray_pieces<F: Field + ?Sized>(
@@ -89,6 +89,7 @@ pub fn guard_stray_pieces<F: Field + ?Sized>(
         oracle,
         support: PIECE_SUPPORT * diagonal,
         push,
+        cell: extracted.stats.cell_size,
     };
     let mut guards = Vec::new();
     let main = (0..count).max_by_key(|&i| owners[i]).unwrap_or(0);
@@ -118,6 +119,8 @@ struct Guarding<'a> {
     support: f64,
     /// How far past zero a guard pushes Φ where it is meant to.
     push: f64,
+    /// The mesh's cell side.
+    cell: f64,
 }
 
 impl Guarding<'_> {
@@ -241,11 +244,15 @@ impl Guarding<'_> {
             .collect();
         // Nowhere clearly outside, where the winding number can tell: within half the
         // sample spacing of a point, sparse points' winding number is noise (at a body's
-        // shoulder it reads −0.25 inside the torso).
-        if samples.iter().any(|&q| {
-            let (i, d) = self.oracle.nearest(q);
-            d >= 0.5 * self.oracle.gap(i) && self.oracle.winding(q) < CLEAR_WINDING
-        }) {
+        // shoulder it reads −0.25 inside the torso). Pieces that meet within a mesh cell
+        // touch at the mesh's resolution: a thin part pinched there (a scanned ear's tip)
+        // reads outside by its few points' winding number, and is joined all the same.
+        if length >= self.cell
+            && samples.iter().any(|&q| {
+                let (i, d) = self.oracle.nearest(q);
+                d >= 0.5 * self.oracle.gap(i) && self.oracle.winding(q) < CLEAR_WINDING
+            })
+        {
             return;
         }
         let mut covered = vec![false; samples.len()];
