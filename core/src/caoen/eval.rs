@@ -74,6 +74,13 @@ impl<S: Scalar, const K: usize> CaoEnModel<S, K> {
         let norm_limit = S::from_f32_saturating(GROUP_NORM_LIMIT);
         let norms = if grouped {
             x.map(|x| {
+                // A coordinate at the limit or beyond (or NaN) puts |x| there too. Checked
+                // first, so that the squares below stay small: Q16.16 coordinates near ±32 768
+                // would overflow the accumulator and give a small norm.
+                let within = |xh: S| xh < norm_limit && norm_limit.neg() < xh;
+                if !x.iter().take(m).all(|&xh| within(xh)) {
+                    return norm_limit;
+                }
                 let mut squared = zero;
                 for &xh in x.iter().take(m) {
                     squared = S::mac(squared, xh, xh);
