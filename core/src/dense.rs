@@ -16,7 +16,7 @@
 //! it. Q16.16 on a Cortex-M4F has them for the N = 9 shapes (`neurosurf-m4f`); they compute
 //! the loops' exact bits, so which path ran never shows in a result.
 
-use crate::implicit::DenseLayout;
+use crate::implicit::{DenseLayout, LANES};
 use crate::scalar::Scalar;
 
 /// Columns a blocked transposed layer accumulates together.
@@ -59,6 +59,13 @@ pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
         && let Some(out) = forward_by_kernel(weights, biases, inputs.0)
     {
         return out;
+    }
+    if S::LANE_KERNELS && L == LANES {
+        let mut out = unwritten::<S, L, OUT>();
+        let parts = [inputs.0, inputs.1, inputs.2].map(lanes);
+        if S::forward_lanes_kernel(weights, biases, parts, lanes_mut(&mut out)) {
+            return out;
+        }
     }
     let (first, second) = (inputs.0.len(), inputs.1.len());
     let mut out = unwritten();
@@ -210,6 +217,18 @@ pub(crate) fn transposed<S: Scalar, const L: usize, const K: usize, const EXACT:
     {
         return out;
     }
+    if S::LANE_KERNELS && L == LANES {
+        let mut out = unwritten::<S, L, K>();
+        if S::transposed_lanes_kernel(
+            weights,
+            count,
+            (first, columns),
+            lanes(g),
+            lanes_mut(&mut out),
+        ) {
+            return out;
+        }
+    }
     let mut out = unwritten();
     let mut done = 0;
     if !EXACT && L == 1 {
@@ -286,6 +305,13 @@ pub(crate) fn transposed_through_activation<
     {
         return out;
     }
+    if S::LANE_KERNELS
+        && L == LANES
+        && let Some(out) =
+            transposed_slope_by_lane_kernel(params, layout, (first, columns), g, outputs)
+    {
+        return out;
+    }
     let mut delta = transposed::<S, L, K, EXACT>(params, layout, (first, columns), g);
     through_activation(&mut delta, outputs);
     delta
@@ -310,6 +336,43 @@ fn transposed_slope_by_kernel<S: Scalar, const L: usize, const K: usize>(
         _ => return None,
     }
     .then_some(out)
+}
+
+/// [`transposed_through_activation`] for a lane group through the scalar's lane kernel, when
+/// it takes the shape; `None` otherwise.
+#[inline(always)]
+fn transposed_slope_by_lane_kernel<S: Scalar, const L: usize, const K: usize>(
+    params: &[S],
+    layout: &DenseLayout,
+    columns: (usize, usize),
+    g: &[[S; L]],
+    outputs: &[[S; L]],
+) -> Option<[[S; L]; K]> {
+    let (count, rows) = (layout.inputs, layout.outputs);
+    let weights = params.get(layout.weights..layout.weights + count * rows)?;
+    let mut out = unwritten::<S, L, K>();
+    S::transposed_slope_lanes_kernel(
+        weights,
+        count,
+        columns,
+        lanes(g.get(..rows)?),
+        lanes(outputs),
+        lanes_mut(&mut out),
+    )
+    .then_some(out)
+}
+
+/// Lanes of `L` points as lane groups of [`LANES`] (all of them when `L` is `LANES`, the
+/// only case the lane kernels are offered).
+#[inline(always)]
+fn lanes<S, const L: usize>(x: &[[S; L]]) -> &[[S; LANES]] {
+    x.as_flattened().as_chunks::<LANES>().0
+}
+
+/// [`lanes`], writable.
+#[inline(always)]
+fn lanes_mut<S, const L: usize>(x: &mut [[S; L]]) -> &mut [[S; LANES]] {
+    x.as_flattened_mut().as_chunks_mut::<LANES>().0
 }
 
 /// `Kernels::transposed_slope_kernel` on slices of exactly the shape `(OUT, IN)`.

@@ -40,6 +40,9 @@ pub fn check_kernels(seed: u32, cases: u32) -> Result<u32, KernelMismatch> {
         checked += transposed_slope::<9, 9>("transposed_slope 9x9", case, &mut draw)?;
         checked += transposed_slope::<9, 1>("transposed_slope 1x9", case, &mut draw)?;
     }
+    if <f32 as Kernels>::LANE_KERNELS {
+        checked += f32_lanes::check(seed, cases)?;
+    }
     Ok(checked)
 }
 
@@ -210,14 +213,209 @@ impl Xorshift {
     }
 }
 
+/// The `f32` lane kernels (x86-64 with AVX2) against their contracts, bit for bit, on layer
+/// shapes of every kind the models use (a leaf's 3 inputs, N = 9, a node's 9 + 9 + 3, run-time
+/// widths, one row) and on inputs that reach every path of the activation: zeros of both
+/// signs, saturation, infinities, NaN, subnormals, and seeded random values.
+mod f32_lanes {
+    use super::{KernelMismatch, Kernels, Xorshift};
+    use crate::arch::Lanes;
+    use crate::implicit::Activation;
+    use crate::scalar::Scalar;
+
+    /// Rows and inputs of the largest layer checked.
+    const ROWS: usize = 16;
+    const INPUTS: usize = 35;
+
+    /// (rows, the three input parts' lengths) of the forward layers checked.
+    const FORWARD: [(usize, [usize; 3]); 8] = [
+        (9, [3, 0, 0]),
+        (9, [9, 0, 0]),
+        (1, [9, 0, 0]),
+        (9, [9, 9, 3]),
+        (4, [4, 4, 3]),
+        (5, [7, 0, 0]),
+        (16, [16, 16, 3]),
+        (2, [1, 0, 0]),
+    ];
+
+    /// (rows, inputs per row, first column, columns) of the transposed layers checked.
+    const TRANSPOSED: [(usize, usize, usize, usize); 8] = [
+        (9, 9, 0, 9),
+        (9, 3, 0, 3),
+        (1, 9, 0, 9),
+        (9, 21, 0, 9),
+        (9, 21, 9, 9),
+        (9, 21, 18, 3),
+        (16, 35, 16, 16),
+        (5, 7, 2, 4),
+    ];
+
+    #[inline(never)]
+    pub(super) fn check(seed: u32, cases: u32) -> Result<u32, KernelMismatch> {
+        let mut random = Xorshift(seed | 1);
+        let mut checked = 0;
+        for case in 0..cases {
+            let mut draw = |scale: f32| value(case, scale, &mut random);
+            for (rows, parts) in FORWARD {
+                checked += forward("f32 forward lanes", case, rows, parts, &mut draw)?;
+            }
+            for shape in TRANSPOSED {
+                checked += transposed("f32 transposed lanes", case, shape, false, &mut draw)?;
+                checked += transposed("f32 transposed_slope lanes", case, shape, true, &mut draw)?;
+            }
+        }
+        Ok(checked)
+    }
+
+    /// One input: case 0 zeros of both signs, 1 and 2 huge values of either sign, 3 the
+    /// smallest subnormals, 4 infinities and NaN among ordinary values; then random values of
+    /// magnitude below `scale`, every other case scaled down by up to 2¹².
+    fn value(case: u32, scale: f32, random: &mut Xorshift) -> f32 {
+        let bits = random.next();
+        let unit = (bits >> 8) as f32 / (1 << 24) as f32 * 2.0 - 1.0;
+        match case {
+            0 => f32::from_bits(bits & 0x8000_0000),
+            1 => 1.0e30,
+            2 => -3.0e38,
+            3 => f32::from_bits((bits & 0x8000_0000) | 1),
+            4 => match bits & 3 {
+                0 => f32::INFINITY,
+                1 => f32::NEG_INFINITY,
+                2 => f32::NAN,
+                _ => unit * scale,
+            },
+            _ if case.is_multiple_of(2) => unit * scale / (1 << (bits % 13)) as f32,
+            _ => unit * scale,
+        }
+    }
+
+    fn lanes(draw: &mut dyn FnMut(f32) -> f32, scale: f32) -> Lanes {
+        core::array::from_fn(|_| draw(scale))
+    }
+
+    /// Equal bits, or both NaN: which NaN payload an operation with two NaN operands returns
+    /// depends on the operand order the compiler chose for a commutative product, in the
+    /// portable loop as much as in a kernel.
+    fn same(a: &[Lanes], b: &[Lanes]) -> bool {
+        a.iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()))
+    }
+
+    fn forward(
+        kernel: &'static str,
+        case: u32,
+        rows: usize,
+        parts: [usize; 3],
+        draw: &mut dyn FnMut(f32) -> f32,
+    ) -> Result<u32, KernelMismatch> {
+        let count: usize = parts.iter().sum();
+        let weights: [f32; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
+        let biases: [f32; ROWS] = core::array::from_fn(|_| draw(4.0));
+        let x: [Lanes; INPUTS] = core::array::from_fn(|_| lanes(draw, 2.0));
+        let mut want = [[0.0; 8]; ROWS];
+        let mut got = [[0.0; 8]; ROWS];
+        let (Some(w), Some(b), Some(x), Some(want), Some(got)) = (
+            weights.get(..rows * count),
+            biases.get(..rows),
+            x.get(..count),
+            want.get_mut(..rows),
+            got.get_mut(..rows),
+        ) else {
+            return Ok(0);
+        };
+        let (x0, rest) = x.split_at_checked(parts[0]).unwrap_or((x, &[]));
+        let (x1, x2) = rest.split_at_checked(parts[1]).unwrap_or((rest, &[]));
+        for ((out, row), &bias) in want.iter_mut().zip(w.chunks_exact(count)).zip(b) {
+            for (lane, out) in out.iter_mut().enumerate() {
+                let acc = row
+                    .iter()
+                    .zip(x0.iter().chain(x1).chain(x2))
+                    .fold(bias.to_acc(), |acc, (&w, x)| {
+                        f32::mac(acc, w, x.get(lane).copied().unwrap_or(0.0))
+                    });
+                *out = f32::activation_from_acc(acc);
+            }
+        }
+        if !<f32 as Kernels>::forward_lanes_kernel(w, b, [x0, x1, x2], got) {
+            return Ok(0);
+        }
+        if same(got, want) {
+            Ok(1)
+        } else {
+            Err(KernelMismatch { kernel, case })
+        }
+    }
+
+    fn transposed(
+        kernel: &'static str,
+        case: u32,
+        (rows, count, first, columns): (usize, usize, usize, usize),
+        slope: bool,
+        draw: &mut dyn FnMut(f32) -> f32,
+    ) -> Result<u32, KernelMismatch> {
+        let weights: [f32; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
+        let g: [Lanes; ROWS] = core::array::from_fn(|_| lanes(draw, 8.0));
+        // Activations lie within ±1.7159.
+        let a: [Lanes; INPUTS] = core::array::from_fn(|_| lanes(draw, 1.7159));
+        let mut want = [[0.0; 8]; INPUTS];
+        let mut got = [[0.0; 8]; INPUTS];
+        let (Some(w), Some(g), Some(a), Some(want), Some(got)) = (
+            weights.get(..rows * count),
+            g.get(..rows),
+            a.get(..columns),
+            want.get_mut(..columns),
+            got.get_mut(..columns),
+        ) else {
+            return Ok(0);
+        };
+        for ((c, out), a) in want.iter_mut().enumerate().zip(a) {
+            for ((lane, out), &a) in out.iter_mut().enumerate().zip(a) {
+                let acc = w
+                    .chunks_exact(count)
+                    .zip(g)
+                    .fold(0.0.to_acc(), |acc, (row, g)| {
+                        let w = row.get(first + c).copied().unwrap_or(0.0);
+                        f32::mac(acc, w, g.get(lane).copied().unwrap_or(0.0))
+                    });
+                *out = f32::from_acc(acc);
+                if slope {
+                    *out = f32::times_slope(*out, a);
+                }
+            }
+        }
+        let ran = if slope {
+            <f32 as Kernels>::transposed_slope_lanes_kernel(w, count, (first, columns), g, a, got)
+        } else {
+            <f32 as Kernels>::transposed_lanes_kernel(w, count, (first, columns), g, got)
+        };
+        if !ran {
+            return Ok(0);
+        }
+        if same(got, want) {
+            Ok(1)
+        } else {
+            Err(KernelMismatch { kernel, case })
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// On the host there are no kernels: nothing is checked and nothing fails.
+    /// On the host only the `f32` lane kernels can run (x86-64 with AVX2): every one of them
+    /// matches its contract, and nothing is checked where they cannot run.
     #[test]
-    fn the_host_has_no_kernels_to_check() {
-        assert_eq!(check_kernels(1, 20), Ok(0));
+    fn the_host_kernels_match_their_contracts() {
+        let expected = if <f32 as Kernels>::LANE_KERNELS && neurosurf_avx2::available() {
+            64 * (8 + 2 * 8)
+        } else {
+            0
+        };
+        assert_eq!(check_kernels(1, 64), Ok(expected));
     }
 
     /// The inputs cover both signs and both ends of their range.

@@ -10,6 +10,10 @@
 
 use neurosurf_m4f as m4f;
 
+pub(super) use super::portable::{
+    F32_LANE_KERNELS, f32_forward_lanes, f32_transposed_lanes, f32_transposed_slope_lanes,
+};
+
 use crate::scalar::Q16;
 
 // Every kernel is in use unless a comparison build turns it off with

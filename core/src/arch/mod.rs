@@ -11,22 +11,36 @@ use crate::scalar::Q16;
 
 pub mod kernel_check;
 
-/// Chooses the kernels' module: the target condition, written once.
+/// Chooses the kernels' module: the target conditions, written once.
 macro_rules! select_target {
-    ($target:item $portable:item) => {
+    ($m4f:item $x86_64:item $portable:item) => {
         #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-        $target
-        #[cfg(not(all(target_arch = "arm", target_abi = "eabihf", target_os = "none")))]
+        $m4f
+        #[cfg(target_arch = "x86_64")]
+        $x86_64
+        #[cfg(not(any(
+            all(target_arch = "arm", target_abi = "eabihf", target_os = "none"),
+            target_arch = "x86_64"
+        )))]
         $portable
     };
 }
 
+// "Use the portable loop" for every kernel: what a target module has no kernel for, it takes
+// from here.
+#[allow(dead_code)]
+mod portable;
+
 select_target! {
     #[path = "m4f.rs"]
     mod target;
-    #[path = "portable.rs"]
+    #[path = "x86_64.rs"]
     mod target;
+    use portable as target;
 }
+
+/// One neuron of a lane group: [`crate::implicit::LANES`] points.
+pub(crate) type Lanes<S = f32> = [S; crate::implicit::LANES];
 
 /// Target kernels and lane counts of a scalar. Each `*_kernel` returns `None` (or `false`)
 /// for "use the portable loop"; what it returns otherwise is exactly that loop's bits.
@@ -90,6 +104,53 @@ pub trait Kernels: Sized + Copy {
         let _ = (w, g, a);
         None
     }
+
+    /// Whether this scalar has kernels for whole lane groups ([`crate::implicit::LANES`]
+    /// points in structure-of-arrays form) on the machine compiled for; the layer loops only
+    /// ask when it does.
+    const LANE_KERNELS: bool = false;
+
+    /// A forward layer for a lane group (W row-major, one row of the concatenated `inputs` per
+    /// output): output j is `activation_from_acc` of the bias accumulating `mac` over the
+    /// inputs in order, lane by lane; `false`, with `out` unwritten, means "use the portable
+    /// loop". (`f32` on x86-64 with AVX2.)
+    #[inline(always)]
+    fn forward_lanes_kernel(
+        weights: &[Self],
+        biases: &[Self],
+        inputs: [&[Lanes<Self>]; 3],
+        out: &mut [Lanes<Self>],
+    ) -> bool {
+        let _ = (weights, biases, inputs, out);
+        false
+    }
+    /// Columns `first..first + columns` of `Wᵀ·g` for a lane group (W has `count` columns, one
+    /// row per `g`): each output `from_acc` of `ZERO.to_acc()` accumulating `mac` over the rows
+    /// in order; `false`, with `out` unwritten, means "use the portable loop".
+    #[inline(always)]
+    fn transposed_lanes_kernel(
+        weights: &[Self],
+        count: usize,
+        columns: (usize, usize),
+        g: &[Lanes<Self>],
+        out: &mut [Lanes<Self>],
+    ) -> bool {
+        let _ = (weights, count, columns, g, out);
+        false
+    }
+    /// `transposed_lanes_kernel` followed by `times_slope` on output c with `outputs[c]`.
+    #[inline(always)]
+    fn transposed_slope_lanes_kernel(
+        weights: &[Self],
+        count: usize,
+        columns: (usize, usize),
+        g: &[Lanes<Self>],
+        outputs: &[Lanes<Self>],
+        out: &mut [Lanes<Self>],
+    ) -> bool {
+        let _ = (weights, count, columns, g, outputs, out);
+        false
+    }
 }
 
 /// No kernels: on the Cortex-M4F the portable loops cost fewer estimated cycles than assembly
@@ -113,6 +174,39 @@ impl Kernels for f32 {
     /// head cost more estimated cycles per point than one (11 084 against 10 780; the leaf
     /// alone is even, 1 859 against 1 862) and 5 KiB more stack.
     const KERNEL_WIDTH_LANE_GROUP: usize = Self::GRADIENT_LANE_GROUP;
+    /// On x86-64: the AVX2 layers of `neurosurf-avx2`, when the processor has AVX2.
+    const LANE_KERNELS: bool = target::F32_LANE_KERNELS;
+
+    #[inline(always)]
+    fn forward_lanes_kernel(
+        weights: &[f32],
+        biases: &[f32],
+        inputs: [&[Lanes]; 3],
+        out: &mut [Lanes],
+    ) -> bool {
+        target::f32_forward_lanes(weights, biases, inputs, out)
+    }
+    #[inline(always)]
+    fn transposed_lanes_kernel(
+        weights: &[f32],
+        count: usize,
+        columns: (usize, usize),
+        g: &[Lanes],
+        out: &mut [Lanes],
+    ) -> bool {
+        target::f32_transposed_lanes(weights, count, columns, g, out)
+    }
+    #[inline(always)]
+    fn transposed_slope_lanes_kernel(
+        weights: &[f32],
+        count: usize,
+        columns: (usize, usize),
+        g: &[Lanes],
+        outputs: &[Lanes],
+        out: &mut [Lanes],
+    ) -> bool {
+        target::f32_transposed_slope_lanes(weights, count, columns, g, outputs, out)
+    }
 }
 
 impl Kernels for Q16 {

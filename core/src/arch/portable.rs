@@ -1,6 +1,7 @@
 //! No target kernels: every function says "use the portable loop". What every target but the
 //! Cortex-M4F compiles (signatures as in `m4f.rs`).
 
+use super::Lanes;
 use crate::scalar::Q16;
 
 #[inline(always)]
@@ -40,4 +41,35 @@ pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
     _: i32,
 ) -> Option<([Q16; IN], u32)> {
     None
+}
+
+/// No `f32` lane kernels.
+pub(super) const F32_LANE_KERNELS: bool = false;
+
+#[inline(always)]
+pub(super) fn f32_forward_lanes(_: &[f32], _: &[f32], _: [&[Lanes]; 3], _: &mut [Lanes]) -> bool {
+    false
+}
+
+#[inline(always)]
+pub(super) fn f32_transposed_lanes(
+    _: &[f32],
+    _: usize,
+    _: (usize, usize),
+    _: &[Lanes],
+    _: &mut [Lanes],
+) -> bool {
+    false
+}
+
+#[inline(always)]
+pub(super) fn f32_transposed_slope_lanes(
+    _: &[f32],
+    _: usize,
+    _: (usize, usize),
+    _: &[Lanes],
+    _: &[Lanes],
+    _: &mut [Lanes],
+) -> bool {
+    false
 }

@@ -22,18 +22,18 @@
 //! accuracy is not a goal — near 0 the result is within 3·10⁻⁷ of a(H), not within an ulp.
 
 /// A = 1.7159.
-const AMPLITUDE: f32 = super::ACTIVATION_AMPLITUDE as f32;
+pub(crate) const AMPLITUDE: f32 = super::ACTIVATION_AMPLITUDE as f32;
 /// (4/3)/ln 2: u = H·U_PER_H.
-const U_PER_H: f32 = (2.0 * super::ACTIVATION_GAIN * core::f64::consts::LOG2_E) as f32;
+pub(crate) const U_PER_H: f32 = (2.0 * super::ACTIVATION_GAIN * core::f64::consts::LOG2_E) as f32;
 /// Beyond this |u|, a(H) is within 2.6·10⁻⁸ of ±A (2A/2^27), and ±A is returned.
-const SATURATION: f32 = 27.0;
+pub(crate) const SATURATION: f32 = 27.0;
 /// 1.5·2²³: for |u| ≤ 2²², `u + ROUNDER` is u rounded to the nearest integer n (ties to even),
 /// stored as ROUNDER's bits + n; ROUNDER's low 22 bits are zero, so those bits shifted left by
 /// 23 are n·2²³ (mod 2³²), the exponent increment of 2ⁿ.
-const ROUNDER: f32 = 12_582_912.0;
+pub(crate) const ROUNDER: f32 = 12_582_912.0;
 /// 2^r ≈ 1 + r·(c₁ + r·(c₂ + … + r·c₆)) for |r| ≤ ½, coefficients c₁…c₆ minimax for relative
 /// error (2.0·10⁻⁹); c₁ rounds to ln 2 in `f32`.
-const POLYNOMIAL: [f32; 6] = [
+pub(crate) const POLYNOMIAL: [f32; 6] = [
     core::f32::consts::LN_2,
     0.240_226_48,
     0.055_503_327,

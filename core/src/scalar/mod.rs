@@ -22,11 +22,11 @@
 //! assert!((float - fixed).abs() < 1.0 / 16384.0);
 //! ```
 
-mod activation_f32;
+pub(crate) mod activation_f32;
 pub(crate) mod activation_table;
 mod exp_f32;
 mod exp_q16;
-mod float;
+pub(crate) mod float;
 pub(crate) mod q16;
 
 pub use q16::Q16;

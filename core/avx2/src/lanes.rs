@@ -1,0 +1,362 @@
+//! The AVX2 kernels and their run-time selection: the crate's only unsafe code.
+
+#![allow(unsafe_code)]
+
+use core::arch::x86_64::{
+    __m256, _CMP_NLT_UQ, _CMP_UNORD_Q, _mm256_add_epi32, _mm256_add_ps, _mm256_and_ps,
+    _mm256_blendv_ps, _mm256_castps_si256, _mm256_castsi256_ps, _mm256_cmp_ps, _mm256_div_ps,
+    _mm256_loadu_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps,
+    _mm256_slli_epi32, _mm256_storeu_ps, _mm256_sub_ps,
+};
+
+use crate::{Activation, Lanes, Slope};
+
+cpufeatures::new!(avx2, "avx2");
+
+/// Whether the processor running has AVX2 (detected once, then one atomic load).
+#[inline]
+pub fn available() -> bool {
+    avx2::get()
+}
+
+/// The forward layer: `out[j]` = a(`biases[j]` + Σᵢ `weights[j][i]`·xᵢ) for every row j, x the
+/// concatenation of `inputs[0]`, `inputs[1]` and `inputs[2]`, each sum in input order, a the
+/// [`Activation`]. Returns `false` without writing when AVX2 is missing or the slices do not
+/// fit (`weights` must hold `biases.len()` rows of one weight per input, `out` at least
+/// `biases.len()` neurons).
+pub fn forward(
+    weights: &[f32],
+    biases: &[f32],
+    inputs: [&[Lanes]; 3],
+    activation: &Activation,
+    out: &mut [Lanes],
+) -> bool {
+    let count = inputs.iter().map(|part| part.len()).sum::<usize>();
+    let rows = biases.len();
+    if count == 0 || Some(weights.len()) != rows.checked_mul(count) || out.len() < rows {
+        return false;
+    }
+    if !available() {
+        return false;
+    }
+    // SAFETY: AVX2 is available (checked above).
+    unsafe { forward_avx2(weights, count, biases, inputs, activation, out) };
+    true
+}
+
+/// The transposed layer: `out[c]` = Σⱼ `weights[j][first + c]`·`g[j]` for c below `columns`,
+/// each sum from +0 over the rows in order. Returns `false` without writing when AVX2 is
+/// missing or the slices do not fit (`weights` must hold `g.len()` rows of `count` weights,
+/// `first + columns` ≤ `count`, `out` at least `columns` neurons).
+pub fn transposed(
+    weights: &[f32],
+    count: usize,
+    (first, columns): (usize, usize),
+    g: &[Lanes],
+    out: &mut [Lanes],
+) -> bool {
+    if !fits_transposed(weights, count, (first, columns), g, out.len()) || !available() {
+        return false;
+    }
+    // SAFETY: AVX2 is available (checked above).
+    unsafe { transposed_avx2(weights, count, (first, columns), g, None, out) };
+    true
+}
+
+/// [`transposed`] with the chain rule on each sum: `out[c]` = (Σⱼ `weights[j][first + c]`·`g[j]`)
+/// · (offset − square·(a·a)), a = `outputs[c]` (`outputs` at least `columns` neurons).
+pub fn transposed_slope(
+    weights: &[f32],
+    count: usize,
+    (first, columns): (usize, usize),
+    g: &[Lanes],
+    (outputs, slope): (&[Lanes], &Slope),
+    out: &mut [Lanes],
+) -> bool {
+    if !fits_transposed(weights, count, (first, columns), g, out.len())
+        || outputs.len() < columns
+        || !available()
+    {
+        return false;
+    }
+    // SAFETY: AVX2 is available (checked above).
+    unsafe {
+        transposed_avx2(
+            weights,
+            count,
+            (first, columns),
+            g,
+            Some((outputs, slope)),
+            out,
+        )
+    };
+    true
+}
+
+fn fits_transposed(
+    weights: &[f32],
+    count: usize,
+    (first, columns): (usize, usize),
+    g: &[Lanes],
+    out: usize,
+) -> bool {
+    Some(weights.len()) == g.len().checked_mul(count)
+        && first.checked_add(columns).is_some_and(|end| end <= count)
+        && out >= columns
+        && columns > 0
+}
+
+#[inline(always)]
+fn load(x: &Lanes) -> __m256 {
+    // SAFETY: `x` is eight readable `f32`; the load has no alignment requirement.
+    unsafe { _mm256_loadu_ps(x.as_ptr()) }
+}
+
+#[inline(always)]
+fn store(out: &mut Lanes, v: __m256) {
+    // SAFETY: `out` is eight writable `f32`; the store has no alignment requirement.
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), v) }
+}
+
+#[target_feature(enable = "avx2")]
+fn forward_avx2(
+    weights: &[f32],
+    count: usize,
+    biases: &[f32],
+    inputs: [&[Lanes]; 3],
+    activation: &Activation,
+    out: &mut [Lanes],
+) {
+    let mut row = 0;
+    while row < biases.len() {
+        let at = (count, row);
+        row += match biases.len() - row {
+            1 => forward_rows::<1>(weights, at, biases, inputs, activation, out),
+            2 => forward_rows::<2>(weights, at, biases, inputs, activation, out),
+            3..WIDE => forward_rows::<3>(weights, at, biases, inputs, activation, out),
+            _ => forward_rows::<WIDE>(weights, at, biases, inputs, activation, out),
+        };
+    }
+}
+
+/// Rows (or columns) of a wide block: nine independent sums (Carcenac's N = 9) keep both
+/// vector adders busy; with the input and a weight they take 11 of the 16 registers.
+const WIDE: usize = 9;
+
+/// Rows `row..row + B` of [`forward_avx2`], their sums side by side; returns `B`.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn forward_rows<const B: usize>(
+    weights: &[f32],
+    (count, row): (usize, usize),
+    biases: &[f32],
+    inputs: [&[Lanes]; 3],
+    activation: &Activation,
+    out: &mut [Lanes],
+) -> usize {
+    let (Some(biases), Some(out), Some(weights)) = (
+        biases.get(row..).and_then(<[f32]>::first_chunk::<B>),
+        out.get_mut(row..).and_then(<[Lanes]>::first_chunk_mut::<B>),
+        weights.get(row * count..),
+    ) else {
+        return B;
+    };
+    // No closures here: they would be compiled without AVX2.
+    let mut acc = [_mm256_setzero_ps(); B];
+    for (acc, &bias) in acc.iter_mut().zip(biases) {
+        *acc = _mm256_set1_ps(bias);
+    }
+    let mut offset = 0;
+    for part in inputs {
+        let at = (count, offset);
+        match part.len() {
+            0 => {}
+            3 => accumulate::<B, 3>(&mut acc, weights, at, part),
+            9 => accumulate::<B, 9>(&mut acc, weights, at, part),
+            _ => accumulate_any::<B>(&mut acc, weights, at, part),
+        }
+        offset += part.len();
+    }
+    for (out, &acc) in out.iter_mut().zip(&acc) {
+        store(out, activate(acc, activation));
+    }
+    B
+}
+
+/// `acc[b] += Σₖ w[b][offset + k]·x[k]` in order of k, for `IN` inputs known when compiled
+/// (the loop unrolls); `w[b]` is row b of `weights` (`count` per row).
+#[target_feature(enable = "avx2")]
+#[inline]
+fn accumulate<const B: usize, const IN: usize>(
+    acc: &mut [__m256; B],
+    weights: &[f32],
+    (count, offset): (usize, usize),
+    x: &[Lanes],
+) {
+    let Some(x) = x.first_chunk::<IN>() else {
+        return;
+    };
+    let mut rows = [&[0.0; IN]; B];
+    for (b, row) in rows.iter_mut().enumerate() {
+        match weights
+            .get(b * count + offset..)
+            .and_then(<[f32]>::first_chunk::<IN>)
+        {
+            Some(weights) => *row = weights,
+            None => return,
+        }
+    }
+    multiply_accumulate(acc, &rows, x);
+}
+
+/// [`accumulate`] for any number of inputs.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn accumulate_any<const B: usize>(
+    acc: &mut [__m256; B],
+    weights: &[f32],
+    (count, offset): (usize, usize),
+    x: &[Lanes],
+) {
+    let n = x.len();
+    // Each row's weights for these inputs: exactly `n` of them.
+    let mut rows: [&[f32]; B] = [&[]; B];
+    for (b, row) in rows.iter_mut().enumerate() {
+        let start = b * count + offset;
+        match weights.get(start..start + n) {
+            Some(weights) => *row = weights,
+            None => return,
+        }
+    }
+    multiply_accumulate(acc, &rows, x);
+}
+
+/// `acc[b] += Σₖ rows[b][k]·x[k]` in order of k (every row at least as long as `x`).
+#[target_feature(enable = "avx2")]
+#[inline]
+fn multiply_accumulate<const B: usize, R: AsRef<[f32]>>(
+    acc: &mut [__m256; B],
+    rows: &[R; B],
+    x: &[Lanes],
+) {
+    for (k, x) in x.iter().enumerate() {
+        let x = load(x);
+        for (acc, row) in acc.iter_mut().zip(rows) {
+            let w = row.as_ref().get(k).copied().unwrap_or(0.0);
+            *acc = _mm256_add_ps(*acc, _mm256_mul_ps(_mm256_set1_ps(w), x));
+        }
+    }
+}
+
+/// The core's branch-free `f32` activation on eight lanes, operation for operation.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn activate(h: __m256, constants: &Activation) -> __m256 {
+    let saturation = _mm256_set1_ps(constants.saturation);
+    let rounder = _mm256_set1_ps(constants.rounder);
+    let one = _mm256_set1_ps(1.0);
+    let u = _mm256_mul_ps(h, _mm256_set1_ps(constants.u_per_h));
+    let magnitude = _mm256_and_ps(u, _mm256_castsi256_ps(splat_bits(0x7fff_ffff)));
+    // "Not below" the saturation point, NaN included.
+    let saturated = _mm256_cmp_ps::<_CMP_NLT_UQ>(magnitude, saturation);
+    let u = _mm256_blendv_ps(u, saturation, saturated);
+    let rounded = _mm256_add_ps(u, rounder);
+    let r = _mm256_sub_ps(u, _mm256_sub_ps(rounded, rounder));
+    let [lower @ .., highest] = constants.polynomial;
+    let mut acc = _mm256_set1_ps(highest);
+    for &c in lower.iter().rev() {
+        acc = _mm256_add_ps(_mm256_set1_ps(c), _mm256_mul_ps(r, acc));
+    }
+    let p = _mm256_add_ps(one, _mm256_mul_ps(r, acc));
+    let e = _mm256_castsi256_ps(_mm256_add_epi32(
+        _mm256_castps_si256(p),
+        _mm256_slli_epi32::<23>(_mm256_castps_si256(rounded)),
+    ));
+    let below = _mm256_mul_ps(
+        _mm256_div_ps(_mm256_sub_ps(e, one), _mm256_add_ps(e, one)),
+        _mm256_set1_ps(constants.amplitude),
+    );
+    // ±A with the sign of H, or H itself when it is NaN.
+    let sign = _mm256_and_ps(h, _mm256_castsi256_ps(splat_bits(0x8000_0000_u32 as i32)));
+    let limit = _mm256_or_ps(_mm256_set1_ps(constants.amplitude), sign);
+    let limit = _mm256_blendv_ps(limit, h, _mm256_cmp_ps::<_CMP_UNORD_Q>(h, h));
+    _mm256_blendv_ps(below, limit, saturated)
+}
+
+#[target_feature(enable = "avx2")]
+#[inline]
+fn splat_bits(bits: i32) -> core::arch::x86_64::__m256i {
+    core::arch::x86_64::_mm256_set1_epi32(bits)
+}
+
+#[target_feature(enable = "avx2")]
+fn transposed_avx2(
+    weights: &[f32],
+    count: usize,
+    (first, columns): (usize, usize),
+    g: &[Lanes],
+    slope: Option<(&[Lanes], &Slope)>,
+    out: &mut [Lanes],
+) {
+    let mut done = 0;
+    while done < columns {
+        let at = (first, done);
+        done += match columns - done {
+            1 => transposed_columns::<1>(weights, count, at, g, slope, out),
+            2 => transposed_columns::<2>(weights, count, at, g, slope, out),
+            3..WIDE => transposed_columns::<3>(weights, count, at, g, slope, out),
+            _ => transposed_columns::<WIDE>(weights, count, at, g, slope, out),
+        };
+    }
+}
+
+/// Columns `first + done..first + done + B` of [`transposed_avx2`] into `out[done..done + B]`,
+/// their sums side by side; returns `B`.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn transposed_columns<const B: usize>(
+    weights: &[f32],
+    count: usize,
+    (first, done): (usize, usize),
+    g: &[Lanes],
+    slope: Option<(&[Lanes], &Slope)>,
+    out: &mut [Lanes],
+) -> usize {
+    let Some(out) = out
+        .get_mut(done..)
+        .and_then(<[Lanes]>::first_chunk_mut::<B>)
+    else {
+        return B;
+    };
+    let column = first + done;
+    let mut acc = [_mm256_setzero_ps(); B];
+    for (row, g) in weights.chunks_exact(count).zip(g) {
+        let Some(w) = row.get(column..).and_then(<[f32]>::first_chunk::<B>) else {
+            return B;
+        };
+        let g = load(g);
+        for (acc, &w) in acc.iter_mut().zip(w) {
+            *acc = _mm256_add_ps(*acc, _mm256_mul_ps(_mm256_set1_ps(w), g));
+        }
+    }
+    let factors =
+        slope.and_then(|(outputs, slope)| Some((outputs.get(done..)?.first_chunk::<B>()?, slope)));
+    match factors {
+        Some((outputs, slope)) => {
+            for ((out, &acc), a) in out.iter_mut().zip(&acc).zip(outputs) {
+                let a = load(a);
+                let factor = _mm256_sub_ps(
+                    _mm256_set1_ps(slope.offset),
+                    _mm256_mul_ps(_mm256_set1_ps(slope.square), _mm256_mul_ps(a, a)),
+                );
+                store(out, _mm256_mul_ps(acc, factor));
+            }
+        }
+        None => {
+            for (out, &acc) in out.iter_mut().zip(&acc) {
+                store(out, acc);
+            }
+        }
+    }
+    B
+}

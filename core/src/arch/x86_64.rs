@@ -1,0 +1,67 @@
+//! x86-64: the `neurosurf-avx2` kernels for eight-lane `f32` batches, which run when the
+//! processor has AVX2 (detected at run time; otherwise they decline and the portable loops
+//! run). Same bits either way: every lane computes the portable loop's unfused operations in
+//! its order. Q16.16 has no kernels here.
+
+use neurosurf_avx2 as avx2;
+
+use super::Lanes;
+use crate::scalar::activation_f32::{AMPLITUDE, POLYNOMIAL, ROUNDER, SATURATION, U_PER_H};
+use crate::scalar::float::{SLOPE_OFFSET, SLOPE_SQUARE};
+
+pub(super) use super::portable::{q16_layer, q16_times_slope, q16_transposed, q16_transposed_slope};
+
+// The kernels' lane group is the core's.
+const _: () = assert!(avx2::LANES == crate::implicit::LANES);
+
+/// The `f32` lane kernels are compiled in, unless a comparison build turns them off with
+/// `--cfg neurosurf_portable="f32_lanes"`.
+pub(super) const F32_LANE_KERNELS: bool = !cfg!(neurosurf_portable = "f32_lanes");
+
+/// The core's `f32` activation constants (`scalar/activation_f32.rs`).
+const ACTIVATION: avx2::Activation = avx2::Activation {
+    u_per_h: U_PER_H,
+    saturation: SATURATION,
+    rounder: ROUNDER,
+    polynomial: POLYNOMIAL,
+    amplitude: AMPLITUDE,
+};
+
+/// The core's `f32` chain rule through the activation (`scalar/float.rs`).
+const SLOPE: avx2::Slope = avx2::Slope {
+    offset: SLOPE_OFFSET,
+    square: SLOPE_SQUARE,
+};
+
+#[inline(always)]
+pub(super) fn f32_forward_lanes(
+    weights: &[f32],
+    biases: &[f32],
+    inputs: [&[Lanes]; 3],
+    out: &mut [Lanes],
+) -> bool {
+    avx2::forward(weights, biases, inputs, &ACTIVATION, out)
+}
+
+#[inline(always)]
+pub(super) fn f32_transposed_lanes(
+    weights: &[f32],
+    count: usize,
+    columns: (usize, usize),
+    g: &[Lanes],
+    out: &mut [Lanes],
+) -> bool {
+    avx2::transposed(weights, count, columns, g, out)
+}
+
+#[inline(always)]
+pub(super) fn f32_transposed_slope_lanes(
+    weights: &[f32],
+    count: usize,
+    columns: (usize, usize),
+    g: &[Lanes],
+    outputs: &[Lanes],
+    out: &mut [Lanes],
+) -> bool {
+    avx2::transposed_slope(weights, count, columns, g, (outputs, &SLOPE), out)
+}

@@ -1,0 +1,175 @@
+//! The core's host evaluation against the peer a Python user would reach for: Φ and ∇Φ of the
+//! demo's torus leaf (3 → 9 → 9 → 1) and 3-feature head (three leaves, two nodes), as
+//! `jax.jit(jax.vmap(jax.value_and_grad(Φ)))` in float32 (`benches/peers/implicit_jax.py`),
+//! one core each. Every time is also a ratio to JAX measured in the same run; without JAX the
+//! JAX row says so and the ratios are to the core's portable single-point evaluation.
+//!
+//! Run: `taskset -c 1 cargo bench -p neurosurf-trainer --bench peers` (set `NEUROSURF_PYTHON`
+//! to a Python with `jax` installed; default `python3`). The models are the demo's blobs kept
+//! in the fuzz corpus (`fuzz/corpus/{torus,head}-f32.nsb`); the 4 096 query points fill their
+//! bounding boxes.
+
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
+use neurosurf_core::scalar::{Q16, Scalar};
+use neurosurf_trainer::implicit::from_blob;
+
+const QUERIES: usize = 4096;
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let python = std::env::var("NEUROSURF_PYTHON").unwrap_or_else(|_| "python3".into());
+    let mut rows: Vec<(String, Vec<Option<f64>>)> = Vec::new();
+    let names = ["torus", "head"];
+    let mut columns = Vec::new();
+    for name in names {
+        let f32_blob =
+            std::fs::read(root.join(format!("fuzz/corpus/{name}-f32.nsb"))).expect("blob");
+        let q16_blob =
+            std::fs::read(root.join(format!("fuzz/corpus/{name}-q16.16.nsb"))).expect("blob");
+        let decoded = from_blob(&f32_blob, Path::new(name)).expect("trainer reads the blob");
+        let points = queries(&decoded.network);
+        let jax = jax_time(&python, &decoded.network, &points, &f32_blob);
+        columns.push([
+            jax,
+            Some(throughput::<f32>(&f32_blob, &points, true)),
+            Some(throughput::<f32>(&f32_blob, &points, false)),
+            Some(throughput::<Q16>(&q16_blob, &points, true)),
+            Some(throughput::<Q16>(&q16_blob, &points, false)),
+        ]);
+    }
+    let labels = [
+        "JAX jit(vmap(value_and_grad)), f32",
+        "core f32, batch",
+        "core f32, one point at a time",
+        "core Q16.16, batch",
+        "core Q16.16, one point at a time",
+    ];
+    for (row, label) in labels.iter().enumerate() {
+        rows.push((label.to_string(), columns.iter().map(|c| c[row]).collect()));
+    }
+    println!("Field + gradient, {QUERIES} points, one core; ns per point (speed against JAX)");
+    println!();
+    println!("| evaluator | torus leaf, N = 9 | 3-feature head |");
+    println!("|---|---:|---:|");
+    for (label, times) in &rows {
+        let cells: Vec<String> = times
+            .iter()
+            .zip(&columns)
+            .map(|(t, column)| match (t, column[0]) {
+                (Some(t), Some(jax)) => format!("{:.1} ({:.2}×)", t * 1e9, jax / t),
+                (Some(t), None) => format!("{:.1}", t * 1e9),
+                (None, _) => "JAX not installed".into(),
+            })
+            .collect();
+        println!("| {label} | {} |", cells.join(" | "));
+    }
+}
+
+/// Points filling the box of the model's control points' region: a fixed lattice walk.
+fn queries(network: &neurosurf_trainer::implicit::ImplicitNetwork) -> Vec<[f32; 3]> {
+    let mut state = 0x9e37_79b9_u32;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        f64::from(state) / f64::from(u32::MAX) * 2.0 - 1.0
+    };
+    let _ = network;
+    (0..QUERIES)
+        .map(|_| [next() * 1.5, next() * 1.5, next() * 1.5].map(|c| c as f32))
+        .collect()
+}
+
+/// Seconds per point of the JAX peer, or `None` when Python or JAX is missing. Panics when
+/// JAX and the core disagree on Φ (a wrong peer would make the ratio meaningless).
+fn jax_time(
+    python: &str,
+    network: &neurosurf_trainer::implicit::ImplicitNetwork,
+    points: &[[f32; 3]],
+    blob: &[u8],
+) -> Option<f64> {
+    let available = Command::new(python)
+        .args(["-c", "import jax"])
+        .output()
+        .is_ok_and(|out| out.status.success());
+    if !available {
+        return None;
+    }
+    let kinds: Vec<&str> = network
+        .kinds()
+        .iter()
+        .map(|k| match k {
+            neurosurf_core::implicit::ModuleKind::Leaf => "leaf",
+            neurosurf_core::implicit::ModuleKind::Node => "node",
+        })
+        .collect();
+    let guards: Vec<[f64; 5]> = network.guards().iter().map(|g| g.parameters()).collect();
+    let model = serde_json::json!({
+        "width": network.width(),
+        "kinds": kinds,
+        "params": network.params(),
+        "guards": guards,
+        "points": points,
+    });
+    let file: PathBuf =
+        std::env::temp_dir().join(format!("neurosurf-peer-{}.json", std::process::id()));
+    std::fs::write(&file, model.to_string()).expect("temporary file");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peers/implicit_jax.py");
+    let out = Command::new(python)
+        .arg(script)
+        .arg(&file)
+        .output()
+        .expect("python runs");
+    let _ = std::fs::remove_file(&file);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(out.stdout.rsplit(|&b| b == b'\n').find(|l| !l.is_empty())?)
+            .expect("the peer prints JSON");
+    let model = ImplicitModel::<f32>::from_blob(blob).expect("core loads the blob");
+    for (k, phi) in report["phi"].as_array()?.iter().enumerate() {
+        let core = model.field_gradient(points[k]).value;
+        let jax = phi.as_f64()? as f32;
+        assert!(
+            (core - jax).abs() < 1e-4,
+            "point {k}: core {core}, JAX {jax}"
+        );
+    }
+    report["ns_per_point"].as_f64().map(|ns| ns * 1e-9)
+}
+
+/// Seconds per field + gradient through the core: the best of 15 runs of 5 passes.
+fn throughput<S: Scalar>(blob: &[u8], points: &[[f32; 3]], batch: bool) -> f64 {
+    let model = ImplicitModel::<S>::from_blob(blob).expect("core loads the blob");
+    let points: Vec<[S; 3]> = points
+        .iter()
+        .map(|p| p.map(S::from_f32_saturating))
+        .collect();
+    let mut out = vec![FieldGradient::<S>::default(); points.len()];
+    let mut best = f64::INFINITY;
+    for _ in 0..15 {
+        let start = Instant::now();
+        for _ in 0..5 {
+            if batch {
+                model
+                    .field_gradient_batch(black_box(&points), &mut out)
+                    .expect("same lengths");
+            } else {
+                for (p, o) in points.iter().zip(out.iter_mut()) {
+                    *o = model.field_gradient(black_box(*p));
+                }
+            }
+            black_box(&out);
+        }
+        best = best.min(start.elapsed().as_secs_f64() / (5 * points.len()) as f64);
+    }
+    best
+}
