@@ -127,6 +127,18 @@ fn forward_avx2(
     activation: &Activation,
     out: &mut [Lanes],
 ) {
+    // Carcenac's N = 9: a leaf's layers (9 × 3, 9 × 9, 1 × 9) and a node's first (9 × 21),
+    // every bound known when compiled.
+    let done = match (biases.len(), inputs.map(<[Lanes]>::len)) {
+        (9, [3, 0, 0]) => forward_fixed::<9, 3, 0, 0>(weights, biases, inputs, activation, out),
+        (9, [9, 0, 0]) => forward_fixed::<9, 9, 0, 0>(weights, biases, inputs, activation, out),
+        (1, [9, 0, 0]) => forward_fixed::<1, 9, 0, 0>(weights, biases, inputs, activation, out),
+        (9, [9, 9, 3]) => forward_fixed::<9, 9, 9, 3>(weights, biases, inputs, activation, out),
+        _ => false,
+    };
+    if done {
+        return;
+    }
     let mut row = 0;
     while row < biases.len() {
         let at = (count, row);
@@ -137,6 +149,59 @@ fn forward_avx2(
             _ => forward_rows::<WIDE>(weights, at, biases, inputs, activation, out),
         };
     }
+}
+
+/// [`forward_avx2`] for `ROWS` rows and input parts of `I0`, `I1` and `I2`; false (nothing
+/// written) when the slices are not of that shape.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn forward_fixed<const ROWS: usize, const I0: usize, const I1: usize, const I2: usize>(
+    weights: &[f32],
+    biases: &[f32],
+    [x0, x1, x2]: [&[Lanes]; 3],
+    activation: &Activation,
+    out: &mut [Lanes],
+) -> bool {
+    let count = I0 + I1 + I2;
+    let (Some(biases), Some(out), Some(x0), Some(x1), Some(x2)) = (
+        biases.first_chunk::<ROWS>(),
+        out.first_chunk_mut::<ROWS>(),
+        x0.first_chunk::<I0>(),
+        x1.first_chunk::<I1>(),
+        x2.first_chunk::<I2>(),
+    ) else {
+        return false;
+    };
+    if weights.len() != ROWS * count {
+        return false;
+    }
+    let mut acc = [_mm256_setzero_ps(); ROWS];
+    for ((acc, &bias), row) in acc.iter_mut().zip(biases).zip(weights.chunks_exact(count)) {
+        let Some((w0, rest)) = row.split_first_chunk::<I0>() else {
+            return false;
+        };
+        let Some((w1, rest)) = rest.split_first_chunk::<I1>() else {
+            return false;
+        };
+        let Some(w2) = rest.first_chunk::<I2>() else {
+            return false;
+        };
+        let mut sum = _mm256_set1_ps(bias);
+        for (&w, x) in w0.iter().zip(x0) {
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(w), load(x)));
+        }
+        for (&w, x) in w1.iter().zip(x1) {
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(w), load(x)));
+        }
+        for (&w, x) in w2.iter().zip(x2) {
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(w), load(x)));
+        }
+        *acc = sum;
+    }
+    for (out, &acc) in out.iter_mut().zip(&acc) {
+        store(out, activate(acc, activation));
+    }
+    true
 }
 
 /// Rows (or columns) of a wide block: nine independent sums (Carcenac's N = 9) keep both
@@ -298,6 +363,20 @@ fn transposed_avx2(
     slope: Option<(&[Lanes], &Slope)>,
     out: &mut [Lanes],
 ) {
+    // Carcenac's N = 9: the output layer and layer b of every module, a leaf's layer a, and a
+    // node's layer a′ towards each child and its own position, every bound known when compiled.
+    let done = match (g.len(), count, first, columns) {
+        (1, 9, 0, 9) => transposed_fixed::<1, 9, 0, 9>(weights, g, slope, out),
+        (9, 9, 0, 9) => transposed_fixed::<9, 9, 0, 9>(weights, g, slope, out),
+        (9, 3, 0, 3) => transposed_fixed::<9, 3, 0, 3>(weights, g, slope, out),
+        (9, 21, 0, 9) => transposed_fixed::<9, 21, 0, 9>(weights, g, slope, out),
+        (9, 21, 9, 9) => transposed_fixed::<9, 21, 9, 9>(weights, g, slope, out),
+        (9, 21, 18, 3) => transposed_fixed::<9, 21, 18, 3>(weights, g, slope, out),
+        _ => false,
+    };
+    if done {
+        return;
+    }
     let mut done = 0;
     while done < columns {
         let at = (first, done);
@@ -307,6 +386,81 @@ fn transposed_avx2(
             3..WIDE => transposed_columns::<3>(weights, count, at, g, slope, out),
             _ => transposed_columns::<WIDE>(weights, count, at, g, slope, out),
         };
+    }
+}
+
+/// [`transposed_avx2`] for `ROWS` rows of `COUNT` weights and the columns `FIRST..FIRST +
+/// COLUMNS`; false (nothing written) when the slices are not of that shape.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn transposed_fixed<
+    const ROWS: usize,
+    const COUNT: usize,
+    const FIRST: usize,
+    const COLUMNS: usize,
+>(
+    weights: &[f32],
+    g: &[Lanes],
+    slope: Option<(&[Lanes], &Slope)>,
+    out: &mut [Lanes],
+) -> bool {
+    let (rows, _) = weights.as_chunks::<COUNT>();
+    let (Some(rows), Some(g), Some(out)) = (
+        rows.first_chunk::<ROWS>(),
+        g.first_chunk::<ROWS>(),
+        out.first_chunk_mut::<COLUMNS>(),
+    ) else {
+        return false;
+    };
+    if weights.len() != ROWS * COUNT {
+        return false;
+    }
+    let mut acc = [_mm256_setzero_ps(); COLUMNS];
+    for (row, g) in rows.iter().zip(g) {
+        let Some(w) = row
+            .split_first_chunk::<FIRST>()
+            .and_then(|(_, rest)| rest.first_chunk::<COLUMNS>())
+        else {
+            return false;
+        };
+        let g = load(g);
+        for (acc, &w) in acc.iter_mut().zip(w) {
+            *acc = _mm256_add_ps(*acc, _mm256_mul_ps(_mm256_set1_ps(w), g));
+        }
+    }
+    finish_columns(
+        &acc,
+        slope.and_then(|(a, s)| Some((a.first_chunk::<COLUMNS>()?, s))),
+        out,
+    );
+    true
+}
+
+/// Writes the column sums `acc` to `out`, each times (offset − square·(a·a)) when `slope`
+/// gives the outputs `a`.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn finish_columns<const B: usize>(
+    acc: &[__m256; B],
+    slope: Option<(&[Lanes; B], &Slope)>,
+    out: &mut [Lanes; B],
+) {
+    match slope {
+        Some((outputs, slope)) => {
+            for ((out, &acc), a) in out.iter_mut().zip(acc).zip(outputs) {
+                let a = load(a);
+                let factor = _mm256_sub_ps(
+                    _mm256_set1_ps(slope.offset),
+                    _mm256_mul_ps(_mm256_set1_ps(slope.square), _mm256_mul_ps(a, a)),
+                );
+                store(out, _mm256_mul_ps(acc, factor));
+            }
+        }
+        None => {
+            for (out, &acc) in out.iter_mut().zip(acc) {
+                store(out, acc);
+            }
+        }
     }
 }
 
@@ -339,24 +493,10 @@ fn transposed_columns<const B: usize>(
             *acc = _mm256_add_ps(*acc, _mm256_mul_ps(_mm256_set1_ps(w), g));
         }
     }
-    let factors =
-        slope.and_then(|(outputs, slope)| Some((outputs.get(done..)?.first_chunk::<B>()?, slope)));
-    match factors {
-        Some((outputs, slope)) => {
-            for ((out, &acc), a) in out.iter_mut().zip(&acc).zip(outputs) {
-                let a = load(a);
-                let factor = _mm256_sub_ps(
-                    _mm256_set1_ps(slope.offset),
-                    _mm256_mul_ps(_mm256_set1_ps(slope.square), _mm256_mul_ps(a, a)),
-                );
-                store(out, _mm256_mul_ps(acc, factor));
-            }
-        }
-        None => {
-            for (out, &acc) in out.iter_mut().zip(&acc) {
-                store(out, acc);
-            }
-        }
-    }
+    finish_columns(
+        &acc,
+        slope.and_then(|(a, s)| Some((a.get(done..)?.first_chunk::<B>()?, s))),
+        out,
+    );
     B
 }
