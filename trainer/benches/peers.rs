@@ -4,10 +4,11 @@
 //! one core each. Every time is also a ratio to JAX measured in the same run; without JAX the
 //! JAX row says so and the ratios are to the core's portable single-point evaluation.
 //!
-//! Run: `taskset -c 1 cargo bench -p neurosurf-trainer --bench peers` (set `NEUROSURF_PYTHON`
-//! to a Python with `jax` installed; default `python3`). The models are the demo's blobs kept
-//! in the fuzz corpus (`fuzz/corpus/{torus,head}-f32.nsb`); the 4 096 query points fill their
-//! bounding boxes.
+//! Run: `taskset -c 1 cargo bench -p neurosurf-trainer --bench peers [-- --out FILE]` (set
+//! `NEUROSURF_PYTHON` to a Python with `jax` installed; default `python3`); `--out` also writes
+//! the table as Markdown (`docs/performance/host.md`). The models are the demo's blobs kept
+//! in the fuzz corpus (`fuzz/corpus/{torus,head}-f32.nsb`); the 4 096 query points fill the cube
+//! [−1.5, 1.5]³.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -32,7 +33,7 @@ fn main() {
         let q16_blob =
             std::fs::read(root.join(format!("fuzz/corpus/{name}-q16.16.nsb"))).expect("blob");
         let decoded = from_blob(&f32_blob, Path::new(name)).expect("trainer reads the blob");
-        let points = queries(&decoded.network);
+        let points = queries();
         let jax = jax_time(&python, &decoded.network, &points, &f32_blob);
         columns.push([
             jax,
@@ -52,10 +53,8 @@ fn main() {
     for (row, label) in labels.iter().enumerate() {
         rows.push((label.to_string(), columns.iter().map(|c| c[row]).collect()));
     }
-    println!("Field + gradient, {QUERIES} points, one core; ns per point (speed against JAX)");
-    println!();
-    println!("| evaluator | torus leaf, N = 9 | 3-feature head |");
-    println!("|---|---:|---:|");
+    let mut table =
+        String::from("| evaluator | torus leaf, N = 9 | 3-feature head |\n|---|---:|---:|\n");
     for (label, times) in &rows {
         let cells: Vec<String> = times
             .iter()
@@ -66,12 +65,37 @@ fn main() {
                 (None, _) => "JAX not installed".into(),
             })
             .collect();
-        println!("| {label} | {} |", cells.join(" | "));
+        table.push_str(&format!("| {label} | {} |\n", cells.join(" | ")));
+    }
+    println!("Field + gradient, {QUERIES} points, one core; ns per point (speed against JAX)\n");
+    print!("{table}");
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(path) = args
+        .iter()
+        .position(|a| a == "--out")
+        .and_then(|i| args.get(i + 1))
+    {
+        let text = format!(
+            "# The core on the host against JAX\n\nWritten by `taskset -c 1 cargo bench -p \
+             neurosurf-trainer --bench peers -- --out {path}` with `NEUROSURF_PYTHON` naming a \
+             Python that has JAX. Φ and ∇Φ at {QUERIES} points in [−1.5, 1.5]³, one core \
+             each; ns per point, and in brackets the speed against \
+             `jax.jit(jax.vmap(jax.value_and_grad(Φ)))` in float32 \
+             (`trainer/benches/peers/implicit_jax.py`) measured in the same run, after checking \
+             that both compute the same Φ. The models are the demo's torus and head \
+             (`fuzz/corpus/{{torus,head}}-f32.nsb`). The core's `f32` batches run the AVX2 \
+             kernels of `core/avx2/` where the processor has AVX2; every result has the same \
+             bits as the Cortex-M4F's. The machine is a shared 2-core virtual machine: compare \
+             ratios, not times.\n\n{table}"
+        );
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path);
+        std::fs::write(&path, text).expect("write --out");
+        eprintln!("wrote {}", path.display());
     }
 }
 
-/// Points filling the box of the model's control points' region: a fixed lattice walk.
-fn queries(network: &neurosurf_trainer::implicit::ImplicitNetwork) -> Vec<[f32; 3]> {
+/// Points spread over the cube [−1.5, 1.5]³ by a fixed xorshift sequence.
+fn queries() -> Vec<[f32; 3]> {
     let mut state = 0x9e37_79b9_u32;
     let mut next = move || {
         state ^= state << 13;
@@ -79,7 +103,6 @@ fn queries(network: &neurosurf_trainer::implicit::ImplicitNetwork) -> Vec<[f32; 
         state ^= state << 5;
         f64::from(state) / f64::from(u32::MAX) * 2.0 - 1.0
     };
-    let _ = network;
     (0..QUERIES)
         .map(|_| [next() * 1.5, next() * 1.5, next() * 1.5].map(|c| c as f32))
         .collect()
