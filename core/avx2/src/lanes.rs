@@ -93,11 +93,13 @@ pub fn transposed_slope(
     true
 }
 
-fn fits_transposed(
-    weights: &[f32],
+/// Whether `weights` holds `g.len()` rows of `count` weights, the columns lie within a row and
+/// `out` neurons hold them: the shape every transposed kernel needs.
+pub(crate) fn fits_transposed<W, G>(
+    weights: &[W],
     count: usize,
     (first, columns): (usize, usize),
-    g: &[Lanes],
+    g: &[G],
     out: usize,
 ) -> bool {
     Some(weights.len()) == g.len().checked_mul(count)

@@ -1,28 +1,33 @@
 //! # neurosurf-avx2
 //!
-//! The `f32` layers of `neurosurf-core`'s implicit modules for eight points at once, written
-//! with x86-64 AVX2 intrinsics and chosen at run time: the forward layer with its activation,
-//! the transposed layer, and the transposed layer fused with the chain rule through the
-//! activation. On a processor without AVX2, and on every other target, each function returns
-//! `false` and the core runs its portable loops; on other targets the crate is empty but for
-//! [`AVAILABLE`].
+//! The layers of `neurosurf-core`'s implicit modules for eight points at once, written with
+//! x86-64 AVX2 intrinsics and chosen at run time, in `f32` (`lanes.rs`: the forward layer with
+//! its activation, the transposed layer, the transposed layer fused with the chain rule through
+//! the activation) and in Q16.16 (`fixed_lanes.rs`: the same three, with exact 64-bit sums and
+//! the core's activation table). On a processor without AVX2, and on every other target, each
+//! function returns `false` and the core runs its portable loops; on other targets the crate is
+//! empty but for [`AVAILABLE`] and [`available`].
 //!
-//! **Same bits as the portable loops.** Every lane computes exactly the IEEE-754 operations of
-//! the core's portable code, in the same order, none fused (AVX2 has no fused multiply–add;
-//! FMA is a separate feature this crate never enables): the core's kernel check
+//! **Same bits as the portable loops.** Every lane computes exactly the operations of the
+//! core's portable code, in the same order: in `f32` the IEEE-754 operations, none fused (AVX2
+//! has no fused multiply–add; FMA is a separate feature this crate never enables); in Q16.16
+//! the exact products and wrapping 64-bit sums, the round-half-up and saturation of `from_acc`,
+//! the table lookup of the activation, and the chain rule's rounded high words (lanes outside
+//! its fast range make the kernel decline). The core's kernel check
 //! (`neurosurf_core::kernel_check`) compares each function with its contract, and the
 //! simulator tests compare the host's batches with the Cortex-M4F's portable results bit for
 //! bit.
 //!
-//! **Safety.** The unsafe surface is one module (`lanes.rs`): the calls into functions
-//! compiled with `#[target_feature(enable = "avx2")]`, made only after run-time detection has
-//! found AVX2, and unaligned loads and stores of `[f32; 8]` lanes through references, so the
-//! lengths read and written are fixed by the types. Every slice index is checked before the
-//! unsafe code runs: a function whose slices do not fit its shape returns `false` untouched.
+//! **Safety.** The unsafe code is in the two kernel modules: the calls into functions compiled
+//! with `#[target_feature(enable = "avx2")]`, made only after run-time detection has found
+//! AVX2; unaligned loads and stores of eight-lane arrays through references, so the lengths
+//! read and written are fixed by the types; and the Q16.16 table's gathers, whose indices are
+//! clamped to the table's checked length. Every slice index is checked before the unsafe code
+//! runs: a function whose slices do not fit its shape returns `false`.
 //!
 //! Layouts are the core's: `weights` is row-major, one row of `inputs` weights per output
-//! neuron; a point set is structure-of-arrays, one `[f32; 8]` per neuron or input, lane `k`
-//! being point `k`.
+//! neuron; a point set is structure-of-arrays, one eight-lane array per neuron or input, lane
+//! `k` being point `k`.
 #![no_std]
 #![deny(unsafe_code)]
 #![warn(
@@ -65,7 +70,12 @@ pub struct Slope {
 }
 
 #[cfg(target_arch = "x86_64")]
+mod fixed_lanes;
+#[cfg(target_arch = "x86_64")]
 mod lanes;
+
+#[cfg(target_arch = "x86_64")]
+pub use fixed_lanes::{FixedLanes, FixedSlope, FixedTable, fixed_forward, fixed_transposed};
 
 #[cfg(target_arch = "x86_64")]
 pub use lanes::{available, forward, transposed, transposed_slope};

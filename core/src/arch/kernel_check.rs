@@ -41,7 +41,10 @@ pub fn check_kernels(seed: u32, cases: u32) -> Result<u32, KernelMismatch> {
         checked += transposed_slope::<9, 1>("transposed_slope 1x9", case, &mut draw)?;
     }
     if <f32 as Kernels>::LANE_KERNELS {
-        checked += f32_lanes::check(seed, cases)?;
+        checked += lane_kernels::check::<f32>(seed, cases)?;
+    }
+    if <Q16 as Kernels>::LANE_KERNELS {
+        checked += lane_kernels::check::<Q16>(seed, cases)?;
     }
     Ok(checked)
 }
@@ -213,15 +216,97 @@ impl Xorshift {
     }
 }
 
-/// The `f32` lane kernels (x86-64 with AVX2) against their contracts, bit for bit, on layer
-/// shapes of every kind the models use (a leaf's 3 inputs, N = 9, a node's 9 + 9 + 3, run-time
-/// widths, one row) and on inputs that reach every path of the activation: zeros of both
-/// signs, saturation, infinities, NaN, subnormals, and seeded random values.
-mod f32_lanes {
+/// The lane kernels (x86-64 with AVX2: `f32` and Q16.16) against their contracts, bit for bit,
+/// on layer shapes of every kind the models use (a leaf's 3 inputs, N = 9, a node's 9 + 9 + 3,
+/// run-time widths, one row) and on inputs that reach every path: for `f32` zeros of both
+/// signs, saturation, infinities, NaN and subnormals; for Q16.16 the extremes of `i32`, where
+/// sums saturate and the activation table ends; then seeded random values.
+mod lane_kernels {
     use super::{KernelMismatch, Kernels, Xorshift};
     use crate::arch::Lanes;
-    use crate::implicit::Activation;
-    use crate::scalar::Scalar;
+    use crate::scalar::{Q16, Scalar};
+
+    /// A scalar whose lane kernels are checked: its inputs and its equality.
+    pub(super) trait Sample: Scalar + Kernels {
+        /// The kernels' names in a [`KernelMismatch`]: forward, transposed, transposed_slope.
+        const NAMES: [&'static str; 3];
+        /// One input of the case (see [`check`]), of magnitude below `scale` when random.
+        fn value(case: u32, scale: f32, random: &mut Xorshift) -> Self;
+        /// Whether the kernel's result stands for the contract's.
+        fn same(a: Self, b: Self) -> bool;
+    }
+
+    impl Sample for f32 {
+        const NAMES: [&'static str; 3] = [
+            "f32 forward lanes",
+            "f32 transposed lanes",
+            "f32 transposed_slope lanes",
+        ];
+        /// Case 0 zeros of both signs, 1 and 2 huge values of either sign, 3 the smallest
+        /// subnormals, 4 infinities and NaN among ordinary values; then random values, every
+        /// other case scaled down by up to 2¹².
+        fn value(case: u32, scale: f32, random: &mut Xorshift) -> f32 {
+            let bits = random.next();
+            let unit = (bits >> 8) as f32 / (1 << 24) as f32 * 2.0 - 1.0;
+            match case {
+                0 => f32::from_bits(bits & 0x8000_0000),
+                1 => 1.0e30,
+                2 => -3.0e38,
+                3 => f32::from_bits((bits & 0x8000_0000) | 1),
+                4 => match bits & 3 {
+                    0 => f32::INFINITY,
+                    1 => f32::NEG_INFINITY,
+                    2 => f32::NAN,
+                    _ => unit * scale,
+                },
+                _ if case.is_multiple_of(2) => unit * scale / (1 << (bits % 13)) as f32,
+                _ => unit * scale,
+            }
+        }
+        /// Equal bits, or both NaN: which NaN payload an operation with two NaN operands
+        /// returns depends on the operand order the compiler chose for a commutative product,
+        /// in the portable loop as much as in a kernel.
+        fn same(a: f32, b: f32) -> bool {
+            a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+        }
+    }
+
+    impl Sample for Q16 {
+        const NAMES: [&'static str; 3] = [
+            "q16.16 forward lanes",
+            "q16.16 transposed lanes",
+            "q16.16 transposed_slope lanes",
+        ];
+        /// Case 0 zeros, 1 and 2 the largest values of either sign (sums saturate, the
+        /// activation leaves its table), 3 one step of either sign, 4 any `i32`; then random
+        /// values: every third of any magnitude, the others below `scale`, half of those
+        /// scaled down by up to 2¹².
+        fn value(case: u32, scale: f32, random: &mut Xorshift) -> Q16 {
+            let bits = random.next();
+            let unit = (bits >> 8) as f32 / (1 << 24) as f32 * 2.0 - 1.0;
+            let random_bits = (unit * scale * 65536.0) as i32;
+            Q16::from_bits(match case {
+                0 => 0,
+                1 => i32::MAX,
+                2 => i32::MIN,
+                3 => {
+                    if bits & 1 == 0 {
+                        1
+                    } else {
+                        -1
+                    }
+                }
+                4 => bits as i32,
+                // Any magnitude: sums near every power of two, the saturation bound included.
+                _ if case.is_multiple_of(3) => (random.next() as i32) >> (bits % 24),
+                _ if case.is_multiple_of(2) => random_bits >> (bits % 13),
+                _ => random_bits,
+            })
+        }
+        fn same(a: Q16, b: Q16) -> bool {
+            a == b
+        }
+    }
 
     /// Rows and inputs of the largest layer checked.
     const ROWS: usize = 16;
@@ -251,72 +336,50 @@ mod f32_lanes {
         (5, 7, 2, 4),
     ];
 
+    /// Every lane kernel of `S` on `cases` inputs (edge cases 0 to 4, then random ones drawn
+    /// from `seed`); how many kernel calls ran and matched.
     #[inline(never)]
-    pub(super) fn check(seed: u32, cases: u32) -> Result<u32, KernelMismatch> {
+    pub(super) fn check<S: Sample>(seed: u32, cases: u32) -> Result<u32, KernelMismatch> {
         let mut random = Xorshift(seed | 1);
         let mut checked = 0;
+        let [forward_name, transposed_name, slope_name] = S::NAMES;
         for case in 0..cases {
-            let mut draw = |scale: f32| value(case, scale, &mut random);
+            let mut draw = |scale: f32| S::value(case, scale, &mut random);
             for (rows, parts) in FORWARD {
-                checked += forward("f32 forward lanes", case, rows, parts, &mut draw)?;
+                checked += forward(forward_name, case, rows, parts, &mut draw)?;
             }
             for shape in TRANSPOSED {
-                checked += transposed("f32 transposed lanes", case, shape, false, &mut draw)?;
-                checked += transposed("f32 transposed_slope lanes", case, shape, true, &mut draw)?;
+                checked += transposed(transposed_name, case, shape, false, &mut draw)?;
+                checked += transposed(slope_name, case, shape, true, &mut draw)?;
             }
         }
         Ok(checked)
     }
 
-    /// One input: case 0 zeros of both signs, 1 and 2 huge values of either sign, 3 the
-    /// smallest subnormals, 4 infinities and NaN among ordinary values; then random values of
-    /// magnitude below `scale`, every other case scaled down by up to 2¹².
-    fn value(case: u32, scale: f32, random: &mut Xorshift) -> f32 {
-        let bits = random.next();
-        let unit = (bits >> 8) as f32 / (1 << 24) as f32 * 2.0 - 1.0;
-        match case {
-            0 => f32::from_bits(bits & 0x8000_0000),
-            1 => 1.0e30,
-            2 => -3.0e38,
-            3 => f32::from_bits((bits & 0x8000_0000) | 1),
-            4 => match bits & 3 {
-                0 => f32::INFINITY,
-                1 => f32::NEG_INFINITY,
-                2 => f32::NAN,
-                _ => unit * scale,
-            },
-            _ if case.is_multiple_of(2) => unit * scale / (1 << (bits % 13)) as f32,
-            _ => unit * scale,
-        }
-    }
-
-    fn lanes(draw: &mut dyn FnMut(f32) -> f32, scale: f32) -> Lanes {
+    fn lanes<S: Sample>(draw: &mut dyn FnMut(f32) -> S, scale: f32) -> Lanes<S> {
         core::array::from_fn(|_| draw(scale))
     }
 
-    /// Equal bits, or both NaN: which NaN payload an operation with two NaN operands returns
-    /// depends on the operand order the compiler chose for a commutative product, in the
-    /// portable loop as much as in a kernel.
-    fn same(a: &[Lanes], b: &[Lanes]) -> bool {
+    fn same<S: Sample>(a: &[Lanes<S>], b: &[Lanes<S>]) -> bool {
         a.iter()
             .flatten()
             .zip(b.iter().flatten())
-            .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()))
+            .all(|(&x, &y)| S::same(x, y))
     }
 
-    fn forward(
+    fn forward<S: Sample>(
         kernel: &'static str,
         case: u32,
         rows: usize,
         parts: [usize; 3],
-        draw: &mut dyn FnMut(f32) -> f32,
+        draw: &mut dyn FnMut(f32) -> S,
     ) -> Result<u32, KernelMismatch> {
         let count: usize = parts.iter().sum();
-        let weights: [f32; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
-        let biases: [f32; ROWS] = core::array::from_fn(|_| draw(4.0));
-        let x: [Lanes; INPUTS] = core::array::from_fn(|_| lanes(draw, 2.0));
-        let mut want = [[0.0; 8]; ROWS];
-        let mut got = [[0.0; 8]; ROWS];
+        let weights: [S; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
+        let biases: [S; ROWS] = core::array::from_fn(|_| draw(4.0));
+        let x: [Lanes<S>; INPUTS] = core::array::from_fn(|_| lanes(draw, 2.0));
+        let mut want = [[S::ZERO; 8]; ROWS];
+        let mut got = [[S::ZERO; 8]; ROWS];
         let (Some(w), Some(b), Some(x), Some(want), Some(got)) = (
             weights.get(..rows * count),
             biases.get(..rows),
@@ -334,12 +397,12 @@ mod f32_lanes {
                     .iter()
                     .zip(x0.iter().chain(x1).chain(x2))
                     .fold(bias.to_acc(), |acc, (&w, x)| {
-                        f32::mac(acc, w, x.get(lane).copied().unwrap_or(0.0))
+                        S::mac(acc, w, x.get(lane).copied().unwrap_or(S::ZERO))
                     });
-                *out = f32::activation_from_acc(acc);
+                *out = S::activation_from_acc(acc);
             }
         }
-        if !<f32 as Kernels>::forward_lanes_kernel(w, b, [x0, x1, x2], got) {
+        if !S::forward_lanes_kernel(w, b, [x0, x1, x2], got) {
             return Ok(0);
         }
         if same(got, want) {
@@ -349,19 +412,19 @@ mod f32_lanes {
         }
     }
 
-    fn transposed(
+    fn transposed<S: Sample>(
         kernel: &'static str,
         case: u32,
         (rows, count, first, columns): (usize, usize, usize, usize),
         slope: bool,
-        draw: &mut dyn FnMut(f32) -> f32,
+        draw: &mut dyn FnMut(f32) -> S,
     ) -> Result<u32, KernelMismatch> {
-        let weights: [f32; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
-        let g: [Lanes; ROWS] = core::array::from_fn(|_| lanes(draw, 8.0));
+        let weights: [S; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
+        let g: [Lanes<S>; ROWS] = core::array::from_fn(|_| lanes(draw, 8.0));
         // Activations lie within ±1.7159.
-        let a: [Lanes; INPUTS] = core::array::from_fn(|_| lanes(draw, 1.7159));
-        let mut want = [[0.0; 8]; INPUTS];
-        let mut got = [[0.0; 8]; INPUTS];
+        let a: [Lanes<S>; INPUTS] = core::array::from_fn(|_| lanes(draw, 1.7159));
+        let mut want = [[S::ZERO; 8]; INPUTS];
+        let mut got = [[S::ZERO; 8]; INPUTS];
         let (Some(w), Some(g), Some(a), Some(want), Some(got)) = (
             weights.get(..rows * count),
             g.get(..rows),
@@ -376,20 +439,20 @@ mod f32_lanes {
                 let acc = w
                     .chunks_exact(count)
                     .zip(g)
-                    .fold(0.0.to_acc(), |acc, (row, g)| {
-                        let w = row.get(first + c).copied().unwrap_or(0.0);
-                        f32::mac(acc, w, g.get(lane).copied().unwrap_or(0.0))
+                    .fold(S::ZERO.to_acc(), |acc, (row, g)| {
+                        let w = row.get(first + c).copied().unwrap_or(S::ZERO);
+                        S::mac(acc, w, g.get(lane).copied().unwrap_or(S::ZERO))
                     });
-                *out = f32::from_acc(acc);
+                *out = S::from_acc(acc);
                 if slope {
-                    *out = f32::times_slope(*out, a);
+                    *out = S::times_slope(*out, a);
                 }
             }
         }
         let ran = if slope {
-            <f32 as Kernels>::transposed_slope_lanes_kernel(w, count, (first, columns), g, a, got)
+            S::transposed_slope_lanes_kernel(w, count, (first, columns), g, a, got)
         } else {
-            <f32 as Kernels>::transposed_lanes_kernel(w, count, (first, columns), g, got)
+            S::transposed_lanes_kernel(w, count, (first, columns), g, got)
         };
         if !ran {
             return Ok(0);
@@ -406,16 +469,22 @@ mod f32_lanes {
 mod tests {
     use super::*;
 
-    /// On the host only the `f32` lane kernels can run (x86-64 with AVX2): every one of them
-    /// matches its contract, and nothing is checked where they cannot run.
+    /// On the host only the lane kernels can run (x86-64 with AVX2): every one of them matches
+    /// its contract, and nothing is checked where they cannot run. The Q16.16 chain rule
+    /// declines lanes outside its fast range (the edge cases), for the portable loop to take.
     #[test]
     fn the_host_kernels_match_their_contracts() {
-        let expected = if <f32 as Kernels>::LANE_KERNELS && neurosurf_avx2::available() {
-            64 * (8 + 2 * 8)
+        let runs = <f32 as Kernels>::LANE_KERNELS && neurosurf_avx2::available();
+        let expected = if runs { 64 * (8 + 2 * 8) } else { 0 };
+        assert_eq!(lane_kernels::check::<f32>(1, 64), Ok(expected));
+        let checked = lane_kernels::check::<Q16>(1, 64).expect("Q16.16 lane kernels");
+        if runs {
+            // Every forward and plain transposed call, and the chain rule on most random cases.
+            assert!(checked >= 64 * (8 + 8) + 30 * 8, "{checked} checked");
         } else {
-            0
-        };
-        assert_eq!(check_kernels(1, 64), Ok(expected));
+            assert_eq!(checked, 0);
+        }
+        assert!(check_kernels(7, 16).is_ok());
     }
 
     /// The inputs cover both signs and both ends of their range.

@@ -222,6 +222,39 @@ impl Kernels for Q16 {
     };
     /// As `LANE_GROUP`.
     const GRADIENT_LANE_GROUP: usize = Self::LANE_GROUP;
+    /// On x86-64: the AVX2 lanes of `neurosurf-avx2`, when the processor has AVX2.
+    const LANE_KERNELS: bool = target::Q16_LANE_KERNELS;
+
+    #[inline(always)]
+    fn forward_lanes_kernel(
+        weights: &[Q16],
+        biases: &[Q16],
+        inputs: [&[Lanes<Q16>]; 3],
+        out: &mut [Lanes<Q16>],
+    ) -> bool {
+        target::q16_forward_lanes(weights, biases, inputs, out)
+    }
+    #[inline(always)]
+    fn transposed_lanes_kernel(
+        weights: &[Q16],
+        count: usize,
+        columns: (usize, usize),
+        g: &[Lanes<Q16>],
+        out: &mut [Lanes<Q16>],
+    ) -> bool {
+        target::q16_transposed_lanes(weights, count, columns, g, None, out)
+    }
+    #[inline(always)]
+    fn transposed_slope_lanes_kernel(
+        weights: &[Q16],
+        count: usize,
+        columns: (usize, usize),
+        g: &[Lanes<Q16>],
+        outputs: &[Lanes<Q16>],
+        out: &mut [Lanes<Q16>],
+    ) -> bool {
+        target::q16_transposed_lanes(weights, count, columns, g, Some(outputs), out)
+    }
 
     #[inline(always)]
     fn layer_kernel<const IN: usize, const OUT: usize>(

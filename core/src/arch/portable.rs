@@ -73,3 +73,28 @@ pub(super) fn f32_transposed_slope_lanes(
 ) -> bool {
     false
 }
+
+/// No Q16.16 lane kernels.
+pub(super) const Q16_LANE_KERNELS: bool = false;
+
+#[inline(always)]
+pub(super) fn q16_forward_lanes(
+    _: &[Q16],
+    _: &[Q16],
+    _: [&[Lanes<Q16>]; 3],
+    _: &mut [Lanes<Q16>],
+) -> bool {
+    false
+}
+
+#[inline(always)]
+pub(super) fn q16_transposed_lanes(
+    _: &[Q16],
+    _: usize,
+    _: (usize, usize),
+    _: &[Lanes<Q16>],
+    _: Option<&[Lanes<Q16>]>,
+    _: &mut [Lanes<Q16>],
+) -> bool {
+    false
+}

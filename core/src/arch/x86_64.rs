@@ -1,13 +1,17 @@
-//! x86-64: the `neurosurf-avx2` kernels for eight-lane `f32` batches, which run when the
-//! processor has AVX2 (detected at run time; otherwise they decline and the portable loops
-//! run). Same bits either way: every lane computes the portable loop's unfused operations in
-//! its order. Q16.16 has no kernels here.
+//! x86-64: the `neurosurf-avx2` kernels for eight-lane `f32` and Q16.16 batches, which run
+//! when the processor has AVX2 (detected at run time; otherwise they decline and the portable
+//! loops run). Same bits either way: every lane computes the portable loop's operations in its
+//! order (`f32`: unfused IEEE operations; Q16.16: exact 64-bit sums, the same roundings,
+//! saturations and table lookups).
 
 use neurosurf_avx2 as avx2;
 
 use super::Lanes;
 use crate::scalar::activation_f32::{AMPLITUDE, POLYNOMIAL, ROUNDER, SATURATION, U_PER_H};
+use crate::scalar::Q16;
+use crate::scalar::activation_table::{FRACTION_BITS, LAST, SEGMENTS};
 use crate::scalar::float::{SLOPE_OFFSET, SLOPE_SQUARE};
+use crate::scalar::q16::{SLOPE_OFFSET as Q16_SLOPE_OFFSET, SLOPE_SQUARE as Q16_SLOPE_SQUARE};
 
 pub(super) use super::portable::{q16_layer, q16_times_slope, q16_transposed, q16_transposed_slope};
 
@@ -64,4 +68,55 @@ pub(super) fn f32_transposed_slope_lanes(
     out: &mut [Lanes],
 ) -> bool {
     avx2::transposed_slope(weights, count, columns, g, (outputs, &SLOPE), out)
+}
+
+/// The Q16.16 lane kernels are compiled in, unless a comparison build turns them off with
+/// `--cfg neurosurf_portable="q16_lanes"`.
+pub(super) const Q16_LANE_KERNELS: bool = !cfg!(neurosurf_portable = "q16_lanes");
+
+/// The core's Q16.16 activation table (`scalar/activation_table.rs`).
+const TABLE: avx2::FixedTable<'static> = avx2::FixedTable {
+    segments: &SEGMENTS,
+    last: LAST,
+    fraction_bits: FRACTION_BITS,
+};
+
+#[inline(always)]
+pub(super) fn q16_forward_lanes(
+    weights: &[Q16],
+    biases: &[Q16],
+    inputs: [&[Lanes<Q16>]; 3],
+    out: &mut [Lanes<Q16>],
+) -> bool {
+    avx2::fixed_forward(
+        bytemuck::cast_slice(weights),
+        bytemuck::cast_slice(biases),
+        inputs.map(bytemuck::cast_slice),
+        &TABLE,
+        bytemuck::cast_slice_mut(out),
+    )
+}
+
+/// The transposed layer, and with `outputs` the chain rule through their activations.
+#[inline(always)]
+pub(super) fn q16_transposed_lanes(
+    weights: &[Q16],
+    count: usize,
+    columns: (usize, usize),
+    g: &[Lanes<Q16>],
+    outputs: Option<&[Lanes<Q16>]>,
+    out: &mut [Lanes<Q16>],
+) -> bool {
+    const SLOPE: avx2::FixedSlope = avx2::FixedSlope {
+        offset: Q16_SLOPE_OFFSET,
+        square: Q16_SLOPE_SQUARE,
+    };
+    avx2::fixed_transposed(
+        bytemuck::cast_slice(weights),
+        count,
+        columns,
+        bytemuck::cast_slice(g),
+        outputs.map(|a| (bytemuck::cast_slice(a), &SLOPE)),
+        bytemuck::cast_slice_mut(out),
+    )
 }
