@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::field::Field;
-use super::region::{Aabb, bounds_of};
+use super::region::{Aabb, Region, bounds_of};
 use crate::error::{Error, Result};
 use crate::geometry::vector::{add, cross, dot, norm, scale, sub};
 use crate::io::Mesh;
@@ -153,7 +153,16 @@ impl MeshGrid {
         hi: [usize; 3],
     ) -> (Vec<f64>, u64) {
         let n = [0, 1, 2].map(|k| hi[k] + 1 - lo[k]);
-        let regions = field.regions();
+        // Only the regions that may meet these points can contain one of them.
+        let bounds = Aabb {
+            lo: self.point(lo),
+            hi: self.point(hi),
+        };
+        let regions: Vec<&Region> = field
+            .regions()
+            .iter()
+            .filter(|r| r.may_overlap(&bounds))
+            .collect();
         let mut values = vec![-1.0; n[0] * n[1] * n[2]];
         let mut inside = Vec::new();
         let mut slots = Vec::new();
@@ -279,12 +288,13 @@ fn block<F: Field + ?Sized>(field: &F, grid: &MeshGrid, index: [usize; 3]) -> (b
         for y in lo[1]..hi[1] {
             for x in lo[0]..hi[0] {
                 let corner = |c: usize| [x + (c & 1), y + (c >> 1 & 1), z + (c >> 2 & 1)];
-                let ids: [u64; 8] = std::array::from_fn(|c| grid.id(corner(c)));
-                let points: [[f64; 3]; 8] = std::array::from_fn(|c| grid.point(corner(c)));
                 let vals: [f64; 8] = std::array::from_fn(|c| values[at(corner(c))]);
                 if vals.iter().all(|&v| v > 0.0) || vals.iter().all(|&v| v <= 0.0) {
                     continue;
                 }
+                // Only cells the surface crosses need their corners' ids and positions.
+                let ids: [u64; 8] = std::array::from_fn(|c| grid.id(corner(c)));
+                let points: [[f64; 3]; 8] = std::array::from_fn(|c| grid.point(corner(c)));
                 for tet in &TETRAHEDRA {
                     march(tet, &ids, &points, &vals, &mut vertices, &mut triangles);
                 }
