@@ -171,15 +171,19 @@ impl Octree {
     ) -> Option<T> {
         let root = self.nodes.first()?;
         let span = root.bounds.ray_span(origin, direction, 0.0)?;
-        self.walk(0, span, origin, direction, search)
+        let ray = Ray {
+            origin,
+            direction,
+            inverse: direction.map(|d| 1.0 / d),
+        };
+        self.walk(0, span, &ray, search)
     }
 
     fn walk<T>(
         &self,
         index: usize,
         span: [f64; 2],
-        origin: [f64; 3],
-        direction: [f64; 3],
+        ray: &Ray,
         search: &mut dyn FnMut(&Aabb, [f64; 2]) -> Option<T>,
     ) -> Option<T> {
         let node = &self.nodes[index];
@@ -195,7 +199,10 @@ impl Octree {
         let mut count = 0;
         for &c in &node.children {
             let c = c as usize;
-            if let Some(s) = self.nodes[c].bounds.ray_span(origin, direction, 0.0)
+            if let Some(s) =
+                self.nodes[c]
+                    .bounds
+                    .ray_span_inverse(ray.origin, ray.direction, ray.inverse, 0.0)
                 && let Some(slot) = order.get_mut(count)
             {
                 *slot = (c, s);
@@ -206,8 +213,15 @@ impl Octree {
         order.sort_unstable_by(|a, b| a.1[0].total_cmp(&b.1[0]));
         order
             .iter()
-            .find_map(|&(c, s)| self.walk(c, s, origin, direction, search))
+            .find_map(|&(c, s)| self.walk(c, s, ray, search))
     }
+}
+
+/// A ray with the reciprocals of its direction, computed once for its whole walk.
+struct Ray {
+    origin: [f64; 3],
+    direction: [f64; 3],
+    inverse: [f64; 3],
 }
 
 /// Samples per axis of a voxel's probe grid ([`Octree::regions_probed`]).

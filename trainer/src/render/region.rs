@@ -46,6 +46,18 @@ impl Aabb {
     /// The ray parameters `[t_in, t_out]` (t ≥ `t_min`) where `origin + t·direction` is inside,
     /// `None` when the ray misses (slab method; exact up to rounding).
     pub fn ray_span(&self, origin: [f64; 3], direction: [f64; 3], t_min: f64) -> Option<[f64; 2]> {
+        self.ray_span_inverse(origin, direction, direction.map(|d| 1.0 / d), t_min)
+    }
+
+    /// [`Aabb::ray_span`] with each `1 / direction[k]` computed once per ray by the caller
+    /// (`inverse`): the same result, without three divisions per box.
+    pub fn ray_span_inverse(
+        &self,
+        origin: [f64; 3],
+        direction: [f64; 3],
+        inverse: [f64; 3],
+        t_min: f64,
+    ) -> Option<[f64; 2]> {
         let mut t_in = t_min;
         let mut t_out = f64::INFINITY;
         for k in 0..3 {
@@ -55,7 +67,7 @@ impl Aabb {
                 }
                 continue;
             }
-            let inv = 1.0 / direction[k];
+            let inv = inverse[k];
             let a = (self.lo[k] - origin[k]) * inv;
             let b = (self.hi[k] - origin[k]) * inv;
             t_in = t_in.max(a.min(b));
