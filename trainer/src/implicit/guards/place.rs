@@ -28,23 +28,34 @@ pub fn place_guards(
     // Φ this close to zero far from the data means a zero crossing within half a cell: a
     // piece too small for the grid to see.
     let push = FAR_PUSH * slope * grid.step;
-    let distance: Vec<f64> = (0..grid.len())
+    // Only where a guard of positive radius fits: one cell beyond the clearance. Most grid
+    // points are surely that far (NaN here: distance not computed yet); the exact distance is
+    // needed only below that, and for the points that get a guard (filled in below).
+    let far_from = clearance + grid.step;
+    let mut distance: Vec<f64> = (0..grid.len())
         .into_par_iter()
-        .map(|i| oracle.disk_distance(grid.point(i)).1)
+        .map(|i| {
+            oracle
+                .disk_distance_below(grid.point(i), far_from)
+                .unwrap_or(f64::NAN)
+        })
         .collect();
-    // Only where a guard of positive radius fits: one cell beyond the clearance.
     let far: Vec<bool> = distance
         .iter()
-        .map(|&d| d >= clearance + grid.step)
+        .map(|&d| d.is_nan() || d >= far_from)
         .collect();
     let probe = Probe::new(network);
     let mut inside = sides(oracle, &grid, &far);
     let jets = probe.grid(&grid, &far, &inside, push);
     let mut phi: Vec<f64> = jets.iter().map(|j| j.map_or(f64::NAN, |j| j.0)).collect();
-    let mut distance = distance;
     let mut wrong: Vec<usize> = (0..grid.len())
         .filter(|&i| far[i] && inside[i].is_some_and(|s| toward(s, phi[i]) < push))
         .collect();
+    for &i in &wrong {
+        if distance[i].is_nan() {
+            distance[i] = oracle.disk_distance(grid.point(i)).1;
+        }
+    }
     // Points off the grid where a steep bump of the wrong sign hides between grid points,
     // appended after them.
     let hidden = hidden_crossings(&probe, &grid, &far, &inside, &jets, push);
