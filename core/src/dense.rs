@@ -13,8 +13,11 @@
 //! `Kernels::transposed_kernel`), for the chain rule through a layer
 //! (`Kernels::times_slope_kernel`) and for both at once (`Kernels::transposed_slope_kernel`):
 //! for single points whose layer shape one of them covers, the loops below hand the work to
-//! it. Q16.16 on a Cortex-M4F has them for the N = 9 shapes (`neurosurf-m4f`); they compute
-//! the loops' exact bits, so which path ran never shows in a result.
+//! it. Q16.16 on a Cortex-M4F has them for the N = 9 shapes (`neurosurf-m4f`). For a lane
+//! group of [`LANES`] points, a scalar may bring lane kernels (`Kernels::forward_lanes_kernel`,
+//! `Kernels::transposed_lanes_kernel`, `Kernels::transposed_slope_lanes_kernel`): `f32` and
+//! Q16.16 on x86-64 with AVX2 (`neurosurf-avx2`). Every kernel computes the loops' exact bits,
+//! so which path ran never shows in a result.
 
 use crate::implicit::{DenseLayout, LANES};
 use crate::scalar::Scalar;

@@ -113,7 +113,7 @@ pub trait Kernels: Sized + Copy {
     /// A forward layer for a lane group (W row-major, one row of the concatenated `inputs` per
     /// output): output j is `activation_from_acc` of the bias accumulating `mac` over the
     /// inputs in order, lane by lane; `false`, with `out` unwritten, means "use the portable
-    /// loop". (`f32` on x86-64 with AVX2.)
+    /// loop". (`f32` and Q16.16 on x86-64 with AVX2.)
     #[inline(always)]
     fn forward_lanes_kernel(
         weights: &[Self],
@@ -138,7 +138,9 @@ pub trait Kernels: Sized + Copy {
         let _ = (weights, count, columns, g, out);
         false
     }
-    /// `transposed_lanes_kernel` followed by `times_slope` on output c with `outputs[c]`.
+    /// `transposed_lanes_kernel` followed by `times_slope` on output c with `outputs[c]`;
+    /// `false`, with `out` unspecified, means "use the portable loop" (Q16.16 declines lanes
+    /// outside the chain rule's fast range after it has written some of `out`).
     #[inline(always)]
     fn transposed_slope_lanes_kernel(
         weights: &[Self],
