@@ -64,6 +64,60 @@ fn axis_targets_power_q1_is_the_unit_sphere() {
     assert!(worst_normal < 1e-6, "{worst_normal}");
 }
 
+/// Source points with zero coordinates (the six axis points and points of the three great
+/// circles between them, where a key's sᵢ = x·wᵢ is exactly 0): the exact normal exists for
+/// every blending, normalized or not, in both scalars and in batches, and is the reference's.
+/// Power blending's F(s) = s (q = 1) has a kink there; its mean slope keeps the q = 1 sphere's
+/// normal x itself, with no zero normal on the circles.
+#[test]
+fn points_with_zero_coordinates_have_normals_for_every_blending() {
+    let mut points: Vec<Vec<f64>> = Vec::new();
+    for k in 0..3 {
+        for sign in [1.0, -1.0] {
+            let mut x = vec![0.0; 3];
+            x[k] = sign;
+            points.push(x);
+        }
+    }
+    for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+        for t in [0.3, 0.785, 2.0, 4.0, 5.5] {
+            let mut x = vec![0.0_f64; 3];
+            (x[a], x[b]) = (f64::cos(t), f64::sin(t));
+            points.push(x);
+        }
+    }
+    // (blending, q): power at its kink, and the smooth exponential and compact forms, with a
+    // compact q whose caps overlap (q = 1 makes each key's cap end at the next axis, where
+    // the surface has a genuine cusp).
+    for (blending, q) in [(0, 1.0), (1, 1.0), (1, 4.0), (2, 0.5)] {
+        for normalized in [false, true] {
+            let net = axis_network(blending, normalized, q);
+            let (f, fixed) = models(&net);
+            let what = format!("blending {blending}, q {q}, normalized {normalized}");
+            let inputs: Vec<[f32; 3]> = points.iter().map(|x| f32s(x)).collect();
+            let mut batch = vec![f.eval_normal(&inputs[0]); inputs.len()];
+            f.eval_normal_batch(&inputs, &mut batch).unwrap();
+            for (i, x) in points.iter().enumerate() {
+                let exact = net
+                    .normal(x)
+                    .unwrap_or_else(|| panic!("{what}: no reference normal at {x:?}"));
+                let n32 = f
+                    .normal(&inputs[i])
+                    .unwrap_or_else(|| panic!("{what}: no f32 normal at {x:?}"));
+                let nq = fixed
+                    .normal(&q16s::<3>(x))
+                    .unwrap_or_else(|| panic!("{what}: no Q16.16 normal at {x:?}"));
+                assert!(angle(f64s(n32), exact) < 1e-5, "{what}, f32 at {x:?}");
+                assert!(angle(f64s(nq), exact) < 1e-3, "{what}, Q16.16 at {x:?}");
+                assert_eq!(batch[i].normal, Some(n32), "{what}, batch at {x:?}");
+                if blending == 0 && !normalized {
+                    assert!(angle(exact, [x[0], x[1], x[2]]) < 1e-12, "{what} at {x:?}");
+                }
+            }
+        }
+    }
+}
+
 /// Power blending, q = 2: |y|₁ = Σ xᵢ² = 1, exactly the octahedron of the targets; q ≥ 2 stays
 /// within it (the convex hull of the targets) and gets spikier (smaller mean |y|₁) as q grows.
 #[test]

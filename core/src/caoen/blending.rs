@@ -98,9 +98,21 @@ pub(crate) fn blend<S: Scalar, const DERIVATIVE: bool>(
 ) -> (S, S) {
     let (value, slope) = match blending {
         Blending::Power => {
-            // NaN is not greater than 0 either and gives 0, like any s ≤ 0.
-            if s.partial_cmp(&S::ZERO) != Some(core::cmp::Ordering::Greater) {
-                return (S::ZERO, S::ZERO);
+            match s.partial_cmp(&S::ZERO) {
+                Some(core::cmp::Ordering::Greater) => {}
+                // F(s) = s has a kink at 0, with one-sided slopes 0 and q. Their mean keeps
+                // keys of opposite weights exact there (F(s) − F(−s) = s has slope q·1, not
+                // 0), so a source point with a zero coordinate keeps a nonzero normal.
+                Some(core::cmp::Ordering::Equal) if power == 1 => {
+                    let slope = if DERIVATIVE {
+                        clamp(q.times_power_of_two(-1), limit)
+                    } else {
+                        S::ZERO
+                    };
+                    return (S::ZERO, slope);
+                }
+                // NaN is not greater than 0 either and gives 0, like any s < 0.
+                _ => return (S::ZERO, S::ZERO),
             }
             if power == 0 {
                 return (S::ONE, S::ZERO);

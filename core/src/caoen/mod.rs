@@ -15,7 +15,9 @@
 //!
 //! sᵢ = x·wᵢ,  kᵢ = Fᵢ(sᵢ)  (or kᵢ = Fᵢ(sᵢ) / Σⱼ Fⱼ(sⱼ) when normalized),  y = Σᵢ kᵢ·tᵢ,
 //!
-//! with F(s) = s^q for s > 0 and 0 otherwise ([`Blending::Power`], q whole, eq. 4),
+//! with F(s) = s^q for s > 0 and 0 otherwise ([`Blending::Power`], q whole, eq. 4; at the
+//! kink s = 0 of q = 1, F′ is the mean of its one-sided slopes, 1/2, so keys of opposite
+//! weights sum to a smooth s and a source point with a zero coordinate keeps its normal),
 //! F(s) = e^{q(s−1)} ([`Blending::Exponential`], eq. 5) or F(s) = (1 + q(s − 1))³ where
 //! positive and 0 otherwise ([`Blending::Compact`]: local support, the paper's §5 open
 //! question). The normalized form is our reading of

@@ -40,7 +40,10 @@ impl RefNet {
     pub fn blend(&self, i: usize, s: f64) -> (f64, f64) {
         let q = self.sharpness[i];
         if self.blending == 0 {
-            if s <= 0.0 {
+            if s == 0.0 && q == 1.0 {
+                // The kink of F(s) = s: the mean of the one-sided slopes 0 and 1.
+                (0.0, 0.5)
+            } else if s <= 0.0 {
                 (0.0, 0.0)
             } else if q == 0.0 {
                 (1.0, 0.0)

@@ -110,7 +110,11 @@ impl CaoEnNetwork {
         let q = self.sharpness[i];
         match self.blending {
             0 => {
-                if s <= 0.0 {
+                if s == 0.0 && q == 1.0 {
+                    // The kink of F(s) = s: the mean of the one-sided slopes, as the core
+                    // takes it (`neurosurf_core::caoen`), so a zero coordinate keeps a normal.
+                    (0.0, 0.5)
+                } else if s <= 0.0 {
                     (0.0, 0.0)
                 } else if q == 0.0 {
                     (1.0, 0.0)

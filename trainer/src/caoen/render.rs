@@ -376,6 +376,42 @@ mod tests {
         assert!(a[0] > b[0]);
     }
 
+    /// On the coordinate great circles a key's sᵢ is exactly 0, the kink of F(s) = s: the
+    /// normal there is still x, and the picture has no dark dotted circles (each interior
+    /// pixel is within a few levels of its neighbours).
+    #[test]
+    fn unit_sphere_is_shaded_smoothly_across_the_coordinate_circles() {
+        let sphere = unit_sphere();
+        for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+            for t in [0.0, 0.4, 1.3, 2.9, 4.4] {
+                let mut x = [0.0; 3];
+                (x[a], x[b]) = (f64::cos(t), f64::sin(t));
+                let n = sphere.normal(&x).expect("a normal");
+                let off: f64 = (0..3).map(|k| (n[k] - x[k]).abs()).sum();
+                assert!(off < 1e-12, "{x:?}: {n:?}");
+            }
+        }
+        let view =
+            View::framing([0.0; 3], 1.25, [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], 160, 160).unwrap();
+        let picture = depth_buffer_image(&[(&sphere, Rgb(200, 80, 40))], &view, 2).unwrap();
+        let r = view.scale;
+        let red = |x: u32, y: u32| i32::from(picture.image.get_pixel(x, y)[0]);
+        for y in 1..159_u32 {
+            for x in 1..159_u32 {
+                let d = ((f64::from(x) + 0.5 - 80.0).powi(2) + (f64::from(y) + 0.5 - 80.0).powi(2))
+                    .sqrt();
+                if d < r - 3.0 {
+                    let step = [(x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)]
+                        .map(|(u, v)| (red(u, v) - red(x, y)).abs())
+                        .into_iter()
+                        .max()
+                        .unwrap();
+                    assert!(step <= 12, "a step of {step} at {x}, {y}");
+                }
+            }
+        }
+    }
+
     /// A small sphere in front of a large one hides it where they overlap, whatever order
     /// they are drawn in.
     #[test]
