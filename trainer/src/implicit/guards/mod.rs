@@ -44,7 +44,7 @@ use probe::Probe;
 
 /// How far a guard's support keeps from the sampled surface, and how far from it the grid is
 /// checked, as a fraction of the bounding diagonal.
-pub const GUARD_CLEARANCE: f64 = 0.02;
+pub const GUARD_CLEARANCE: f64 = 0.01;
 /// Cells along the longest side of the grid the guards are placed on and the mesh is checked
 /// on: the resolution the stray-surface and mesh-piece figures are measured at (`neurosurf
 /// mesh --resolution 96`; its default, 128, is finer).
