@@ -19,7 +19,7 @@
 //! At t = 0 and t = 1 the network equals the two models up to rounding (the test asserts
 //! surfaces within 10⁻⁹).
 
-use neurosurf_core::caoen::Blending;
+use neurosurf_core::caoen::{Blending, Domain};
 
 use super::mesh::{CaoEnMesh, map_mesh};
 use super::network::CaoEnNetwork;
@@ -49,21 +49,27 @@ impl Morph {
     pub fn new(from: &CaoEnNetwork, to: &CaoEnNetwork) -> Result<Morph> {
         from.validate()?;
         to.validate()?;
-        let shape = |n: &CaoEnNetwork| {
+        let differences: Vec<&str> = [
+            (from.domain != to.domain, "domain"),
+            (from.blending != to.blending, "blending"),
+            (from.normalized != to.normalized, "form"),
             (
-                n.domain,
-                n.blending,
-                n.normalized,
-                n.source_dimension(),
-                n.target_dimension(),
-            )
-        };
-        if shape(from) != shape(to) {
+                from.source_dimension() != to.source_dimension()
+                    || from.target_dimension() != to.target_dimension(),
+                "dimensions",
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(differs, what)| differs.then_some(what))
+        .collect();
+        if !differences.is_empty() {
             return Err(Error::invalid(format!(
-                "a morph needs networks of the same domain, blending, form and dimensions: \
-                 {:?} and {:?}",
-                shape(from),
-                shape(to)
+                "these networks differ in {}: the first is {}, the second {}. A morph needs \
+                 the same domain, blending, form and dimensions (fit both with the same \
+                 --domain, --blending and --normalized)",
+                differences.join(" and "),
+                describe(from),
+                describe(to)
             )));
         }
         let power = from.blending == Blending::Power.code();
@@ -202,6 +208,31 @@ impl Morph {
     }
 }
 
+/// A network's kind in words: "a sphere network with power blending, unnormalized, 3 → 3
+/// coordinates".
+fn describe(network: &CaoEnNetwork) -> String {
+    let domain = match Domain::from_code(network.domain) {
+        Some(Domain::Torus) => "torus",
+        _ if network.source_dimension() > 3 => "hypersphere",
+        _ => "sphere",
+    };
+    let blending = match Blending::from_code(network.blending) {
+        Some(Blending::Power) => "power",
+        Some(Blending::Compact) => "compact",
+        _ => "exponential",
+    };
+    format!(
+        "a {domain} network with {blending} blending, {}, {} → {} coordinates",
+        if network.normalized {
+            "normalized"
+        } else {
+            "unnormalized"
+        },
+        network.source_dimension(),
+        network.target_dimension()
+    )
+}
+
 /// `frames` meshes from `from` to `to` (t = k/(frames − 1)), each the source grid of
 /// `subdivisions` (an icosphere, or a torus grid of 10·2ˢ × 5·2ˢ) mapped through the
 /// in-between network.
@@ -302,8 +333,16 @@ mod tests {
         let e = Morph::new(&a, &b).unwrap_err().to_string();
         assert!(e.contains("ever empty"), "{e}");
         assert!(Morph::new(&a, &a).is_ok());
-        let c = shape(26, [1.0; 3], Blending::Power, true);
-        assert!(Morph::new(&a, &c).is_err());
+        let c = shape(26, [1.0; 3], Blending::Power, false);
+        let e = Morph::new(&a, &c).unwrap_err().to_string();
+        assert!(
+            e.contains(
+                "differ in blending and form: the first is a sphere network with \
+                        exponential blending, normalized, 3 → 3 coordinates, the second a \
+                        sphere network with power blending, unnormalized"
+            ) && !e.contains("(0,"),
+            "{e}"
+        );
         assert!(Morph::new(&a, &a).unwrap().at(1.5).is_err());
         assert!(morph_meshes(&a, &a, 1, 2).is_err());
     }
