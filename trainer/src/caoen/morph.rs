@@ -13,13 +13,17 @@
 //!   the key drops out of Σ F as well);
 //! - normalized form with compact blending: the same, for keys with q ≥ 1 (s = 0 is then off
 //!   the key's cap);
-//! - normalized form with exponential blending (or a compact key with q < 1): no key is ever
-//!   empty (F > 0 at s = 0), so models with different key counts are refused.
+//! - normalized form with compact blending and q < 1: the same, its q rising to 1 as the
+//!   weight shrinks (u = 1 − q ≤ 0 at s = 0, so F = 0);
+//! - normalized form with exponential blending: its weight scales to zero while its q rises
+//!   to [`MAX_SHARPNESS`], so it ends at F = e⁻⁶⁴ ≈ 1.6·10⁻²⁸. That is empty up to 10⁻¹⁴
+//!   wherever the strongest other key blends to e⁻³² or more, which is checked over the
+//!   domain; networks whose keys leave a region that weak are refused.
 //!
 //! At t = 0 and t = 1 the network equals the two models up to rounding (the test asserts
 //! surfaces within 10⁻⁹).
 
-use neurosurf_core::caoen::{Blending, Domain};
+use neurosurf_core::caoen::{Blending, Domain, MAX_SHARPNESS};
 
 use super::mesh::{CaoEnMesh, map_mesh};
 use super::network::CaoEnNetwork;
@@ -104,26 +108,24 @@ impl Morph {
                 .map(|j| (None, Some(j))),
         );
         pairs.sort();
-        // In the normalized form a key is emptied by scaling its weight to zero: s = 0 must
-        // give F = 0, as power blending does and compact blending does for q ≥ 1.
-        let emptiable =
-            |network: &CaoEnNetwork, i: usize| match Blending::from_code(network.blending) {
-                Some(Blending::Power) => true,
-                Some(Blending::Compact) => network.sharpness[i] >= 1.0,
-                _ => false,
-            };
-        let stuck = pairs.iter().any(|pair| match *pair {
-            (Some(i), None) => !emptiable(from, i),
-            (None, Some(j)) => !emptiable(to, j),
-            _ => false,
-        });
-        if from.normalized && stuck {
-            return Err(Error::invalid(
-                "no key point is ever empty in the normalized form with exponential blending \
-                 (nor with compact blending and q < 1), so these networks with different key \
-                 counts cannot morph (use power blending, compact blending with q ≥ 1, or the \
-                 unnormalized form)",
-            ));
+        // In the normalized form an exponential key empties only to e⁻⁶⁴, which must stay
+        // negligible beside the others (see the module documentation).
+        let unpaired = pairs
+            .iter()
+            .any(|pair| pair.0.is_none() || pair.1.is_none());
+        if from.normalized && unpaired && from.blending == Blending::Exponential.code() {
+            for (which, network) in [("first", from), ("second", to)] {
+                let weakest = weakest_cover(network);
+                if weakest < COVER_FLOOR {
+                    return Err(Error::invalid(format!(
+                        "these normalized exponential networks have different key counts, and \
+                         a key without a partner fades only to e^-64: somewhere on the domain \
+                         the {which} network's strongest key blends to {weakest:.1e}, below \
+                         e^-32, so the faded key would not be negligible there (fit both with \
+                         the same key count, or with more keys or a lower sharpness)"
+                    )));
+                }
+            }
         }
         let morph = Morph {
             from: from.clone(),
@@ -198,14 +200,63 @@ impl Morph {
         s: f64,
         by_weight: bool,
     ) -> (Vec<f64>, Vec<f64>, f64) {
-        let (w, target) = (&network.weights[i], &network.targets[i]);
+        let (w, target, q) = (
+            &network.weights[i],
+            &network.targets[i],
+            network.sharpness[i],
+        );
         let scaled = |v: &[f64]| v.iter().map(|x| s * x).collect::<Vec<f64>>();
-        if by_weight {
-            (scaled(w), target.clone(), network.sharpness[i])
-        } else {
-            (w.clone(), scaled(target), network.sharpness[i])
+        if !by_weight {
+            return (w.clone(), scaled(target), q);
         }
+        // The sharpness at which a key of zero weight gives F(0) = 0 (power, compact) or
+        // e⁻⁶⁴ (exponential); power keeps its whole q.
+        let empty = match Blending::from_code(network.blending) {
+            Some(Blending::Power) => q,
+            Some(Blending::Compact) => q.max(1.0),
+            _ => MAX_SHARPNESS,
+        };
+        (scaled(w), target.clone(), empty + s * (q - empty))
     }
+}
+
+/// How weak the strongest key of a normalized exponential network may be anywhere on its
+/// domain for a morph that empties keys: where some key blends to at least e⁻³², an emptied
+/// key's e⁻⁶⁴ is 10⁻¹⁴ of it.
+const COVER_FLOOR: f64 = 1.266_416_554_909_417e-14;
+
+/// The smallest, over points of the domain (an icosphere of 642 points, a 40 × 20 torus grid,
+/// or 4 096 quasi-random points of a hypersphere), of the largest F of `network`'s keys.
+fn weakest_cover(network: &CaoEnNetwork) -> f64 {
+    let m = network.source_dimension();
+    let points: Vec<Vec<f64>> = if network.domain == Domain::Torus.code() {
+        torus_grid(40, 20).map(|g| g.sources).unwrap_or_default()
+    } else if m == 3 {
+        icosphere(3)
+            .map(|s| s.positions.iter().map(|p| p.to_vec()).collect())
+            .unwrap_or_default()
+    } else {
+        // Additive recurrences with the square roots of the first primes, centred and
+        // normalized: spread over the hypersphere, the same on every run.
+        const ROOTS: [f64; 8] = [1.414, 1.732, 2.236, 2.646, 3.317, 3.606, 4.123, 4.359];
+        (1..=4096)
+            .map(|i| {
+                let v: Vec<f64> = (0..m)
+                    .map(|h| (f64::from(i) * ROOTS[h % ROOTS.len()]).fract() * 2.0 - 1.0)
+                    .collect();
+                let r = inner(&v, &v).sqrt().max(1e-12);
+                v.iter().map(|c| c / r).collect()
+            })
+            .collect()
+    };
+    points
+        .iter()
+        .map(|x| {
+            (0..network.key_count())
+                .map(|i| network.blend(i, inner(x, &network.weights[i])).0)
+                .fold(0.0, f64::max)
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// A network's kind in words: "a sphere network with power blending, unnormalized, 3 → 3
@@ -290,13 +341,14 @@ mod tests {
         fitted(&keys, &targets, blending, normalized, 4.0)
     }
 
-    /// Ends reproduce the two surfaces within 1e-9 for the forms that have empty keys; the
-    /// middle is a different surface between them; the normalized exponential form with
-    /// different counts is refused.
+    /// Ends reproduce the two surfaces within 1e-9 in every blending and form, with different
+    /// key counts; the middle is a different surface between them. Normalized exponential
+    /// networks with keys too sharp to empty are refused, by a sentence.
     #[test]
     fn ends_reproduce_both_models() {
         for (blending, normalized) in [
             (Blending::Exponential, false),
+            (Blending::Exponential, true),
             (Blending::Power, false),
             (Blending::Power, true),
             (Blending::Compact, false),
@@ -330,8 +382,15 @@ mod tests {
         }
         let a = shape(26, [1.0; 3], Blending::Exponential, true);
         let b = shape(40, [1.0; 3], Blending::Exponential, true);
-        let e = Morph::new(&a, &b).unwrap_err().to_string();
-        assert!(e.contains("ever empty"), "{e}");
+        assert!(Morph::new(&a, &b).is_ok());
+        // Keys of q = 64 and length 0.5 blend to at most e^-32 anywhere: refused.
+        let mut weak = b.clone();
+        weak.sharpness = vec![64.0; weak.key_count()];
+        for w in &mut weak.weights {
+            w.iter_mut().for_each(|c| *c *= 0.5);
+        }
+        let e = Morph::new(&a, &weak).unwrap_err().to_string();
+        assert!(e.contains("the second network's strongest key"), "{e}");
         assert!(Morph::new(&a, &a).is_ok());
         let c = shape(26, [1.0; 3], Blending::Power, false);
         let e = Morph::new(&a, &c).unwrap_err().to_string();
