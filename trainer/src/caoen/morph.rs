@@ -26,7 +26,7 @@
 use neurosurf_core::caoen::{Blending, Domain, MAX_SHARPNESS};
 
 use super::mesh::{CaoEnMesh, map_mesh};
-use super::network::CaoEnNetwork;
+use super::network::{CaoEnNetwork, on_domain};
 use super::{icosphere, torus_grid};
 use crate::error::{Error, Result};
 use crate::geometry::vector::inner;
@@ -225,29 +225,46 @@ impl Morph {
 /// key's e⁻⁶⁴ is 10⁻¹⁴ of it.
 const COVER_FLOOR: f64 = 1.266_416_554_909_417e-14;
 
-/// The smallest, over points of the domain (an icosphere of 642 points, a 40 × 20 torus grid,
-/// or 4 096 quasi-random points of a hypersphere), of the largest F of `network`'s keys.
+/// Source points (m coordinates each) and the triangles between them.
+type SourceMesh = (Vec<Vec<f64>>, Vec<[u32; 3]>);
+
+/// The source grid `network` is meshed on: an icosphere of `subdivisions`, or a torus grid of
+/// 10·2ˢ × 5·2ˢ; `None` for a hypersphere.
+fn domain_grid(network: &CaoEnNetwork, subdivisions: usize) -> Result<Option<SourceMesh>> {
+    Ok(if network.domain == Domain::Torus.code() {
+        let grid = torus_grid(10 << subdivisions.min(8), 5 << subdivisions.min(8))?;
+        Some((grid.sources, grid.triangles))
+    } else if network.source_dimension() == 3 {
+        let sphere = icosphere(subdivisions)?;
+        Some((
+            sphere.positions.iter().map(|p| p.to_vec()).collect(),
+            sphere.triangles,
+        ))
+    } else {
+        None
+    })
+}
+
+/// The smallest, over points of the domain (the vertices of [`domain_grid`] at 3
+/// subdivisions, or 4 096 quasi-random points of a hypersphere), of the largest F of
+/// `network`'s keys.
 fn weakest_cover(network: &CaoEnNetwork) -> f64 {
     let m = network.source_dimension();
-    let points: Vec<Vec<f64>> = if network.domain == Domain::Torus.code() {
-        torus_grid(40, 20).map(|g| g.sources).unwrap_or_default()
-    } else if m == 3 {
-        icosphere(3)
-            .map(|s| s.positions.iter().map(|p| p.to_vec()).collect())
-            .unwrap_or_default()
-    } else {
-        // Additive recurrences with the square roots of the first primes, centred and
-        // normalized: spread over the hypersphere, the same on every run.
-        const ROOTS: [f64; 8] = [1.414, 1.732, 2.236, 2.646, 3.317, 3.606, 4.123, 4.359];
-        (1..=4096)
-            .map(|i| {
-                let v: Vec<f64> = (0..m)
-                    .map(|h| (f64::from(i) * ROOTS[h % ROOTS.len()]).fract() * 2.0 - 1.0)
-                    .collect();
-                let r = inner(&v, &v).sqrt().max(1e-12);
-                v.iter().map(|c| c / r).collect()
-            })
-            .collect()
+    let points = match domain_grid(network, 3) {
+        Ok(Some((sources, _))) => sources,
+        _ => {
+            // Additive recurrences with the square roots of the first primes, put on the
+            // hypersphere: spread over it, the same on every run.
+            const ROOTS: [f64; 8] = [1.414, 1.732, 2.236, 2.646, 3.317, 3.606, 4.123, 4.359];
+            (1..=4096)
+                .map(|i| {
+                    let v: Vec<f64> = (0..m)
+                        .map(|h| (f64::from(i) * ROOTS[h % ROOTS.len()]).fract() * 2.0 - 1.0)
+                        .collect();
+                    on_domain(network.domain, &v)
+                })
+                .collect()
+        }
     };
     points
         .iter()
@@ -303,16 +320,7 @@ pub fn morph_meshes(
         )));
     }
     let morph = Morph::new(from, to)?;
-    let (sources, triangles): (Vec<Vec<f64>>, Vec<[u32; 3]>) = if from.domain == 1 {
-        let grid = torus_grid(10 << subdivisions.min(8), 5 << subdivisions.min(8))?;
-        (grid.sources, grid.triangles)
-    } else if from.source_dimension() == 3 {
-        let sphere = icosphere(subdivisions)?;
-        (
-            sphere.positions.iter().map(|p| p.to_vec()).collect(),
-            sphere.triangles,
-        )
-    } else {
+    let Some((sources, triangles)) = domain_grid(from, subdivisions)? else {
         return Err(Error::invalid(
             "morph meshes need a sphere (m = 3) or torus network",
         ));
