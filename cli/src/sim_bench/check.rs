@@ -1,17 +1,22 @@
 //! `sim-bench --check`: does a committed `docs/performance/target.md` match a fresh run?
 //!
 //! Instruction counts, MACs, stack and flash are exact on every machine, so they must match to
-//! the last digit. The cycle estimates are made from the same executed instructions, but the
-//! refill of a taken branch is seen through QEMU's translation blocks, and a run on another
-//! machine (same toolchain, same firmware sources) was once a few cycles in 10⁵ off. Cells of
-//! the estimated-cycles column may therefore differ by [`CYCLE_TOLERANCE`]; a change of the
-//! core or the firmware moves instruction counts, which stay exact.
+//! the last digit. The cycle estimates are made from the same executed instructions, but they
+//! depend on where the code lies: cargo hashes the absolute path of a path dependency outside
+//! the firmware's workspace (the core) into its symbol names (cargo issue 13586), rustc orders
+//! generic instantiations by symbol name, and so a checkout at another path places the same
+//! code at other addresses, which QEMU cuts into other translation blocks. Measured between two
+//! checkout paths: the same instruction counts, estimates up to 0.5 % apart (a few refills per
+//! evaluation). Cells of the estimated-cycles column may therefore differ by
+//! [`CYCLE_TOLERANCE`]; a change of the core or the firmware moves instruction counts, which
+//! stay exact.
 
 /// The header of the column whose cells may differ within [`CYCLE_TOLERANCE`].
 const CYCLES_HEADER: &str = "est. cycles/eval";
 
-/// The largest relative difference of two estimated-cycles cells that still match (0.1 %).
-pub(super) const CYCLE_TOLERANCE: f64 = 1e-3;
+/// The largest relative difference of two estimated-cycles cells that still match (2 %, four
+/// times the largest placement effect measured).
+pub(super) const CYCLE_TOLERANCE: f64 = 2e-2;
 
 /// `Ok` when `fresh` matches `committed`, else the first line that differs, both ways.
 pub(super) fn compare(committed: &str, fresh: &str) -> Result<(), String> {
@@ -73,9 +78,9 @@ mod tests {
 
     #[test]
     fn estimated_cycles_may_move_within_the_tolerance_only() {
-        assert_eq!(compare(TABLE, &TABLE.replace("1186.3", "1186.2")), Ok(()));
-        let error = compare(TABLE, &TABLE.replace("1186.3", "1190.0")).unwrap_err();
-        assert!(error.contains("1190.0"), "{error}");
+        assert_eq!(compare(TABLE, &TABLE.replace("1186.3", "1192.2")), Ok(()));
+        let error = compare(TABLE, &TABLE.replace("1186.3", "1215.0")).unwrap_err();
+        assert!(error.contains("1215.0"), "{error}");
     }
 
     #[test]
