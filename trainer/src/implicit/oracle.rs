@@ -159,11 +159,23 @@ impl Oracle {
     }
 
     /// [`Oracle::disk_distance`]`(q).1` when it may be below `bound`, `None` when it is surely
-    /// not: the distance to the nearest point less the largest disk radius bounds every disk's
-    /// distance from below (a disk lies within its radius of its point), and one nearest-point
-    /// query costs far less than the disks' eight. The bound keeps a relative margin of 10⁻⁹
-    /// over rounding, so `None` means the exact distance is at least `bound`.
+    /// not (see [`Oracle::ball_clears`], here with a ball of radius 0): one nearest-point query
+    /// costs far less than the disks' eight.
     pub fn disk_distance_below(&self, q: [f64; 3], bound: f64) -> Option<f64> {
+        if self.ball_clears(q, 0.0, bound) {
+            None
+        } else {
+            Some(self.disk_distance(q).1)
+        }
+    }
+
+    /// Whether every point within `reach` of `q` is surely at least `bound` from every disk:
+    /// the distance to the nearest point less `reach` bounds the nearest-point distance in the
+    /// ball from below (it is 1-Lipschitz), and less the largest disk radius it bounds every
+    /// disk's distance (a disk lies within its radius of its point). The bound keeps a
+    /// relative margin of 10⁻⁹ over rounding, so `true` means the exact distances are at least
+    /// `bound`.
+    pub fn ball_clears(&self, q: [f64; 3], reach: f64, bound: f64) -> bool {
         let nearest = self
             .tree
             .query(&q)
@@ -171,11 +183,7 @@ impl Oracle {
             .execute()
             .distance
             .sqrt();
-        if nearest - self.max_radius >= bound * (1.0 + 1e-9) + f64::MIN_POSITIVE {
-            None
-        } else {
-            Some(self.disk_distance(q).1)
-        }
+        nearest - reach - self.max_radius >= bound * (1.0 + 1e-9) + f64::MIN_POSITIVE
     }
 
     /// The control points.

@@ -86,3 +86,52 @@ impl Grid {
         [0, 1, 2].map(|k| self.lo[k] + self.spacing[k] * index[k] as f64)
     }
 }
+
+/// Grid points per side of the blocks [`Grid::disk_distances_below`] rules out at once.
+const BLOCK: usize = 4;
+
+impl Grid {
+    /// [`Oracle::disk_distance_below`]`(point, bound)` at every grid point, NaN where it is
+    /// `None`: the same values, but a block of [`BLOCK`]³ points that one nearest-point query
+    /// at its centre clears ([`Oracle::ball_clears`] over the block's half diagonal) is NaN
+    /// without a query per point. Most of the grid is far from the data, so most blocks go
+    /// in one query.
+    pub(super) fn disk_distances_below(&self, oracle: &Oracle, bound: f64) -> Vec<f64> {
+        let [nx, ny, nz] = self.counts;
+        let mut distances = vec![f64::NAN; self.len()];
+        // Slabs of BLOCK layers along z are contiguous in the grid's order.
+        distances
+            .par_chunks_mut(nx * ny * BLOCK)
+            .enumerate()
+            .for_each(|(slab, out)| {
+                let z0 = slab * BLOCK;
+                let z1 = (z0 + BLOCK).min(nz);
+                for y0 in (0..ny).step_by(BLOCK) {
+                    let y1 = (y0 + BLOCK).min(ny);
+                    for x0 in (0..nx).step_by(BLOCK) {
+                        let x1 = (x0 + BLOCK).min(nx);
+                        let (lo, hi) = ([x0, y0, z0], [x1 - 1, y1 - 1, z1 - 1]);
+                        let corner = |index: [usize; 3]| {
+                            [0, 1, 2].map(|k| self.lo[k] + self.spacing[k] * index[k] as f64)
+                        };
+                        let (a, b) = (corner(lo), corner(hi));
+                        let centre = [0, 1, 2].map(|k| 0.5 * (a[k] + b[k]));
+                        if oracle.ball_clears(centre, 0.5 * distance(a, b), bound) {
+                            continue;
+                        }
+                        for z in z0..z1 {
+                            for y in y0..y1 {
+                                for x in x0..x1 {
+                                    let i = x + nx * (y + ny * z);
+                                    out[i - z0 * nx * ny] = oracle
+                                        .disk_distance_below(self.point(i), bound)
+                                        .unwrap_or(f64::NAN);
+                                }
+                            }
+                        }
+                    }
+                }
+            });
+        distances
+    }
+}

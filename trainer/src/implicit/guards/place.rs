@@ -32,14 +32,7 @@ pub fn place_guards(
     // points are surely that far (NaN here: distance not computed yet); the exact distance is
     // needed only below that, and for the points that get a guard (filled in below).
     let far_from = clearance + grid.step;
-    let mut distance: Vec<f64> = (0..grid.len())
-        .into_par_iter()
-        .map(|i| {
-            oracle
-                .disk_distance_below(grid.point(i), far_from)
-                .unwrap_or(f64::NAN)
-        })
-        .collect();
+    let mut distance = grid.disk_distances_below(oracle, far_from);
     let far: Vec<bool> = distance
         .iter()
         .map(|&d| d.is_nan() || d >= far_from)

@@ -281,3 +281,32 @@ fn a_cavity_no_point_explains_is_filled() {
     assert_eq!(pieces(&fixed), 1);
     assert!(fixed.eval(carve.center).0 > 0.0, "filled");
 }
+
+/// Ruling out whole blocks gives the point-by-point distances exactly, with most blocks
+/// cleared (a torus's grid is mostly far from it), at bounds from tight to loose and on a
+/// grid whose counts are not multiples of the block.
+#[test]
+fn block_distances_are_the_pointwise_ones() {
+    let points = torus_points(300, 5);
+    let oracle = Oracle::new(&points.positions, &points.normals).expect("oracle");
+    let domain = Aabb {
+        lo: [-1.7, -1.6, -0.75],
+        hi: [1.65, 1.7, 0.7],
+    };
+    let grid = Grid::over(&domain).expect("grid");
+    assert!(grid.counts.iter().any(|c| c % 4 != 0), "{:?}", grid.counts);
+    for (bound, far_share) in [(0.02, 0.3), (0.4, 0.05)] {
+        let blocks = grid.disk_distances_below(&oracle, bound);
+        let far = blocks.iter().filter(|d| d.is_nan()).count();
+        // Every 7th point: the kd-tree queries of all 600 000 are slow in a debug build.
+        for (i, &d) in blocks.iter().enumerate().step_by(7) {
+            let pointwise = oracle.disk_distance_below(grid.point(i), bound);
+            assert_eq!(d.to_bits(), pointwise.unwrap_or(f64::NAN).to_bits(), "{i}");
+        }
+        assert!(
+            far as f64 > far_share * blocks.len() as f64,
+            "{far} of {}",
+            blocks.len()
+        );
+    }
+}
