@@ -10,7 +10,6 @@ use nalgebra::{Matrix3, Vector3};
 use neurosurf_core::implicit::{DEFAULT_PARAMETERS, GUARD_LEN, MAX_GUARDS, ModuleKind};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::capacity::check_capacity;
@@ -296,103 +295,22 @@ pub(crate) fn train_with(
         },
         ..options.clone()
     };
-    // Leaves, in parallel.
-    let leaves: Vec<usize> = (0..network.module_count())
-        .filter(|&i| network.kinds()[i] == ModuleKind::Leaf)
-        .collect();
-    let leaf_results: Vec<Result<TrainedLeaf>> = leaves
-        .par_iter()
-        .map(|&i| {
-            let feature = network.leaf_features()[i].unwrap_or(0);
-            let indices = module_points(&[feature], &reach);
-            let positions: Vec<[f64; 3]> = indices.iter().map(|&p| model.positions[p]).collect();
-            let what = format!("feature {feature}");
-            let norm =
-                Normalization::fit(&positions, options.box_size, options.box_scaling, &what)?;
-            let layout = network.trained_layout(i);
-            let mut leaf_net = network.clone();
-            leaf_net.set_normalization(i, &norm);
-            let regions = setting.regions(&[norm], false);
-            let data = setting.module_data(&leaf_net, i, &[feature], &indices, &regions, i);
-            let (params, report) = match &previous {
-                Some(previous) => {
-                    let old = previous.normalization(i).unwrap_or(norm);
-                    let initial =
-                        reexpress_first_layer(&layout, previous.trained_params(i), &old, &norm);
-                    fit_module(
-                        i,
-                        &data,
-                        initial,
-                        &leaf_options,
-                        Some(feature),
-                        true,
-                        progress,
-                    )
-                }
-                None => fit_cold(i, &data, &layout, &leaf_options, Some(feature), progress),
-            };
-            Ok((i, norm, params, report))
-        })
-        .collect();
+    let schedule = Schedule {
+        network: &network,
+        model: &model,
+        setting: &setting,
+        reach: &reach,
+        options,
+        leaf_options: &leaf_options,
+        previous: previous.as_ref(),
+        progress,
+    };
+    let root = network.module_count() - 1;
     let mut reports: Vec<Option<ModuleReport>> = vec![None; network.module_count()];
-    for result in leaf_results {
-        let (i, norm, params, report) = result?;
+    for (i, norm, params, report) in schedule.subtree(root)? {
         network.set_normalization(i, &norm);
         network.trained_params_mut(i).copy_from_slice(&params);
         reports[i] = Some(report);
-    }
-
-    // Nodes, level by level: every node whose children are trained, in parallel.
-    loop {
-        let ready: Vec<usize> = (0..network.module_count())
-            .filter(|&i| reports[i].is_none())
-            .filter(|&i| {
-                network
-                    .children(i)
-                    .is_some_and(|(l, r)| reports[l].is_some() && reports[r].is_some())
-            })
-            .collect();
-        if ready.is_empty() {
-            break;
-        }
-        let results: Vec<(usize, Normalization, Vec<f64>, ModuleReport)> = ready
-            .par_iter()
-            .map(|&i| {
-                let layout = network.trained_layout(i);
-                let subtree = network.subtree_leaves(i);
-                let features: Vec<u32> = subtree
-                    .iter()
-                    .map(|&leaf| network.leaf_features()[leaf].unwrap_or(0))
-                    .collect();
-                let boxes: Vec<Normalization> = subtree
-                    .iter()
-                    .filter_map(|&leaf| network.normalization(leaf))
-                    .collect();
-                let regions = setting.regions(&boxes, true);
-                let indices = module_points(&features, &reach);
-                let positions: Vec<[f64; 3]> =
-                    indices.iter().map(|&p| model.positions[p]).collect();
-                let norm =
-                    Normalization::fit(&positions, options.box_size, options.box_scaling, "node")
-                        .unwrap_or(boxes[0]);
-                let mut node_net = network.clone();
-                node_net.set_normalization(i, &norm);
-                let data = setting.module_data(&node_net, i, &features, &indices, &regions, i);
-                let (params, report) = match &previous {
-                    Some(previous) => {
-                        let initial = previous.trained_params(i).to_vec();
-                        fit_module(i, &data, initial, options, None, true, progress)
-                    }
-                    None => fit_cold(i, &data, &layout, options, None, progress),
-                };
-                (i, norm, params, report)
-            })
-            .collect();
-        for (i, norm, params, report) in results {
-            network.set_normalization(i, &norm);
-            network.trained_params_mut(i).copy_from_slice(&params);
-            reports[i] = Some(report);
-        }
     }
     let network = if guarded {
         guard(
@@ -421,6 +339,119 @@ pub(crate) fn train_with(
         frame,
     };
     Ok(Trained { network, summary })
+}
+
+/// What training every module of a tree shares: the untrained network, the points in the
+/// model frame and how each module sees them.
+struct Schedule<'a> {
+    network: &'a ImplicitNetwork,
+    model: &'a PointSet,
+    setting: &'a Setting<'a>,
+    /// The points each feature's leaf learns (its own, and a band of its neighbours').
+    reach: &'a [Vec<usize>],
+    options: &'a ImplicitOptions,
+    leaf_options: &'a ImplicitOptions,
+    /// The warm start's network, in the model frame.
+    previous: Option<&'a ImplicitNetwork>,
+    progress: &'a (dyn Fn(Progress) + Sync),
+}
+
+impl Schedule<'_> {
+    /// Trains module `i` and every module below it. A node's two subtrees train at once
+    /// (`rayon::join`), and a node starts as soon as its own children are done, not when its
+    /// whole level is. Every module trains on what only its subtree decides, so the order
+    /// does not change the result.
+    fn subtree(&self, i: usize) -> Result<Vec<TrainedLeaf>> {
+        let Some((left, right)) = self.network.children(i) else {
+            return self.leaf(i).map(|leaf| vec![leaf]);
+        };
+        let (left, right) = rayon::join(|| self.subtree(left), || self.subtree(right));
+        let mut done = left?;
+        done.extend(right?);
+        let mut network = self.network.clone();
+        for (j, norm, params, _) in &done {
+            network.set_normalization(*j, norm);
+            network.trained_params_mut(*j).copy_from_slice(params);
+        }
+        done.push(self.node(&network, i));
+        Ok(done)
+    }
+
+    /// Trains leaf `i` on its feature's points (and the band it borrows).
+    fn leaf(&self, i: usize) -> Result<TrainedLeaf> {
+        let (network, options) = (self.network, self.options);
+        let feature = network.leaf_features()[i].unwrap_or(0);
+        let indices = module_points(&[feature], self.reach);
+        let positions: Vec<[f64; 3]> = indices.iter().map(|&p| self.model.positions[p]).collect();
+        let what = format!("feature {feature}");
+        let norm = Normalization::fit(&positions, options.box_size, options.box_scaling, &what)?;
+        let layout = network.trained_layout(i);
+        let mut leaf_net = network.clone();
+        leaf_net.set_normalization(i, &norm);
+        let regions = self.setting.regions(&[norm], false);
+        let data = self
+            .setting
+            .module_data(&leaf_net, i, &[feature], &indices, &regions, i);
+        let (params, report) = match self.previous {
+            Some(previous) => {
+                let old = previous.normalization(i).unwrap_or(norm);
+                let initial =
+                    reexpress_first_layer(&layout, previous.trained_params(i), &old, &norm);
+                fit_module(
+                    i,
+                    &data,
+                    initial,
+                    self.leaf_options,
+                    Some(feature),
+                    true,
+                    self.progress,
+                )
+            }
+            None => fit_cold(
+                i,
+                &data,
+                &layout,
+                self.leaf_options,
+                Some(feature),
+                self.progress,
+            ),
+        };
+        Ok((i, norm, params, report))
+    }
+
+    /// Trains node `i` of `network`, whose modules below it are trained, on the union of its
+    /// leaves' points with its children frozen.
+    fn node(&self, network: &ImplicitNetwork, i: usize) -> TrainedLeaf {
+        let options = self.options;
+        let layout = network.trained_layout(i);
+        let subtree = network.subtree_leaves(i);
+        let features: Vec<u32> = subtree
+            .iter()
+            .map(|&leaf| network.leaf_features()[leaf].unwrap_or(0))
+            .collect();
+        let boxes: Vec<Normalization> = subtree
+            .iter()
+            .filter_map(|&leaf| network.normalization(leaf))
+            .collect();
+        let regions = self.setting.regions(&boxes, true);
+        let indices = module_points(&features, self.reach);
+        let positions: Vec<[f64; 3]> = indices.iter().map(|&p| self.model.positions[p]).collect();
+        let norm = Normalization::fit(&positions, options.box_size, options.box_scaling, "node")
+            .unwrap_or(boxes[0]);
+        let mut node_net = network.clone();
+        node_net.set_normalization(i, &norm);
+        let data = self
+            .setting
+            .module_data(&node_net, i, &features, &indices, &regions, i);
+        let (params, report) = match self.previous {
+            Some(previous) => {
+                let initial = previous.trained_params(i).to_vec();
+                fit_module(i, &data, initial, options, None, true, self.progress)
+            }
+            None => fit_cold(i, &data, &layout, options, None, self.progress),
+        };
+        (i, norm, params, report)
+    }
 }
 
 /// `network` (in the model frame) in the data's units with sign guards: first where the grid
