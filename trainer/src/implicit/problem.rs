@@ -132,8 +132,10 @@ impl ModuleData {
     }
 }
 
-/// Rows beyond which [`ModuleProblem`] sums its normal equations on two threads.
-pub const PARALLEL_ROWS: usize = 4096;
+/// Rows beyond which [`ModuleProblem`] computes its residuals and sums its normal equations on
+/// two threads: a node over a few hundred control points has more (four rows per point, plus
+/// its off-surface and sign points).
+pub const PARALLEL_ROWS: usize = 2048;
 
 /// A contiguous share of a problem's points and their residuals.
 struct Part<'r> {
@@ -208,26 +210,69 @@ impl<'a> ModuleProblem<'a> {
     }
 
     #[inline(always)]
-    fn residuals_impl<const FMA: bool>(&self, params: &[f64], residuals: &mut [f64]) {
-        let (surface, values) = residuals.split_at_mut(4 * self.data.len());
+    fn residuals_impl<const FMA: bool>(&self, params: &[f64], part: Part<'_>) {
         let mut lanes = InputLanes::ZERO;
         let mut tape = TapeLanes::ZERO;
-        for (group, out) in surface.chunks_mut(4 * LANES).enumerate() {
-            let first = group * LANES;
+        for (group, out) in part.surface.chunks_mut(4 * LANES).enumerate() {
+            let first = part.surface_first + group * LANES;
             self.gather(first, out.len() / 4, &mut lanes);
             forward_lanes::<FMA>(&self.layout, params, &lanes, &mut tape);
             self.lane_residuals(first, &tape, out);
         }
         let mut inputs = [[0.0; LANES]; MAX_INPUTS];
         let mut tape = ValueTape::ZERO;
-        for (group, out) in values.chunks_mut(LANES).enumerate() {
-            let first = group * LANES;
+        for (group, out) in part.values.chunks_mut(LANES).enumerate() {
+            let first = part.value_first + group * LANES;
             self.gather_values(first, out.len(), &mut inputs);
             forward_value_lanes::<FMA>(&self.layout, params, &inputs, &mut tape);
             for (l, e) in out.iter_mut().enumerate() {
                 *e = self.value_residual(first + l, tape.value[l]).0;
             }
         }
+    }
+
+    /// One thread's share of the residuals.
+    fn residuals_part(&self, params: &[f64], part: Part<'_>) {
+        #[cfg(target_arch = "x86_64")]
+        if self.fma {
+            // SAFETY: `fma` comes from `cpu_has_fma`: this CPU has AVX2 and FMA.
+            unsafe { self.residuals_fma(params, part) };
+            return;
+        }
+        self.residuals_impl::<false>(params, part);
+    }
+
+    /// `residuals` split into its control points' rows and its value points' rows, whole
+    /// when it has at most [`PARALLEL_ROWS`] rows, else in two halves on lane-group
+    /// boundaries (one per thread).
+    fn parts<'r>(&self, residuals: &'r mut [f64]) -> (Part<'r>, Option<Part<'r>>) {
+        let (surface, values) = residuals.split_at_mut(4 * self.data.len());
+        if surface.len() + values.len() <= PARALLEL_ROWS {
+            let whole = Part {
+                surface_first: 0,
+                surface,
+                value_first: 0,
+                values,
+            };
+            return (whole, None);
+        }
+        let surface_half = self.data.len().div_ceil(2 * LANES) * LANES;
+        let value_half = self.data.value_len().div_ceil(2 * LANES) * LANES;
+        let (surface_a, surface_b) = surface.split_at_mut(4 * surface_half);
+        let (values_a, values_b) = values.split_at_mut(value_half);
+        let first = Part {
+            surface_first: 0,
+            surface: surface_a,
+            value_first: 0,
+            values: values_a,
+        };
+        let second = Part {
+            surface_first: surface_half,
+            surface: surface_b,
+            value_first: value_half,
+            values: values_b,
+        };
+        (first, Some(second))
     }
 
     /// Loads value points `first..first + count` into lanes (the last repeated in spare lanes).
@@ -373,8 +418,8 @@ impl<'a> ModuleProblem<'a> {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn residuals_fma(&self, params: &[f64], residuals: &mut [f64]) {
-        self.residuals_impl::<true>(params, residuals);
+    fn residuals_fma(&self, params: &[f64], part: Part<'_>) {
+        self.residuals_impl::<true>(params, part);
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -398,14 +443,18 @@ impl LeastSquares for ModuleProblem<'_> {
         4 * self.data.len()
     }
 
+    /// Problems of more than [`PARALLEL_ROWS`] rows are computed in two halves on two
+    /// threads (every residual is computed alone, so the split changes no bit).
     fn residuals(&self, params: &[f64], residuals: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        if self.fma {
-            // SAFETY: `fma` comes from `cpu_has_fma`: this CPU has AVX2 and FMA.
-            unsafe { self.residuals_fma(params, residuals) };
-            return;
+        match self.parts(residuals) {
+            (whole, None) => self.residuals_part(params, whole),
+            (first, Some(second)) => {
+                rayon::join(
+                    || self.residuals_part(params, first),
+                    || self.residuals_part(params, second),
+                );
+            }
         }
-        self.residuals_impl::<false>(params, residuals);
     }
 
     /// The rows [`Self::normal_equations`] uses (portable arithmetic).
@@ -447,42 +496,21 @@ impl LeastSquares for ModuleProblem<'_> {
         residuals: &mut [f64],
         normal: &mut NormalEquations,
     ) {
-        let (surface, values) = residuals.split_at_mut(4 * self.data.len());
-        if surface.len() + values.len() <= PARALLEL_ROWS {
-            let part = Part {
-                surface_first: 0,
-                surface,
-                value_first: 0,
-                values,
-            };
-            self.normal_equations_part(params, part, normal);
-            return;
-        }
-        // Halves on lane-group boundaries.
-        let surface_half = self.data.len().div_ceil(2 * LANES) * LANES;
-        let value_half = self.data.value_len().div_ceil(2 * LANES) * LANES;
-        let (surface_a, surface_b) = surface.split_at_mut(4 * surface_half);
-        let (values_a, values_b) = values.split_at_mut(value_half);
+        let (first, second) = match self.parts(residuals) {
+            (whole, None) => {
+                self.normal_equations_part(params, whole, normal);
+                return;
+            }
+            (first, Some(second)) => (first, second),
+        };
         let mut other = normal.empty_like();
         rayon::join(
             || {
-                let part = Part {
-                    surface_first: 0,
-                    surface: surface_a,
-                    value_first: 0,
-                    values: values_a,
-                };
-                self.normal_equations_part(params, part, normal);
+                self.normal_equations_part(params, first, normal);
                 normal.finish();
             },
             || {
-                let part = Part {
-                    surface_first: surface_half,
-                    surface: surface_b,
-                    value_first: value_half,
-                    values: values_b,
-                };
-                self.normal_equations_part(params, part, &mut other);
+                self.normal_equations_part(params, second, &mut other);
                 other.finish();
             },
         );
