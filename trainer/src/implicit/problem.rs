@@ -443,7 +443,7 @@ impl LeastSquares for ModuleProblem<'_> {
         4 * self.data.len()
     }
 
-    /// Problems of more than [`PARALLEL_ROWS`] rows are computed in two halves on two
+    /// Problems of more than `PARALLEL_ROWS` rows are computed in two halves on two
     /// threads (every residual is computed alone, so the split changes no bit).
     fn residuals(&self, params: &[f64], residuals: &mut [f64]) {
         match self.parts(residuals) {
