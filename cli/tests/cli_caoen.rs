@@ -75,6 +75,19 @@ fn a_fitted_sphere_network_passes_through_its_targets_and_runs_on_the_target() {
     ]));
     assert_eq!(report["key_points"], 26);
     assert!(report["rms_at_keys"].as_f64().unwrap() < 1e-6, "{report}");
+    // By default: the rational form, q chosen by leave-one-out, and the surface between the
+    // keys reported on dense samples.
+    assert_eq!(report["normalized"], true, "{report}");
+    assert_eq!(report["sharpness_from"], "leave-one-out", "{report}");
+    let q = report["sharpness"].as_f64().unwrap();
+    assert!((1.0..=64.0).contains(&q) && q.fract() == 0.0, "{report}");
+    assert!(report["leave_one_out"].as_f64().unwrap() > 0.0, "{report}");
+    let between = &report["between_keys"];
+    assert!(
+        between["farthest_from_targets"].as_f64().unwrap()
+            < between["target_gap"].as_f64().unwrap(),
+        "{report}"
+    );
     let obj = fs::read_to_string(&mesh).unwrap();
     assert_eq!(obj.lines().filter(|l| l.starts_with("v ")).count(), 2562);
 
@@ -184,7 +197,12 @@ fn shading_folds_into_the_network_and_meshes_carry_texture_coordinates() {
     let dir = tempfile::tempdir().unwrap();
     let targets = targets_file(dir.path());
     let model = dir.path().join("bean.nsb");
-    ok(&["caoen", "fit", s(&targets), "--out", s(&model)]);
+    let paper = ["--plain", "--sharpness", "4"];
+    ok(&[
+        &["caoen", "fit", s(&targets), "--out", s(&model)],
+        &paper[..],
+    ]
+    .concat());
     let lit = dir.path().join("lit.nsb");
     let report = json(&ok(&[
         "caoen",

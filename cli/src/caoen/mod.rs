@@ -18,7 +18,8 @@ use neurosurf_core::caoen::{Blending, Domain};
 use serde::Serialize;
 
 use neurosurf_trainer::caoen::{
-    self, CaoEnNetwork, fit_shape, fit_sharpness, from_key_points, rms_error,
+    self, BetweenKeys, CaoEnNetwork, between_keys, fit_auto, fit_shape, fit_sharpness,
+    from_key_points, leave_one_out, rms_error,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_rows, write_mesh, write_textured_obj};
@@ -120,12 +121,18 @@ pub struct FitArgs {
     /// The blending function.
     #[arg(long, value_enum, default_value_t = BlendingArg::Power)]
     blending: BlendingArg,
-    /// Use the rational (normalized) form: the surface stays in the targets' convex hull.
-    #[arg(long)]
+    /// Use the rational (normalized) form: y is a weighted mean of V. The default when V is
+    /// fitted: it follows star-shaped targets more closely between the keys.
+    #[arg(long, conflicts_with = "plain")]
     normalized: bool,
-    /// q of every key point (whole for power blending).
-    #[arg(long, default_value_t = 4.0)]
-    sharpness: f64,
+    /// Use the plain (unnormalized) form, y = Σ F·v. The default with --no-fit (the
+    /// paper's construction).
+    #[arg(long)]
+    plain: bool,
+    /// q of every key point (whole for power blending). Default: when V is fitted, the q of
+    /// 1 … 64 that predicts left-out targets best (leave-one-out); with --no-fit, 4.
+    #[arg(long)]
+    sharpness: Option<f64>,
     /// Keep V = the targets, as the paper does (the surface passes near them, not through).
     #[arg(long)]
     no_fit: bool,
@@ -156,8 +163,19 @@ struct FitReport<'a> {
     source_dimension: usize,
     target_dimension: usize,
     fitted: bool,
+    /// The rational (normalized) form.
+    normalized: bool,
+    /// The q of every key point, `None` when --fit-sharpness chose one per key.
+    sharpness: Option<f64>,
+    /// How q was set: `given`, `leave-one-out` or `per key`.
+    sharpness_from: &'static str,
     /// RMS distance from y(wᵢ) to tᵢ over the key points.
     rms_at_keys: f64,
+    /// RMS distance from each target to the surface fitted through the others, at its key
+    /// point (`None` for the paper's construction or a singular fit).
+    leave_one_out: Option<f64>,
+    /// The surface between the keys, on dense samples of the domain.
+    between_keys: BetweenKeys,
     mesh: Option<&'a Path>,
 }
 
@@ -215,21 +233,34 @@ fn fit(args: &FitArgs) -> Result<()> {
     let (keys, targets) = keys_and_targets(&rows, m)
         .with_context(|| format!("cannot read key points from {}", args.points.display()))?;
     neurosurf_trainer::caoen::check_key_count(keys.len(), &args.points.display().to_string())?;
+    let normalized = args.normalized || (!args.plain && !args.no_fit);
     let built = from_key_points(
         domain,
         blending,
-        args.normalized,
+        normalized,
         &keys,
         &targets,
-        args.sharpness,
+        args.sharpness.unwrap_or(PAPER_SHARPNESS),
     )?;
     // The fit takes the keys as they sit on the domain (the network normalizes them).
     let on_domain = built.weights.clone();
-    let network: CaoEnNetwork = match (args.no_fit, args.fit_sharpness.is_empty()) {
-        (true, _) => built,
-        (false, true) => fit_shape(&built, &on_domain, &targets)?,
-        (false, false) => fit_sharpness(&built, &on_domain, &targets, &args.fit_sharpness)?.0,
-    };
+    let (network, sharpness_from): (CaoEnNetwork, _) =
+        match (args.no_fit, args.sharpness, args.fit_sharpness.is_empty()) {
+            (true, _, _) => (built, "given"),
+            (false, Some(_), true) => (fit_shape(&built, &on_domain, &targets)?, "given"),
+            (false, None, true) => (fit_auto(&built, &targets)?.0, "leave-one-out"),
+            (false, given, false) => {
+                let start = match given {
+                    Some(_) => built,
+                    None => fit_auto(&built, &targets)?.0,
+                };
+                let candidates = &args.fit_sharpness;
+                (
+                    fit_sharpness(&start, &on_domain, &targets, candidates)?.0,
+                    "per key",
+                )
+            }
+        };
     let blob = caoen::to_blob(&network, scalar, b"neurosurf caoen fit")?;
     if args.mesh.is_some() && !matches!(network.source_dimension(), 3 | 4) {
         bail!("--mesh maps sphere (m = 3) and torus (m = 4) networks, this one has m = {m}");
@@ -246,26 +277,64 @@ fn fit(args: &FitArgs) -> Result<()> {
         source_dimension: network.source_dimension(),
         target_dimension: network.target_dimension(),
         fitted: !args.no_fit,
+        normalized,
+        sharpness: (sharpness_from != "per key").then(|| network.sharpness[0]),
+        sharpness_from,
         rms_at_keys: rms_error(&network, &on_domain, &targets),
+        leave_one_out: (!args.no_fit)
+            .then(|| leave_one_out(&network, &targets))
+            .flatten(),
+        between_keys: between_keys(&network, &targets),
         mesh: args.mesh.as_deref(),
     };
     if args.json {
         return output::json(&report);
     }
-    println!(
-        "{} key points, {}-D → {}-D, {}: RMS distance to the targets at the key points {:.3e}",
-        report.key_points,
-        report.source_dimension,
-        report.target_dimension,
-        if report.fitted {
-            "V fitted through the targets"
-        } else {
-            "V = the targets (the paper's construction)"
-        },
-        report.rms_at_keys
-    );
+    print_fit_report(&report);
     wrote_blob(&args.out, blob.len(), scalar, args.mesh.as_deref());
     Ok(())
+}
+
+/// q of every key point in the paper's construction (--no-fit) when none is given.
+const PAPER_SHARPNESS: f64 = 4.0;
+
+fn print_fit_report(report: &FitReport<'_>) {
+    let form = if report.normalized {
+        "rational form"
+    } else {
+        "plain form"
+    };
+    let q = match (report.sharpness, report.sharpness_from) {
+        (Some(q), "leave-one-out") => format!("q = {q} (chosen by leave-one-out)"),
+        (Some(q), _) => format!("q = {q}"),
+        (None, _) => "q per key point".to_string(),
+    };
+    let v = if report.fitted {
+        "V fitted through the targets"
+    } else {
+        "V = the targets (the paper's construction)"
+    };
+    println!(
+        "{} key points, {}-D → {}-D, {form}, {q}, {v}: RMS distance to the targets at the key \
+         points {:.3e}",
+        report.key_points, report.source_dimension, report.target_dimension, report.rms_at_keys
+    );
+    let b = &report.between_keys;
+    let percent = |d: f64| 100.0 * d / b.diagonal.max(f64::MIN_POSITIVE);
+    if let Some(loo) = report.leave_one_out {
+        println!(
+            "  a target left out is predicted within {loo:.3e} RMS ({:.2} % of the targets' \
+             diagonal)",
+            percent(loo)
+        );
+    }
+    println!(
+        "  between the keys the surface stays within {:.3e} of a target ({:.2} % of the \
+         diagonal; neighbouring targets are up to {:.3e} apart)",
+        b.farthest_from_targets,
+        percent(b.farthest_from_targets),
+        b.target_gap
+    );
 }
 
 #[derive(Debug, clap::Args)]

@@ -150,3 +150,136 @@ pub fn fit_sharpness(
     }
     Ok((best, best_error))
 }
+
+/// The sharpness values [`fit_auto`] tries: whole numbers (power blending takes no other),
+/// spaced about 20 % apart up to the core's largest.
+pub const AUTO_SHARPNESS: [f64; 19] = [
+    1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 10.0, 12.0, 14.0, 16.0, 20.0, 24.0, 28.0, 32.0, 40.0,
+    48.0, 64.0,
+];
+
+/// How a fit through the key points predicts them: the root-mean-square distance from each
+/// target tᵢ to where the surface fitted through every *other* target puts it, y₋ᵢ(wᵢ).
+///
+/// Computed for all keys at once from the inverse of the key matrix K (Rippa 1999): with
+/// C = K⁻¹T, the left-out error of key i is Cᵢ / (K⁻¹)ᵢᵢ. That is exact when leaving a key
+/// out removes its column of K as well (unnormalized blending), and close to it for the
+/// normalized form, whose other columns also change a little. `None` when K is singular.
+pub fn leave_one_out(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> Option<f64> {
+    let n = network.key_count();
+    if n < 2 || targets.len() != n {
+        return None;
+    }
+    let p = network.target_dimension();
+    let rows: Vec<Vec<f64>> = network
+        .weights
+        .iter()
+        .map(|w| network.activations(w))
+        .collect();
+    let k = DMatrix::from_fn(n, n, |j, i| rows[j][i]);
+    let inverse = k.try_inverse()?;
+    let t = DMatrix::from_fn(n, p, |j, g| targets[j][g]);
+    let c = &inverse * t;
+    let mut total = 0.0;
+    for i in 0..n {
+        let d = inverse[(i, i)];
+        for g in 0..p {
+            let e = c[(i, g)] / d;
+            total += e * e;
+        }
+    }
+    let rms = (total / n as f64).sqrt();
+    rms.is_finite().then_some(rms)
+}
+
+/// The network through the targets at the key points (as [`fit_shape`]) with the one q, from
+/// [`AUTO_SHARPNESS`], that predicts left-out targets best ([`leave_one_out`]); returns it
+/// with that error.
+///
+/// Too small a q for the keys' spacing makes K nearly singular: the fit still passes through
+/// every target, but swings far away between them (a star of 100 keys fitted with q = 4
+/// reached 200 times its size). Too large a q leaves the surface sagging between keys. Both
+/// predict a left-out target badly, so the left-out error finds the q between, without
+/// knowing the shape.
+///
+/// # Errors
+/// As [`fit_shape`]; [`Error::InvalidInput`] when no q gives a solvable key matrix.
+pub fn fit_auto(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> Result<(CaoEnNetwork, f64)> {
+    let mut best: Option<(f64, f64)> = None;
+    for q in AUTO_SHARPNESS {
+        let mut trial = network.clone();
+        trial.sharpness.fill(q);
+        if trial.validate().is_err() {
+            continue;
+        }
+        if let Some(error) = leave_one_out(&trial, targets)
+            && best.is_none_or(|(_, e)| error < e)
+        {
+            best = Some((q, error));
+        }
+    }
+    let Some((q, error)) = best else {
+        return Err(Error::invalid(
+            "no sharpness makes the key matrix solvable: are two key points the same?",
+        ));
+    };
+    let mut chosen = network.clone();
+    chosen.sharpness.fill(q);
+    let fitted = fit_shape(&chosen, &chosen.weights.clone(), targets)?;
+    Ok((fitted, error))
+}
+
+/// How a fitted surface behaves between its key points, on dense samples of the whole source
+/// domain (an icosphere of 2 562 vertices, a 160 × 80 torus grid, or 4 096 points of a
+/// hypersphere), in the targets' units.
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BetweenKeys {
+    /// The largest distance from a sample y(x) to the nearest target: about half the gap
+    /// between neighbouring targets for a surface that follows them, far more for one that
+    /// swings away between them.
+    pub farthest_from_targets: f64,
+    /// The largest distance from a target to its nearest other target: the gap the first
+    /// figure is read against.
+    pub target_gap: f64,
+    /// The targets' bounding diagonal.
+    pub diagonal: f64,
+}
+
+/// [`BetweenKeys`] of `network`, whose surface is meant to follow `targets`.
+pub fn between_keys(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> BetweenKeys {
+    let nearest = |y: &[f64], skip: Option<usize>| {
+        targets
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| Some(j) != skip)
+            .map(|(_, t)| t.iter().zip(y).map(|(a, b)| (a - b) * (a - b)).sum::<f64>())
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    };
+    let samples = super::morph::domain_samples(network, 4);
+    let farthest_from_targets = samples
+        .iter()
+        .map(|x| nearest(&network.position(x), None))
+        .fold(0.0, f64::max);
+    let target_gap = (0..targets.len())
+        .map(|i| nearest(&targets[i], Some(i)))
+        .filter(|d| d.is_finite())
+        .fold(0.0, f64::max);
+    let p = targets.first().map_or(0, Vec::len);
+    let diagonal = (0..p)
+        .map(|g| {
+            let (lo, hi) = targets
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), t| {
+                    (l.min(t[g]), h.max(t[g]))
+                });
+            (hi - lo) * (hi - lo)
+        })
+        .sum::<f64>()
+        .sqrt();
+    BetweenKeys {
+        farthest_from_targets,
+        target_gap,
+        diagonal,
+    }
+}

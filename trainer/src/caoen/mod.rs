@@ -56,7 +56,10 @@ pub use blob::{DecodedCaoEn, from_blob, to_blob};
 pub use capacity::check_key_count;
 pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
 pub use distort::Distortion;
-pub use fit::{cube_directions, fit_shape, fit_sharpness, from_key_points, rms_error};
+pub use fit::{
+    AUTO_SHARPNESS, BetweenKeys, between_keys, cube_directions, fit_auto, fit_shape, fit_sharpness,
+    from_key_points, leave_one_out, rms_error,
+};
 pub use groups::order_for_groups;
 pub use image::{
     CompressedImage, ImageCodec, MAX_ITERATIONS, SPAN, compress_image, psnr, smooth_test_image,

@@ -245,28 +245,30 @@ fn domain_grid(network: &CaoEnNetwork, subdivisions: usize) -> Result<Option<Sou
     })
 }
 
-/// The smallest, over points of the domain (the vertices of [`domain_grid`] at 3
-/// subdivisions, or 4 096 quasi-random points of a hypersphere), of the largest F of
-/// `network`'s keys.
-fn weakest_cover(network: &CaoEnNetwork) -> f64 {
+/// Points spread over `network`'s source domain: the vertices of [`domain_grid`] at
+/// `subdivisions`, or 4 096 quasi-random points of a hypersphere.
+pub(super) fn domain_samples(network: &CaoEnNetwork, subdivisions: usize) -> Vec<Vec<f64>> {
+    if let Ok(Some((sources, _))) = domain_grid(network, subdivisions) {
+        return sources;
+    }
+    // Additive recurrences with the square roots of the first primes, put on the
+    // hypersphere: spread over it, the same on every run.
+    const ROOTS: [f64; 8] = [1.414, 1.732, 2.236, 2.646, 3.317, 3.606, 4.123, 4.359];
     let m = network.source_dimension();
-    let points = match domain_grid(network, 3) {
-        Ok(Some((sources, _))) => sources,
-        _ => {
-            // Additive recurrences with the square roots of the first primes, put on the
-            // hypersphere: spread over it, the same on every run.
-            const ROOTS: [f64; 8] = [1.414, 1.732, 2.236, 2.646, 3.317, 3.606, 4.123, 4.359];
-            (1..=4096)
-                .map(|i| {
-                    let v: Vec<f64> = (0..m)
-                        .map(|h| (f64::from(i) * ROOTS[h % ROOTS.len()]).fract() * 2.0 - 1.0)
-                        .collect();
-                    on_domain(network.domain, &v)
-                })
-                .collect()
-        }
-    };
-    points
+    (1..=4096)
+        .map(|i| {
+            let v: Vec<f64> = (0..m)
+                .map(|h| (f64::from(i) * ROOTS[h % ROOTS.len()]).fract() * 2.0 - 1.0)
+                .collect();
+            on_domain(network.domain, &v)
+        })
+        .collect()
+}
+
+/// The smallest, over points of the domain ([`domain_samples`] at 3 subdivisions), of the
+/// largest F of `network`'s keys.
+fn weakest_cover(network: &CaoEnNetwork) -> f64 {
+    domain_samples(network, 3)
         .iter()
         .map(|x| {
             (0..network.key_count())

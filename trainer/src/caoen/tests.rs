@@ -255,3 +255,123 @@ fn torus_network_mesh() {
         assert!(cos > 0.8, "{x:?}: {n:?}");
     }
 }
+
+/// Rippa's formula is the explicit leave-one-out for unnormalized blending: refitting
+/// without key i and evaluating at wᵢ gives the same errors.
+#[test]
+fn leave_one_out_matches_refitting_without_each_key() {
+    let (keys, targets) = star(30);
+    let built = from_key_points(Domain::Sphere, Blending::Power, false, &keys, &targets, 6.0)
+        .expect("network");
+    let formula = leave_one_out(&built, &targets).expect("solvable");
+    let mut total = 0.0;
+    for i in 0..keys.len() {
+        let others = |v: &[Vec<f64>]| -> Vec<Vec<f64>> {
+            v.iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, x)| x.clone())
+                .collect()
+        };
+        let without = from_key_points(
+            Domain::Sphere,
+            Blending::Power,
+            false,
+            &others(&keys),
+            &others(&targets),
+            6.0,
+        )
+        .expect("network");
+        let fitted = fit_shape(&without, &without.weights.clone(), &others(&targets)).unwrap();
+        let y = fitted.position(&built.weights[i]);
+        total += y
+            .iter()
+            .zip(&targets[i])
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>();
+    }
+    let explicit = (total / keys.len() as f64).sqrt();
+    assert!(
+        (formula - explicit).abs() <= 1e-7 * explicit,
+        "{formula} {explicit}"
+    );
+}
+
+/// Targets on a five-armed star r(θ, φ) = 1 + 0.25·sin 5θ·sin⁵φ, stretched to 2 × 1.2 × 0.9,
+/// at `n` keys of a Fibonacci lattice.
+fn star(n: usize) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let keys = support::fibonacci(n);
+    let targets = keys.iter().map(|k| star_point(k)).collect();
+    (keys, targets)
+}
+
+fn star_point(k: &[f64]) -> Vec<f64> {
+    let (theta, phi) = (k[1].atan2(k[0]), k[2].clamp(-1.0, 1.0).acos());
+    let r = 1.0 + 0.25 * (5.0 * theta).sin() * phi.sin().powi(5);
+    vec![2.0 * r * k[0], 1.2 * r * k[1], 0.9 * r * k[2]]
+}
+
+/// The Hausdorff distance between `network`'s surface and the star, over dense samples of
+/// both, in % of the star's bounding diagonal.
+fn star_hausdorff(network: &CaoEnNetwork) -> f64 {
+    let truth: Vec<Vec<f64>> = support::fibonacci(4000)
+        .iter()
+        .map(|k| star_point(k))
+        .collect();
+    let surface: Vec<Vec<f64>> = support::fibonacci(2000)
+        .iter()
+        .map(|k| network.position(k))
+        .collect();
+    let one_way = |from: &[Vec<f64>], to: &[Vec<f64>]| {
+        from.iter()
+            .map(|a| {
+                to.iter()
+                    .map(|b| a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+            .sqrt()
+    };
+    let diagonal = between_keys(network, &truth).diagonal;
+    100.0 * one_way(&surface, &truth).max(one_way(&truth, &surface)) / diagonal
+}
+
+/// The default fit of 45, 100 and 200 star targets stays within 7 % of the star (Hausdorff,
+/// both ways); the paper's q = 4 fitted through the same targets swings far away.
+#[test]
+fn the_default_fit_follows_a_star_between_its_keys() {
+    for n in [45, 100, 200] {
+        let (keys, targets) = star(n);
+        let built = from_key_points(Domain::Sphere, Blending::Power, true, &keys, &targets, 4.0)
+            .expect("network");
+        let (fitted, _) = fit_auto(&built, &targets).expect("fit");
+        let h = star_hausdorff(&fitted);
+        println!("{n} keys: Hausdorff {h:.2} %, q = {}", fitted.sharpness[0]);
+        assert!(
+            h <= 7.0,
+            "{n} keys: Hausdorff {h:.2} %, q = {}",
+            fitted.sharpness[0]
+        );
+        let between = between_keys(&fitted, &targets);
+        assert!(
+            between.farthest_from_targets < between.target_gap,
+            "{n} keys: {between:?}"
+        );
+        if n == 100 {
+            let plain =
+                from_key_points(Domain::Sphere, Blending::Power, false, &keys, &targets, 4.0)
+                    .expect("network");
+            let paper = fit_shape(&plain, &plain.weights.clone(), &targets).unwrap();
+            let swing = star_hausdorff(&paper);
+            assert!(
+                swing > 3.0 * h,
+                "q = 4 through 100 targets: {swing:.1} %, auto {h:.1} %"
+            );
+            let paper_between = between_keys(&paper, &targets);
+            assert!(
+                paper_between.farthest_from_targets > 2.0 * between.target_gap,
+                "{paper_between:?}"
+            );
+        }
+    }
+}
