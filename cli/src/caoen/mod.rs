@@ -165,9 +165,12 @@ struct FitReport<'a> {
     fitted: bool,
     /// The rational (normalized) form.
     normalized: bool,
-    /// The q of every key point, `None` when --fit-sharpness chose one per key.
+    /// The q of every key point, `None` when the keys have different q.
     sharpness: Option<f64>,
-    /// How q was set: `given`, `leave-one-out` or `per key`.
+    /// The smallest and largest q of the keys.
+    sharpness_range: [f64; 2],
+    /// How q was set: `given`, `leave-one-out` (one q, or q scaled by each key's spacing) or
+    /// `per key` (--fit-sharpness).
     sharpness_from: &'static str,
     /// RMS distance from y(wᵢ) to tᵢ over the key points.
     rms_at_keys: f64,
@@ -278,7 +281,17 @@ fn fit(args: &FitArgs) -> Result<()> {
         target_dimension: network.target_dimension(),
         fitted: !args.no_fit,
         normalized,
-        sharpness: (sharpness_from != "per key").then(|| network.sharpness[0]),
+        sharpness: network
+            .sharpness
+            .iter()
+            .all(|&q| q == network.sharpness[0])
+            .then(|| network.sharpness[0]),
+        sharpness_range: network
+            .sharpness
+            .iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &q| {
+                [lo.min(q), hi.max(q)]
+            }),
         sharpness_from,
         rms_at_keys: rms_error(&network, &on_domain, &targets),
         leave_one_out: (!args.no_fit)
@@ -304,10 +317,16 @@ fn print_fit_report(report: &FitReport<'_>) {
     } else {
         "plain form"
     };
-    let q = match (report.sharpness, report.sharpness_from) {
-        (Some(q), "leave-one-out") => format!("q = {q} (chosen by leave-one-out)"),
-        (Some(q), _) => format!("q = {q}"),
-        (None, _) => "q per key point".to_string(),
+    let q = match report.sharpness {
+        Some(q) => format!("q = {q}"),
+        None => format!(
+            "q {} … {} by key",
+            report.sharpness_range[0], report.sharpness_range[1]
+        ),
+    };
+    let q = match report.sharpness_from {
+        "leave-one-out" => format!("{q} (chosen by leave-one-out)"),
+        _ => q,
     };
     let v = if report.fitted {
         "V fitted through the targets"

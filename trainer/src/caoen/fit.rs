@@ -13,10 +13,11 @@
 //! here: each q only shapes its neighbourhood, and every trial is one linear solve.
 
 use nalgebra::DMatrix;
-use neurosurf_core::caoen::{Blending, Domain};
+use neurosurf_core::caoen::{Blending, Domain, MAX_SHARPNESS};
 
 use super::network::{CaoEnNetwork, on_domain};
 use crate::error::{Error, Result};
+use crate::geometry::vector::inner;
 
 /// The 26 unit directions of a cube's faces, edges and corners: the paper's key points.
 pub fn cube_directions() -> Vec<Vec<f64>> {
@@ -192,9 +193,36 @@ pub fn leave_one_out(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> Option<f64
     rms.is_finite().then_some(rms)
 }
 
-/// The network through the targets at the key points (as [`fit_shape`]) with the one q, from
-/// [`AUTO_SHARPNESS`], that predicts left-out targets best ([`leave_one_out`]); returns it
-/// with that error.
+/// The factors α that [`fit_auto`] tries for q scaled by each key's spacing,
+/// qᵢ = α / (wᵢ·wᵢ − the mean wᵢ·wⱼ of its three nearest keys), rounded and kept in 1 … 64.
+pub const AUTO_SPACING: [f64; 12] = [
+    0.1, 0.14, 0.2, 0.25, 0.3, 0.35, 0.42, 0.5, 0.7, 1.0, 1.4, 2.0,
+];
+
+/// For each key, 1 / (wᵢ·wᵢ − the mean of its three largest wᵢ·wⱼ): the sharpness at which
+/// F falls to about e⁻¹ of its peak at its nearest neighbours (exactly so for exponential
+/// blending on the sphere, where F = e^{q(s − 1)}).
+fn spacing_scales(network: &CaoEnNetwork) -> Vec<f64> {
+    let w = &network.weights;
+    (0..w.len())
+        .map(|i| {
+            let own = inner(&w[i], &w[i]);
+            let mut near: Vec<f64> = (0..w.len())
+                .filter(|&j| j != i)
+                .map(|j| inner(&w[i], &w[j]))
+                .collect();
+            near.sort_by(|a, b| b.total_cmp(a));
+            let k = near.len().min(3);
+            let mean = near[..k].iter().sum::<f64>() / k.max(1) as f64;
+            1.0 / (own - mean).max(1e-6)
+        })
+        .collect()
+}
+
+/// The network through the targets at the key points (as [`fit_shape`]) with the q that
+/// predicts left-out targets best ([`leave_one_out`]), among one q for every key
+/// ([`AUTO_SHARPNESS`]) and q scaled by each key's spacing ([`AUTO_SPACING`]: sharper where
+/// keys are dense, wider across gaps); returns it with that error.
 ///
 /// Too small a q for the keys' spacing makes K nearly singular: the fit still passes through
 /// every target, but swings far away between them (a star of 100 keys fitted with q = 4
@@ -205,26 +233,33 @@ pub fn leave_one_out(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> Option<f64
 /// # Errors
 /// As [`fit_shape`]; [`Error::InvalidInput`] when no q gives a solvable key matrix.
 pub fn fit_auto(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> Result<(CaoEnNetwork, f64)> {
-    let mut best: Option<(f64, f64)> = None;
-    for q in AUTO_SHARPNESS {
+    let scales = spacing_scales(network);
+    let whole = |q: f64| q.round().clamp(1.0, MAX_SHARPNESS);
+    let candidates = AUTO_SHARPNESS.iter().map(|&q| vec![q; scales.len()]).chain(
+        AUTO_SPACING
+            .iter()
+            .map(|&alpha| scales.iter().map(|&b| whole(alpha * b)).collect()),
+    );
+    let mut best: Option<(Vec<f64>, f64)> = None;
+    for sharpness in candidates {
         let mut trial = network.clone();
-        trial.sharpness.fill(q);
+        trial.sharpness = sharpness;
         if trial.validate().is_err() {
             continue;
         }
         if let Some(error) = leave_one_out(&trial, targets)
-            && best.is_none_or(|(_, e)| error < e)
+            && best.as_ref().is_none_or(|(_, e)| error < *e)
         {
-            best = Some((q, error));
+            best = Some((trial.sharpness, error));
         }
     }
-    let Some((q, error)) = best else {
+    let Some((sharpness, error)) = best else {
         return Err(Error::invalid(
             "no sharpness makes the key matrix solvable: are two key points the same?",
         ));
     };
     let mut chosen = network.clone();
-    chosen.sharpness.fill(q);
+    chosen.sharpness = sharpness;
     let fitted = fit_shape(&chosen, &chosen.weights.clone(), targets)?;
     Ok((fitted, error))
 }

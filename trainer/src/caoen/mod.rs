@@ -57,8 +57,8 @@ pub use capacity::check_key_count;
 pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
 pub use distort::Distortion;
 pub use fit::{
-    AUTO_SHARPNESS, BetweenKeys, between_keys, cube_directions, fit_auto, fit_shape, fit_sharpness,
-    from_key_points, leave_one_out, rms_error,
+    AUTO_SHARPNESS, AUTO_SPACING, BetweenKeys, between_keys, cube_directions, fit_auto, fit_shape,
+    fit_sharpness, from_key_points, leave_one_out, rms_error,
 };
 pub use groups::order_for_groups;
 pub use image::{
