@@ -226,9 +226,9 @@ fn spacing_scales(network: &CaoEnNetwork) -> Vec<f64> {
 ///
 /// Too small a q for the keys' spacing makes K nearly singular: the fit still passes through
 /// every target, but swings far away between them (a star of 100 keys fitted with q = 4
-/// reached 200 times its size). Too large a q leaves the surface sagging between keys. Both
-/// predict a left-out target badly, so the left-out error finds the q between, without
-/// knowing the shape.
+/// strayed more than 200 times its diagonal from it). Too large a q leaves the surface
+/// sagging between keys. Both predict a left-out target badly, so the left-out error finds
+/// the q between, without knowing the shape.
 ///
 /// # Errors
 /// As [`fit_shape`]; [`Error::InvalidInput`] when no q gives a solvable key matrix.
@@ -269,9 +269,9 @@ pub fn fit_auto(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> Result<(CaoEnNe
 /// hypersphere), in the targets' units.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize)]
 pub struct BetweenKeys {
-    /// The largest distance from a sample y(x) to the nearest target: about half the gap
-    /// between neighbouring targets for a surface that follows them, far more for one that
-    /// swings away between them.
+    /// The largest distance from a sample y(x) to the nearest target: below
+    /// [`BetweenKeys::target_gap`] for a surface that follows the targets (0.7–0.9 of it on
+    /// evenly spread stars), far above it for one that swings away between them.
     pub farthest_from_targets: f64,
     /// The largest distance from a target to its nearest other target: the gap the first
     /// figure is read against.
