@@ -189,6 +189,12 @@ fn bad_key_point_files_fail_clearly() {
     assert!(mixed.contains("row 2"), "{mixed}");
     let centre = case("centre.txt", "1 0 0\n-1 0 0\n0 0 0\n", &[]);
     assert!(centre.contains("centroid"), "{centre}");
+    let same = case(
+        "same.txt",
+        "1 0 0\n1 0 0\n0 1 0\n0 0 1\n-1 0 0\n0 -1 0\n",
+        &[],
+    );
+    assert!(same.contains("rows 1 and 2"), "{same}");
     let short = case("short.txt", "1 0 0 0\n0 1 0 0\n", &["--domain", "torus"]);
     assert!(short.contains("4 source coordinates"), "{short}");
     assert!(!out.exists());

@@ -233,6 +233,19 @@ fn spacing_scales(network: &CaoEnNetwork) -> Vec<f64> {
 /// # Errors
 /// As [`fit_shape`]; [`Error::InvalidInput`] when no q gives a solvable key matrix.
 pub fn fit_auto(network: &CaoEnNetwork, targets: &[Vec<f64>]) -> Result<(CaoEnNetwork, f64)> {
+    let w = &network.weights;
+    for i in 0..w.len() {
+        if let Some(j) = (i + 1..w.len()).find(|&j| w[j] == w[i]) {
+            return Err(Error::invalid(format!(
+                "key points {} and {} (rows {} and {}) lie on the same direction of the domain, \
+                 so the fit cannot tell their targets apart; remove one of them",
+                i,
+                j,
+                i + 1,
+                j + 1
+            )));
+        }
+    }
     let scales = spacing_scales(network);
     let whole = |q: f64| q.round().clamp(1.0, MAX_SHARPNESS);
     let candidates = AUTO_SHARPNESS.iter().map(|&q| vec![q; scales.len()]).chain(
