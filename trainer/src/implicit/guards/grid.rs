@@ -81,6 +81,25 @@ impl Grid {
         })
     }
 
+    /// The corners of the grid cell that holds `q` (the nearest cell for a point outside the
+    /// grid).
+    pub(super) fn cell_corners(&self, q: [f64; 3]) -> impl Iterator<Item = usize> + use<> {
+        let low = [0, 1, 2].map(|k| {
+            let cells = self.counts[k].saturating_sub(1);
+            let t = ((q[k] - self.lo[k]) / self.spacing[k]).floor();
+            // NaN and negative go to 0; `as` saturates.
+            (t.max(0.0) as usize).min(cells.saturating_sub(1))
+        });
+        let [nx, ny, _] = self.counts;
+        let counts = self.counts;
+        (0..8_usize).filter_map(move |corner| {
+            let c = [0, 1, 2].map(|k| low[k] + (corner >> k & 1));
+            (0..3)
+                .all(|k| c[k] < counts[k])
+                .then(|| c[0] + nx * (c[1] + ny * c[2]))
+        })
+    }
+
     pub(super) fn point(&self, i: usize) -> [f64; 3] {
         let index = self.index(i);
         [0, 1, 2].map(|k| self.lo[k] + self.spacing[k] * index[k] as f64)

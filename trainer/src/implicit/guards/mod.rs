@@ -29,6 +29,7 @@ use crate::quality::component_labels;
 use crate::render::{Aabb, Field, extract_mesh};
 
 mod grid;
+mod grid_set;
 mod pieces;
 mod place;
 mod probe;
@@ -39,6 +40,7 @@ pub use pieces::{PIECE_SUPPORT, guard_stray_pieces};
 pub use place::place_guards;
 
 use grid::Grid;
+use grid_set::GridSet;
 use place::MARGIN;
 use probe::Probe;
 

@@ -82,29 +82,11 @@ pub fn place_guards(
     }
     // What no guard's ball may hold: points near the surface, and far points not clearly on
     // its side.
-    let tree_of = |keep: &dyn Fn(usize) -> bool| {
-        let points: Vec<[f64; 3]> = (0..grid.len())
-            .filter(|&i| keep(i))
-            .map(|i| grid.point(i))
-            .collect();
-        (!points.is_empty())
-            .then(|| ImmutableKdTree::<f64, 3>::new_from_slice(&points).ok())
-            .flatten()
-    };
-    let near = tree_of(&|i| distance[i] < clearance);
-    let sides_trees = [
-        tree_of(&|i| far[i] && inside[i] != Some(false)),
-        tree_of(&|i| far[i] && inside[i] != Some(true)),
+    let near = GridSet::new(&grid, |i| distance[i] < clearance);
+    let sides_sets = [
+        GridSet::new(&grid, |i| far[i] && inside[i] != Some(false)),
+        GridSet::new(&grid, |i| far[i] && inside[i] != Some(true)),
     ];
-    let nearest = |tree: &Option<ImmutableKdTree<f64, 3>>, p: &[f64; 3]| {
-        tree.as_ref().map_or(f64::INFINITY, |t| {
-            t.query(p)
-                .nearest_one::<SquaredEuclidean<f64>>()
-                .execute()
-                .distance
-                .sqrt()
-        })
-    };
     let positions: Vec<[f64; 3]> = wrong.iter().map(|&i| point(i)).collect();
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&positions) else {
         return Vec::new();
@@ -129,8 +111,9 @@ pub fn place_guards(
         let (i, centre) = (wrong[w], positions[w]);
         // The side the guard sits on: the opposite of the network's sign there.
         let side = inside[i] == Some(true);
-        let blocked =
-            nearest(&near, &centre).min(nearest(&sides_trees[usize::from(side)], &centre));
+        let blocked = near
+            .nearest(&grid, centre)
+            .min(sides_sets[usize::from(side)].nearest(&grid, centre));
         let radius = (distance[i] - clearance).min(0.95 * blocked);
         if radius.is_nan() || radius <= 0.0 {
             continue;

@@ -310,3 +310,47 @@ fn block_distances_are_the_pointwise_ones() {
         );
     }
 }
+
+/// The nearest member from a tree over a set's shell and the query's cell corners is the
+/// nearest member from a tree over the whole set, bit for bit: for sets from a solid ball
+/// (mostly interior) to scattered points (all shell), at grid points and between them.
+#[test]
+fn a_grid_set_finds_the_nearest_member_from_its_shell() {
+    use rand::{Rng, SeedableRng};
+    let domain = Aabb {
+        lo: [-1.0, -0.8, -0.3],
+        hi: [1.1, 0.9, 0.35],
+    };
+    let grid = Grid::over(&domain).expect("grid");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let scattered: Vec<bool> = (0..grid.len())
+        .map(|_| rng.random::<f64>() < 0.01)
+        .collect();
+    let sets: [&(dyn Fn(usize) -> bool + Sync); 3] = [
+        &|i| norm(grid.point(i)) > 0.6,
+        &|i| norm(grid.point(i)) < 0.5,
+        &|i| scattered[i],
+    ];
+    for keep in sets {
+        let set = GridSet::new(&grid, keep);
+        let all: Vec<[f64; 3]> = (0..grid.len())
+            .filter(|&i| keep(i))
+            .map(|i| grid.point(i))
+            .collect();
+        let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&all).expect("tree");
+        for n in 0..2000 {
+            let q = if n % 2 == 0 {
+                grid.point(rng.random_range(0..grid.len()))
+            } else {
+                [0, 1, 2].map(|k| rng.random_range(domain.lo[k]..domain.hi[k]))
+            };
+            let expected = tree
+                .query(&q)
+                .nearest_one::<SquaredEuclidean<f64>>()
+                .execute()
+                .distance
+                .sqrt();
+            assert_eq!(set.nearest(&grid, q).to_bits(), expected.to_bits(), "{q:?}");
+        }
+    }
+}
