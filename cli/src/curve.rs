@@ -32,7 +32,7 @@ pub enum Command {
     Surface(SurfaceArgs),
     /// Plot a curve blob (and, optionally, the points it was fitted to) as SVG or PNG.
     Plot(PlotArgs),
-    /// Time ordering and fitting on noisy ellipses of 20, 200 and 2 000 points.
+    /// Time ordering and fitting on noisy ellipses of 20 to 20 000 points.
     Bench(BenchArgs),
 }
 
@@ -139,6 +139,11 @@ pub struct FitArgs {
     /// Neurons per input point in the chain (the paper: 4).
     #[arg(long, default_value_t = CurveOptions::default().kohonen.neurons_per_point)]
     neurons_per_point: usize,
+    /// Most points the chain learns from: beyond it, a random sample of this many (drawn
+    /// with the seed) sets the curve's course and every point is ordered along it. Training
+    /// time grows about as the square of this count.
+    #[arg(long, value_name = "COUNT", default_value_t = CurveOptions::default().kohonen.max_trained_points)]
+    chain_points: usize,
     /// Keep the paper's order as the chain gives it (no 2-opt repair).
     #[arg(long)]
     no_refine: bool,
@@ -172,6 +177,7 @@ struct FitReport<'a> {
     control_points: usize,
     segments: usize,
     chain_iterations: usize,
+    chain_trained_points: usize,
     chain_converged: bool,
     refine_reversals: Option<usize>,
     refine_insertions: Option<usize>,
@@ -198,6 +204,7 @@ fn fit(args: &FitArgs) -> Result<()> {
     };
     let mut options = CurveOptions::new(topology, args.blob.seed);
     options.kohonen.neurons_per_point = args.neurons_per_point;
+    options.kohonen.max_trained_points = args.chain_points;
     options.approximation.control_points = args.control;
     if args.no_refine {
         options.refine = None;
@@ -264,6 +271,7 @@ fn fit(args: &FitArgs) -> Result<()> {
         control_points: curve.control.len(),
         segments: curve.segments(),
         chain_iterations: result.training.iterations,
+        chain_trained_points: result.training.trained_points,
         chain_converged: result.training.convergence.converged(),
         refine_reversals: result.refinement.as_ref().map(|r| r.reversals),
         refine_insertions: result.refinement.as_ref().map(|r| r.insertions),
@@ -272,12 +280,18 @@ fn fit(args: &FitArgs) -> Result<()> {
     if args.json {
         return output::json(&report);
     }
+    let sample = if report.chain_trained_points < report.fit.points {
+        format!(" trained on {} of them", report.chain_trained_points)
+    } else {
+        String::new()
+    };
     println!(
-        "{} {}-D points → {} chain of {} neurons ({} iterations, {}) → {} of {} control points",
+        "{} {}-D points → {} chain of {} neurons{} ({} iterations, {}) → {} of {} control points",
         report.fit.points,
         dimension,
         if report.closed { "closed" } else { "open" },
         report.fit.neurons,
+        sample,
         report.chain_iterations,
         if report.chain_converged {
             "converged"
@@ -501,6 +515,9 @@ pub struct BenchArgs {
     /// Print JSON rows instead of the table.
     #[arg(long)]
     json: bool,
+    /// Also write the table as Markdown to this file (`docs/performance/curve.md`).
+    #[arg(long, value_name = "FILE")]
+    markdown: Option<PathBuf>,
 }
 
 fn bench(args: &BenchArgs) -> Result<()> {
@@ -510,6 +527,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
     }
     let mut table = Table::new([
         ("points", Align::Right),
+        ("chain learns from", Align::Right),
         ("neurons", Align::Right),
         ("iterations", Align::Right),
         ("seconds", Align::Right),
@@ -521,6 +539,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
         let per = row.seconds * 1e6 / row.iterations.max(1) as f64;
         table.push([
             row.points.to_string(),
+            row.trained_points.to_string(),
             row.neurons.to_string(),
             row.iterations.to_string(),
             format!("{:.4}", row.seconds),
@@ -529,5 +548,26 @@ fn bench(args: &BenchArgs) -> Result<()> {
         ]);
     }
     print!("{table}");
+    if let Some(path) = &args.markdown {
+        let sizes: Vec<String> = args.sizes.iter().map(ToString::to_string).collect();
+        let text = format!(
+            "# Curve fitting time\n\nWritten by `neurosurf curve bench --markdown {}`{}: \
+             Kohonen training, ordering, refinement and both fits on noisy ellipses (seed {}), \
+             one run each on one thread, sampling not timed. Beyond {} points the chain \
+             learns from a sample of {} and every point is ordered along it.\n\n{}",
+            path.display(),
+            if args.sizes == BENCHMARK_SIZES {
+                String::new()
+            } else {
+                format!(" --sizes {}", sizes.join(","))
+            },
+            args.seed,
+            CurveOptions::default().kohonen.max_trained_points,
+            CurveOptions::default().kohonen.max_trained_points,
+            table.to_markdown(),
+        );
+        write_atomic(path, text.as_bytes())?;
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }

@@ -11,9 +11,10 @@
 //! nearest-neuron query on a uniform grid that follows the moving neurons (a few cells and
 //! neurons once the chain has formed) plus an update of ≤ 2⌈3σ(t)⌉ + 1 neurons; with the
 //! geometric radius the mean update is about 6(σ₀ − σ_T)/ln(σ₀/σ_T) neurons, O(m / log m).
-//! So O(n · m / log m) in all, memory O(n + m). Measured with the defaults (release build,
-//! one core, training + ordering + refinement + both fits; `neurosurf curve bench`): 20 points
-//! 5 ms, 200 points 45 ms, 2 000 points 0.6 s.
+//! So O(n · m / log m) in all, memory O(n + m). Beyond
+//! [`KohonenOptions::max_trained_points`] the chain learns from a random sample of that many
+//! points, so training time stops growing with the input (`neurosurf curve bench`:
+//! `docs/performance/curve.md`).
 
 use serde::{Deserialize, Serialize};
 
@@ -63,6 +64,16 @@ pub struct KohonenOptions {
     pub early_stop: bool,
     /// Seed of the initial weights and the presentation order (0).
     pub seed: u64,
+    /// Most points the chain is trained on (2 000): from larger inputs a random sample of
+    /// this many, drawn with the seed. Training costs about n·m/log m, so a chain over every
+    /// point of a large input would take minutes; the sample fixes the curve's course, and
+    /// [`order_points`](super::order_points) places every point along it.
+    #[serde(default = "default_trained_points")]
+    pub max_trained_points: usize,
+}
+
+fn default_trained_points() -> usize {
+    2_000
 }
 
 impl Default for KohonenOptions {
@@ -79,6 +90,7 @@ impl Default for KohonenOptions {
             line_tolerance: 0.1,
             early_stop: true,
             seed: 0,
+            max_trained_points: default_trained_points(),
         }
     }
 }
@@ -97,6 +109,15 @@ impl KohonenOptions {
     /// # Errors
     /// [`Error::InvalidInput`] naming the offending setting.
     pub fn check(&self) -> Result<()> {
+        if self.max_trained_points < super::points::MIN_POINTS {
+            return Err(Error::invalid(format!(
+                "the chain learns from at least {} points, but max_trained_points \
+                 (--chain-points) is {}; give {} or more",
+                super::points::MIN_POINTS,
+                self.max_trained_points,
+                super::points::MIN_POINTS
+            )));
+        }
         if self.neurons_per_point == 0 {
             return Err(Error::invalid(
                 "Kohonen option neurons_per_point must be at least 1 (m ≥ n)",
@@ -146,6 +167,9 @@ pub struct KohonenChain {
 pub struct TrainingReport {
     /// m.
     pub neurons: usize,
+    /// The points the chain learned from: all of them, or a sample of
+    /// [`KohonenOptions::max_trained_points`].
+    pub trained_points: usize,
     /// Presentations made (less than `scheduled_iterations` after an early stop).
     pub iterations: usize,
     /// T of the schedule.
@@ -156,7 +180,8 @@ pub struct TrainingReport {
     pub convergence: Convergence,
 }
 
-/// Trains a chain on `points`. Deterministic: the same points and options give bit-identical
+/// Trains a chain on `points` (on a sample of them beyond
+/// [`KohonenOptions::max_trained_points`]). Deterministic: the same points and options give bit-identical
 /// weights.
 ///
 /// # Errors
@@ -166,6 +191,8 @@ pub fn train_chain(
     options: &KohonenOptions,
 ) -> Result<(KohonenChain, TrainingReport)> {
     options.check()?;
+    let sample = points.sample(options.max_trained_points, options.seed);
+    let points = &sample;
     let n = points.len();
     let m = options.neuron_count(n)?;
     let closed = options.topology == Topology::Closed;
@@ -208,6 +235,7 @@ pub fn train_chain(
     let neurons = som.neurons;
     let report = TrainingReport {
         neurons: m,
+        trained_points: n,
         iterations: t,
         scheduled_iterations: total,
         spacing,

@@ -2,6 +2,9 @@
 
 use std::collections::HashMap;
 
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
 use crate::error::{Error, Result};
 
 use crate::geometry::vector::{bounds, distance_squared};
@@ -105,6 +108,26 @@ impl CurvePoints {
             lower,
             upper,
         })
+    }
+
+    /// `count` of the points, drawn without replacement (seeded by `seed`) and kept in input
+    /// order; all of them when there are no more than `count`.
+    pub fn sample(&self, count: usize, seed: u64) -> CurvePoints {
+        if self.points.len() <= count.max(MIN_POINTS) {
+            return self.clone();
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut picked =
+            rand::seq::index::sample(&mut rng, self.points.len(), count.max(MIN_POINTS)).into_vec();
+        picked.sort_unstable();
+        let points: Vec<[f64; 3]> = picked.into_iter().map(|i| self.points[i]).collect();
+        let (lower, upper) = bounds(&points);
+        CurvePoints {
+            dimension: self.dimension,
+            points,
+            lower,
+            upper,
+        }
     }
 
     /// 2 or 3.

@@ -522,3 +522,26 @@ fn svg_plots_are_written_atomically() {
     let error = write_plot(&dir.path().join("trefoil.gif"), &layers, &options).unwrap_err();
     assert!(message(error).contains(".svg or .png"));
 }
+
+/// Beyond `max_trained_points` the chain learns from a sample and still orders every point:
+/// a noisy spiral of 6 000 points, trained on 1 500 of them, keeps its order and its fit.
+#[test]
+fn a_large_input_trains_the_chain_on_a_sample() {
+    let sample = sample(SampleCurve::Spiral, 6_000, 4);
+    let points = sample.curve_points().unwrap();
+    let mut options = CurveOptions::new(SampleCurve::Spiral.topology(), 4);
+    options.kohonen.max_trained_points = 1_500;
+    let result = reconstruct_curve(&points, &options).unwrap();
+    assert_eq!(result.training.trained_points, 1_500);
+    assert_eq!(result.training.neurons, 6_000);
+    assert_eq!(result.ordering.order.len(), 6_000);
+    let (adjacency, _, hausdorff, _) = score(&sample, &result);
+    assert!(adjacency >= 0.99, "adjacency {adjacency}");
+    assert!(hausdorff <= MAX_HAUSDORFF, "Hausdorff {hausdorff}");
+    // Too small a sample is a named error.
+    options.kohonen.max_trained_points = 3;
+    let error = reconstruct_curve(&points, &options)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("--chain-points"), "{error}");
+}
