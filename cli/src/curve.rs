@@ -9,10 +9,10 @@ use clap::{Subcommand, ValueEnum};
 use serde::Serialize;
 
 use neurosurf_trainer::curve::{
-    BENCHMARK_SIZES, BSplineCurve, CurveOptions, CurvePoints, FitSummary, PlotLayers, PlotOptions,
-    SampleCurve, SampleOptions, SurfaceOptions, Topology, benchmark, curve_to_blob, fit_surface,
-    interpolation_parameter, reconstruct_curve, sample_curve, surface_mesh, surface_to_blob,
-    write_plot,
+    BENCHMARK_SIZES, BSplineCurve, CurveOptions, CurvePoints, FitSummary, LongSteps, PlotLayers,
+    PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, TrainingReport, benchmark,
+    curve_to_blob, fit_surface, interpolation_parameter, reconstruct_curve, sample_curve,
+    surface_mesh, surface_to_blob, write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
@@ -179,6 +179,8 @@ struct FitReport<'a> {
     chain_iterations: usize,
     chain_trained_points: usize,
     chain_converged: bool,
+    /// Steps of the order longer than three times its median step.
+    order_long_steps: LongSteps,
     refine_reversals: Option<usize>,
     refine_insertions: Option<usize>,
     #[serde(flatten)]
@@ -273,6 +275,7 @@ fn fit(args: &FitArgs) -> Result<()> {
         chain_iterations: result.training.iterations,
         chain_trained_points: result.training.trained_points,
         chain_converged: result.training.convergence.converged(),
+        order_long_steps: result.ordering.long_steps(&points, LONG_STEP),
         refine_reversals: result.refinement.as_ref().map(|r| r.reversals),
         refine_insertions: result.refinement.as_ref().map(|r| r.insertions),
         fit: summary,
@@ -286,20 +289,19 @@ fn fit(args: &FitArgs) -> Result<()> {
         String::new()
     };
     println!(
-        "{} {}-D points → {} chain of {} neurons{} ({} iterations, {}) → {} of {} control points",
+        "{} {}-D points → {} chain of {} neurons{} ({} iterations) → {} of {} control points",
         report.fit.points,
         dimension,
         if report.closed { "closed" } else { "open" },
         report.fit.neurons,
         sample,
         report.chain_iterations,
-        if report.chain_converged {
-            "converged"
-        } else {
-            "NOT converged"
-        },
         method,
         report.control_points
+    );
+    println!(
+        "{}",
+        convergence_text(&result.training, report.order_long_steps, report.closed)
     );
     println!(
         "residual RMS {:.3e}, max {:.3e}; {:.3} s; wrote {} ({} bytes, {})",
@@ -502,6 +504,71 @@ fn plot(args: &PlotArgs) -> Result<()> {
     write_plot(&args.out, &layers, &options)?;
     println!("wrote {}", args.out.display());
     Ok(())
+}
+
+/// A step of the order this many times its median step counts as a jump.
+const LONG_STEP: f64 = 3.0;
+
+/// What the chain's convergence tests say, and whether it matters: the tests judge the chain;
+/// the order read off it is judged by its jumps.
+fn convergence_text(training: &TrainingReport, jumps: LongSteps, closed: bool) -> String {
+    let c = &training.convergence;
+    let spacings = |d: f64| d / training.spacing;
+    let chain = if c.converged() {
+        "chain: converged (both of the paper's tests)".to_string()
+    } else {
+        let mut failed = Vec::new();
+        if !c.within_epsilon {
+            failed.push(format!(
+                "a point lies {:.2} spacings from its nearest neuron (ε = {:.2})",
+                spacings(c.worst_input_distance),
+                spacings(c.epsilon)
+            ));
+        }
+        if !c.on_neighbour_lines {
+            failed.push(format!(
+                "an idle neuron lies {:.2} spacings off its neighbours' line (tolerance {:.2})",
+                spacings(c.worst_line_distance),
+                spacings(c.line_tolerance)
+            ));
+        }
+        format!(
+            "chain: the paper's tests are not met ({}); they judge the chain, not the order",
+            failed.join("; ")
+        )
+    };
+    let order = if jumps.count == 0 {
+        format!(
+            "order: no step longer than {LONG_STEP}× the median step (longest {:.1}×), so the \
+             fit is not affected",
+            jumps.longest_ratio
+        )
+    } else {
+        format!(
+            "order: {} steps longer than {LONG_STEP}× the median step (longest {:.1}×): gaps \
+             in the data, or points out of order there (try another --seed or more \
+             --neurons-per-point)",
+            jumps.count, jumps.longest_ratio
+        )
+    };
+    // An open order whose ends are a step or so apart went round a closed curve; a closed
+    // order with one step far longer than all others bridges the ends of an open one.
+    let topology = if !closed && jumps.ends_ratio <= LONG_STEP {
+        format!(
+            "\nwarning: the order's ends are {:.1} median steps apart: the curve looks closed; \
+             fit it with --closed",
+            jumps.ends_ratio
+        )
+    } else if closed && jumps.count == 1 && jumps.longest_ratio > 2.0 * LONG_STEP {
+        format!(
+            "\nwarning: one step of the ring is {:.1}× the median, all others under {LONG_STEP}×: \
+             it bridges the ends of an open curve; fit it without --closed",
+            jumps.longest_ratio
+        )
+    } else {
+        String::new()
+    };
+    format!("{chain}\n{order}{topology}")
 }
 
 #[derive(Debug, clap::Args)]

@@ -336,3 +336,45 @@ fn spline_surfaces_beyond_the_core_are_refused_before_training() {
     ]);
     assert!(out.exists());
 }
+
+/// The fit says whether the chain's tests matter (the order's long steps), and warns when a
+/// closed curve is fitted open or an open one closed.
+#[test]
+fn the_fit_reports_the_order_and_a_wrong_topology() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = |curve: &str, closed: bool| {
+        let points = dir.path().join(format!("{curve}.txt"));
+        ok(&[
+            "curve",
+            "sample",
+            curve,
+            "-n",
+            "300",
+            "--seed",
+            "3",
+            "--out",
+            s(&points),
+        ]);
+        let out = dir.path().join("c.nsb");
+        let mut args = vec!["curve", "fit", s(&points), "--out", s(&out)];
+        if closed {
+            args.push("--closed");
+        }
+        ok(&args)
+    };
+    let right = fit("ellipse", true);
+    assert!(right.contains("order: no step longer than"), "{right}");
+    assert!(!right.contains("warning"), "{right}");
+    let open_ellipse = fit("ellipse", false);
+    assert!(
+        open_ellipse.contains("the curve looks closed; fit it with --closed"),
+        "{open_ellipse}"
+    );
+    let closed_spiral = fit("spiral", true);
+    assert!(
+        closed_spiral.contains("fit it without --closed"),
+        "{closed_spiral}"
+    );
+    let right = fit("spiral", false);
+    assert!(!right.contains("warning"), "{right}");
+}

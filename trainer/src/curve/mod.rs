@@ -76,7 +76,7 @@ pub use kohonen::{
 pub use metrics::{
     adjacency_fraction, directed_distance, distance_to_polyline, hausdorff_distance,
 };
-pub use ordering::{Ordering, order_points};
+pub use ordering::{LongSteps, Ordering, order_points};
 pub use pipeline::{CurveOptions, CurveReconstruction, reconstruct_curve};
 pub use plot::{PlotLayers, PlotOptions, Projection, plot_scene, render_svg, write_plot};
 pub use points::{CurvePoints, DUPLICATE_TOLERANCE, MAX_POINTS, MIN_POINTS};

@@ -26,10 +26,57 @@ pub struct Ordering {
     pub chain_position: Vec<f64>,
 }
 
+/// The steps of an order that are much longer than its typical step: where a wrong order
+/// shows (a jump to another arm and back), or a real gap in the data.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct LongSteps {
+    /// Steps longer than the factor × the median step.
+    pub count: usize,
+    /// The longest step ÷ the median step.
+    pub longest_ratio: f64,
+    /// The distance from the last point back to the first ÷ the median step: near 1 on a
+    /// closed curve, large on an open one whatever the order's topology.
+    pub ends_ratio: f64,
+}
+
 impl Ordering {
     /// The input points in the recovered order.
     pub fn ordered_points(&self, points: &CurvePoints) -> Vec<[f64; 3]> {
         self.order.iter().map(|&i| points.points()[i]).collect()
+    }
+
+    /// The steps between consecutive points (the closing one too when closed) longer than
+    /// `factor` × the median step.
+    pub fn long_steps(&self, points: &CurvePoints, factor: f64) -> LongSteps {
+        let ordered = self.ordered_points(points);
+        let mut steps: Vec<f64> = ordered
+            .windows(2)
+            .map(|w| crate::geometry::vector::distance(w[0], w[1]))
+            .collect();
+        if self.closed
+            && let (Some(&first), Some(&last)) = (ordered.first(), ordered.last())
+        {
+            steps.push(crate::geometry::vector::distance(last, first));
+        }
+        let mut sorted = steps.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+        if median.is_nan() || median <= 0.0 {
+            return LongSteps {
+                count: 0,
+                longest_ratio: 0.0,
+                ends_ratio: 0.0,
+            };
+        }
+        let ends = match (ordered.first(), ordered.last()) {
+            (Some(&first), Some(&last)) => crate::geometry::vector::distance(last, first),
+            _ => 0.0,
+        };
+        LongSteps {
+            count: steps.iter().filter(|&&d| d > factor * median).count(),
+            longest_ratio: sorted.last().copied().unwrap_or(0.0) / median,
+            ends_ratio: ends / median,
+        }
     }
 }
 
