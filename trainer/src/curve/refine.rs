@@ -7,10 +7,12 @@
 //! moves repair it: 2-opt (reverse a stretch; candidates from each point's k nearest
 //! neighbours) and segment insertion (Or-opt: move a stretch elsewhere, possibly reversed;
 //! the stretches tried are those of ≤ 3 points and those bounded by two long edges or an
-//! end of an open order). An open
+//! end of an open order). Between long edges both moves are also tried directly (reverse
+//! what two long edges bound; insert a stretch into another long edge): in a band thicker
+//! than the spacing a defect's true neighbours lie beyond the k nearest. An open
 //! order is handled as a closed tour through a dummy point at distance 0 from every point,
 //! so the ends may move too. Moves are applied while they shorten the polygon by more than
-//! 1e-12 of the bounding-box diagonal. Each pass costs O(n·k) for 2-opt, O(n·k + J²·k)
+//! 1e-12 of the bounding-box diagonal. Each pass costs O(n·k) for 2-opt, O(n·k + J²·(k + J))
 //! for insertion with J long edges, plus O(n) per applied move.
 
 use serde::{Deserialize, Serialize};

@@ -143,7 +143,7 @@ impl<'a> Tour<'a> {
             for length in 1..=3 {
                 let end_position = (self.position[start] + length - 1) % self.nodes.len();
                 let end = self.nodes[end_position];
-                if self.try_insertion(start, end, epsilon) {
+                if self.try_insertion(start, end, &[], epsilon) {
                     moves += 1;
                     break;
                 }
@@ -182,7 +182,14 @@ impl<'a> Tour<'a> {
                 if first == second || !is_boundary(first, self) || !is_boundary(second, self) {
                     continue;
                 }
-                if self.try_insertion(self.next(first), second, epsilon) {
+                // Two long edges around a reversed stretch: in a thick noisy band the
+                // stretch's true neighbours can lie beyond every point's k nearest, where
+                // plain 2-opt looks.
+                if self.try_reversal(first, second, epsilon) {
+                    moves += 1;
+                    continue;
+                }
+                if self.try_insertion(self.next(first), second, &tails, epsilon) {
                     moves += 1;
                 }
             }
@@ -190,9 +197,27 @@ impl<'a> Tour<'a> {
         moves
     }
 
-    /// Tries to move the stretch `start` … `end` (forward) between two neighbours elsewhere;
-    /// applies the best improving placement found.
-    fn try_insertion(&mut self, start: usize, end: usize, epsilon: f64) -> bool {
+    /// Replaces the edges after `a` and after `c` by `a`–`c` and their successors' edge
+    /// (reversing what lies between) when that shortens the tour.
+    fn try_reversal(&mut self, a: usize, c: usize, epsilon: f64) -> bool {
+        let (b, d) = (self.next(a), self.next(c));
+        if c == b || d == a {
+            return false;
+        }
+        let gain =
+            self.distance(a, b) + self.distance(c, d) - self.distance(a, c) - self.distance(b, d);
+        if gain > epsilon {
+            self.reverse(b, c);
+            return true;
+        }
+        false
+    }
+
+    /// Tries to move the stretch `start` … `end` (forward) between two neighbours elsewhere:
+    /// after a point near one of its ends, or after one of `also` (the tails of long edges:
+    /// in a thick noisy band a misplaced stretch's true place can lie beyond its ends' k
+    /// nearest points). Applies the best improving placement found.
+    fn try_insertion(&mut self, start: usize, end: usize, also: &[usize], epsilon: f64) -> bool {
         let size = self.nodes.len();
         let (i, j) = (self.position[start], self.position[end]);
         let span = (j + size - i) % size + 1;
@@ -209,30 +234,35 @@ impl<'a> Tour<'a> {
             return false;
         }
         let mut best: Option<(f64, usize, bool)> = None;
+        let mut consider = |a: usize, tour: &Tour<'_>| {
+            let b = tour.next(a);
+            if inside(a, tour) || inside(b, tour) {
+                return;
+            }
+            let ab = tour.distance(a, b);
+            let keep = tour.distance(a, start) + tour.distance(end, b) - ab;
+            let flip = tour.distance(a, end) + tour.distance(start, b) - ab;
+            let (cost, reversed) = if flip < keep {
+                (flip, true)
+            } else {
+                (keep, false)
+            };
+            if removal - cost > epsilon && best.is_none_or(|(g, _, _)| removal - cost > g) {
+                best = Some((removal - cost, a, reversed));
+            }
+        };
         for x in [start, end] {
             for index in 0..self.neighbours[x].len() {
                 let c = self.neighbours[x][index];
                 if self.distance(x, c) >= removal {
                     break;
                 }
-                for a in [c, self.previous(c)] {
-                    let b = self.next(a);
-                    if inside(a, self) || inside(b, self) {
-                        continue;
-                    }
-                    let ab = self.distance(a, b);
-                    let keep = self.distance(a, start) + self.distance(end, b) - ab;
-                    let flip = self.distance(a, end) + self.distance(start, b) - ab;
-                    let (cost, reversed) = if flip < keep {
-                        (flip, true)
-                    } else {
-                        (keep, false)
-                    };
-                    if removal - cost > epsilon && best.is_none_or(|(g, _, _)| removal - cost > g) {
-                        best = Some((removal - cost, a, reversed));
-                    }
-                }
+                consider(c, self);
+                consider(self.previous(c), self);
             }
+        }
+        for &a in also {
+            consider(a, self);
         }
         let Some((_, a, reversed)) = best else {
             return false;
