@@ -11,8 +11,8 @@ use serde::Serialize;
 use neurosurf_trainer::curve::{
     BENCHMARK_SIZES, BSplineCurve, CurveOptions, CurvePoints, FitSummary, LongSteps, PlotLayers,
     PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, TrainingReport, benchmark,
-    curve_to_blob, fit_surface, interpolation_parameter, reconstruct_curve, sample_curve,
-    surface_mesh, surface_to_blob, write_plot,
+    curve_svg, curve_to_blob, export_curve, export_surface, fit_surface, interpolation_parameter,
+    reconstruct_curve, sample_curve, surface_mesh, surface_to_blob, write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
@@ -34,6 +34,9 @@ pub enum Command {
     Plot(PlotArgs),
     /// Time ordering and fitting on noisy ellipses of 20 to 20 000 points.
     Bench(BenchArgs),
+    /// Export a curve or spline surface blob for CAD: degree, knots and control points as
+    /// JSON, and a 2-D curve as an SVG path of cubic Béziers in model coordinates.
+    Export(ExportArgs),
 }
 
 pub fn run(command: &Command) -> Result<()> {
@@ -43,6 +46,7 @@ pub fn run(command: &Command) -> Result<()> {
         Command::Surface(args) => surface(args),
         Command::Plot(args) => plot(args),
         Command::Bench(args) => bench(args),
+        Command::Export(args) => export(args),
     }
 }
 
@@ -454,6 +458,66 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         seconds
     );
     wrote_blob(&args.blob.out, blob.len(), scalar, args.mesh.as_deref());
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ExportArgs {
+    /// A curve or spline surface blob.
+    model: PathBuf,
+    /// Write degree, knots and control points as JSON: a standard (unclamped) B-spline whose
+    /// evaluation by de Boor's algorithm over its domain is `eval --scalar f64`.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Write a 2-D curve as an SVG path of cubic Béziers, one per segment, in the model's
+    /// coordinates.
+    #[arg(long, value_name = "FILE")]
+    svg: Option<PathBuf>,
+}
+
+fn export(args: &ExportArgs) -> Result<()> {
+    if args.json.is_none() && args.svg.is_none() {
+        anyhow::bail!("nothing to export: give --json FILE, --svg FILE or both");
+    }
+    for path in [&args.json, &args.svg].into_iter().flatten() {
+        neurosurf_trainer::io::check_output(path)?;
+    }
+    let model = LoadedModel::read(&args.model)?;
+    let (json, svg) = match &model {
+        LoadedModel::Curve { decoded, .. } => {
+            let json = serde_json::to_string_pretty(&export_curve(&decoded.curve)?)?;
+            let svg = match &args.svg {
+                Some(_) => Some(curve_svg(&decoded.curve)?),
+                None => None,
+            };
+            (json, svg)
+        }
+        LoadedModel::SplineSurface { decoded, .. } => {
+            if args.svg.is_some() {
+                anyhow::bail!(
+                    "{}: a spline surface has no SVG form; export it with --json",
+                    args.model.display()
+                );
+            }
+            (
+                serde_json::to_string_pretty(&export_surface(&decoded.surface)?)?,
+                None,
+            )
+        }
+        other => anyhow::bail!(
+            "{}: a {} model; `curve export` exports curves and spline surfaces",
+            args.model.display(),
+            other.kind().name()
+        ),
+    };
+    if let Some(path) = &args.json {
+        write_atomic(path, format!("{json}\n").as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    if let (Some(path), Some(svg)) = (&args.svg, svg) {
+        write_atomic(path, svg.as_bytes())?;
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }
 

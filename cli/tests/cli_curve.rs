@@ -378,3 +378,112 @@ fn the_fit_reports_the_order_and_a_wrong_topology() {
     let right = fit("spiral", false);
     assert!(!right.contains("warning"), "{right}");
 }
+
+/// The exported knots and control points (by de Boor's algorithm) and the SVG path's cubic
+/// Béziers reproduce `eval` to 10⁻⁶ of the curve's size.
+#[test]
+fn exports_reproduce_eval() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("peanut.txt");
+    ok(&[
+        "curve",
+        "sample",
+        "peanut",
+        "-n",
+        "120",
+        "--out",
+        s(&points),
+    ]);
+    for closed in [true, false] {
+        let blob = dir.path().join("c.nsb");
+        let mut fit = vec!["curve", "fit", s(&points), "--out", s(&blob)];
+        if closed {
+            fit.push("--closed");
+        }
+        ok(&fit);
+        let (json_path, svg_path) = (dir.path().join("c.json"), dir.path().join("c.svg"));
+        ok(&[
+            "curve",
+            "export",
+            s(&blob),
+            "--json",
+            s(&json_path),
+            "--svg",
+            s(&svg_path),
+        ]);
+        let t_path = t_file(dir.path());
+        let csv = ok(&["eval", s(&blob), "--points", s(&t_path), "--scalar", "f64"]);
+        let rows: Vec<Vec<f64>> = csv
+            .lines()
+            .filter_map(|l| l.split(',').map(|v| v.parse().ok()).collect())
+            .collect();
+        let exported = json(&fs::read_to_string(&json_path).unwrap());
+        let numbers = |v: &serde_json::Value| -> Vec<f64> {
+            v.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        };
+        let knots = numbers(&exported["knots"]);
+        let control: Vec<Vec<f64>> = exported["control_points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(numbers)
+            .collect();
+        // The Béziers: after "M x,y", groups of three points per segment.
+        let svg = fs::read_to_string(&svg_path).unwrap();
+        let d = svg
+            .split(" d=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        let flat: Vec<[f64; 2]> = d
+            .split_whitespace()
+            .filter(|w| w.contains(','))
+            .map(|w| {
+                let (x, y) = w.split_once(',').unwrap();
+                [x.parse().unwrap(), y.parse().unwrap()]
+            })
+            .collect();
+        let segments = (flat.len() - 1) / 3;
+        assert!(rows.len() > 40);
+        for row in &rows {
+            let t = row[0].clamp(0.0, 1.0);
+            let want = [row[1], row[2]];
+            // de Boor on the exported knots.
+            let m = control.len();
+            let k = (3..m).rev().find(|&k| knots[k] <= t).unwrap_or(3);
+            let mut p: Vec<Vec<f64>> = (0..4).map(|j| control[k - 3 + j].clone()).collect();
+            for r in 1..4 {
+                for j in (r..4).rev() {
+                    let i = k - 3 + j;
+                    let a = (t - knots[i]) / (knots[i + 4 - r] - knots[i]);
+                    p[j] = (0..2)
+                        .map(|c| (1.0 - a) * p[j - 1][c] + a * p[j][c])
+                        .collect();
+                }
+            }
+            // The Bézier segment holding t.
+            let st = t * segments as f64;
+            let i = (st.floor() as usize).min(segments - 1);
+            let (u, v) = (st - i as f64, 1.0 - (st - i as f64));
+            let b = &flat[3 * i..3 * i + 4];
+            let w = [v * v * v, 3.0 * u * v * v, 3.0 * u * u * v, u * u * u];
+            for c in 0..2 {
+                let bezier: f64 = (0..4).map(|j| w[j] * b[j][c]).sum();
+                assert!(
+                    (p[3][c] - want[c]).abs() < 1e-6,
+                    "de Boor at {t}: {p:?} {want:?}"
+                );
+                assert!(
+                    (bezier - want[c]).abs() < 1e-6,
+                    "Bézier at {t}: {bezier} {want:?}"
+                );
+            }
+        }
+    }
+}

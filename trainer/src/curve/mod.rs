@@ -37,6 +37,7 @@ mod basis;
 mod bench;
 mod blob;
 mod convergence;
+mod export;
 mod fit;
 mod grid;
 mod grid_map;
@@ -65,6 +66,9 @@ pub use blob::{
     surface_to_blob,
 };
 pub use convergence::Convergence;
+pub use export::{
+    CurveExport, DEGREE, SurfaceExport, bezier_segments, curve_svg, export_curve, export_surface,
+};
 pub use fit::{
     Approximation, ApproximationOptions, approximate, check_curve_capacity,
     chord_length_parameters, default_control_points, interpolate, interpolation_parameter,
