@@ -140,6 +140,12 @@ pub struct FitArgs {
     /// core holds at most 512).
     #[arg(long)]
     control: Option<usize>,
+    /// Smoothing weight λ of the approximation: a penalty λ·Σ|P_{k−1} − 2P_k + P_{k+1}|² on
+    /// the control polygon's second differences, relative to the data term. The default only
+    /// keeps spans without data well-posed; larger values bend the curve less where the data
+    /// leave it free.
+    #[arg(long, value_name = "LAMBDA", default_value_t = CurveOptions::default().approximation.smoothing)]
+    smoothing: f64,
     /// Neurons per input point in the chain (the paper: 4).
     #[arg(long, default_value_t = CurveOptions::default().kohonen.neurons_per_point)]
     neurons_per_point: usize,
@@ -212,6 +218,14 @@ fn fit(args: &FitArgs) -> Result<()> {
     options.kohonen.neurons_per_point = args.neurons_per_point;
     options.kohonen.max_trained_points = args.chain_points;
     options.approximation.control_points = args.control;
+    if !(args.smoothing.is_finite() && (0.0..=1e6).contains(&args.smoothing)) {
+        anyhow::bail!(
+            "--smoothing {}: give a finite weight from 0 to 1e6 (the default is {:e})",
+            args.smoothing,
+            CurveOptions::default().approximation.smoothing
+        );
+    }
+    options.approximation.smoothing = args.smoothing;
     if args.no_refine {
         options.refine = None;
     }

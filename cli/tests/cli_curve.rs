@@ -487,3 +487,50 @@ fn exports_reproduce_eval() {
         }
     }
 }
+
+/// `--smoothing` reaches the fit (a stiffer curve leaves larger residuals), and absurd
+/// values are refused before training.
+#[test]
+fn smoothing_is_an_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("e.txt");
+    ok(&[
+        "curve",
+        "sample",
+        "ellipse",
+        "-n",
+        "200",
+        "--noise",
+        "3",
+        "--out",
+        s(&points),
+    ]);
+    let out = dir.path().join("e.nsb");
+    let rms = |lambda: &str| {
+        let report = json(&ok(&[
+            "curve",
+            "fit",
+            s(&points),
+            "--closed",
+            "--out",
+            s(&out),
+            "--smoothing",
+            lambda,
+            "--json",
+        ]));
+        report["rms_residual"].as_f64().unwrap()
+    };
+    assert!(rms("10") > 1.5 * rms("0"));
+    for bad in ["nan", "1e9", "inf"] {
+        let error = fails(&[
+            "curve",
+            "fit",
+            s(&points),
+            "--out",
+            s(&out),
+            "--smoothing",
+            bad,
+        ]);
+        assert!(error.contains("--smoothing"), "{error}");
+    }
+}
