@@ -577,3 +577,74 @@ fn the_repair_undoes_defects_in_a_thick_band() {
     let jumps = repaired.long_steps(&points, 10.0);
     assert_eq!(jumps.count, 0, "{jumps:?}");
 }
+
+/// An open curve's order ends where the curve ends: a hairpin (two arms 0.2 apart joined by
+/// a half circle) and a 'C' with a 30° opening, 200 noisy points, several seeds.
+#[test]
+fn open_curves_end_where_they_end() {
+    for seed in 1..=4 {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let bend = std::f64::consts::PI * 0.1;
+        let hairpin: Vec<[f64; 2]> = (0..200)
+            .map(|_| {
+                let s = rng.random::<f64>() * (4.0 + bend);
+                let [x, y] = if s < 2.0 {
+                    [s - 2.0, 0.1]
+                } else if s < 2.0 + bend {
+                    let a = (s - 2.0) / 0.1;
+                    [0.1 * a.sin(), 0.1 * a.cos()]
+                } else {
+                    [-(s - 2.0 - bend), -0.1]
+                };
+                [
+                    x + 0.002 * gaussian(&mut rng),
+                    y + 0.002 * gaussian(&mut rng),
+                ]
+            })
+            .collect();
+        let c: Vec<[f64; 2]> = (0..200)
+            .map(|_| {
+                let a = (15.0 + 330.0 * rng.random::<f64>()).to_radians();
+                let r = 1.0 + 0.005 * gaussian(&mut rng);
+                [r * a.cos(), r * a.sin()]
+            })
+            .collect();
+        // Each arm's extreme point: the leftmost of either hairpin arm, and the C's points
+        // nearest its two opening angles.
+        let extreme = |points: &[[f64; 2]],
+                       key: &dyn Fn([f64; 2]) -> f64,
+                       keep: &dyn Fn([f64; 2]) -> bool| {
+            (0..points.len())
+                .filter(|&i| keep(points[i]))
+                .min_by(|&a, &b| key(points[a]).total_cmp(&key(points[b])))
+                .unwrap()
+        };
+        let angle = |p: [f64; 2]| p[1].atan2(p[0]).to_degrees().rem_euclid(360.0);
+        let cases = [
+            (
+                &hairpin,
+                [
+                    extreme(&hairpin, &|p| p[0], &|p| p[1] > 0.0),
+                    extreme(&hairpin, &|p| p[0], &|p| p[1] < 0.0),
+                ],
+            ),
+            (
+                &c,
+                [
+                    extreme(&c, &|p| angle(p), &|_| true),
+                    extreme(&c, &|p| -angle(p), &|_| true),
+                ],
+            ),
+        ];
+        for (points, mut want) in cases {
+            let points = CurvePoints::from_2d(points).unwrap();
+            let result =
+                reconstruct_curve(&points, &CurveOptions::new(Topology::Open, seed)).unwrap();
+            let order = &result.ordering.order;
+            let mut ends = [order[0], order[order.len() - 1]];
+            ends.sort_unstable();
+            want.sort_unstable();
+            assert_eq!(ends, want, "seed {seed}");
+        }
+    }
+}
