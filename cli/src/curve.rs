@@ -9,10 +9,11 @@ use clap::{Subcommand, ValueEnum};
 use serde::Serialize;
 
 use neurosurf_trainer::curve::{
-    BENCHMARK_SIZES, BSplineCurve, CurveOptions, CurvePoints, FitSummary, LongSteps, PlotLayers,
-    PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, TrainingReport, benchmark,
-    curve_svg, curve_to_blob, export_curve, export_surface, fit_surface, interpolation_parameter,
-    reconstruct_curve, sample_curve, surface_mesh, surface_to_blob, write_plot,
+    BENCHMARK_SIZES, BSplineCurve, BandReport, CurveOptions, CurvePoints, FitSummary, LongSteps,
+    PlotLayers, PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, TrainingReport,
+    benchmark, curve_svg, curve_to_blob, export_curve, export_surface, fit_surface,
+    interpolation_parameter, reconstruct_curve, sample_curve, surface_mesh, surface_to_blob,
+    write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
@@ -191,6 +192,8 @@ struct FitReport<'a> {
     chain_converged: bool,
     /// Steps of the order longer than three times its median step.
     order_long_steps: LongSteps,
+    /// How a band of noise wider than the spacing was parametrized, if it was.
+    band: Option<BandReport>,
     refine_reversals: Option<usize>,
     refine_insertions: Option<usize>,
     #[serde(flatten)]
@@ -294,6 +297,7 @@ fn fit(args: &FitArgs) -> Result<()> {
         chain_trained_points: result.training.trained_points,
         chain_converged: result.training.convergence.converged(),
         order_long_steps: result.ordering.long_steps(&points, LONG_STEP),
+        band: result.band.clone(),
         refine_reversals: result.refinement.as_ref().map(|r| r.reversals),
         refine_insertions: result.refinement.as_ref().map(|r| r.insertions),
         fit: summary,
@@ -321,6 +325,16 @@ fn fit(args: &FitArgs) -> Result<()> {
         "{}",
         convergence_text(&result.training, report.order_long_steps, report.closed)
     );
+    if let Some(band) = &report.band {
+        println!(
+            "noise across the curve {:.3e} ({:.1}× the spacing along it): fitted at parameters \
+             along the band's middle (±{} points averaged) with {} control points",
+            band.noise,
+            band.noise / band.spacing,
+            band.window,
+            report.control_points
+        );
+    }
     println!(
         "residual RMS {:.3e}, max {:.3e}; {:.3} s; wrote {} ({} bytes, {})",
         rms,

@@ -152,6 +152,19 @@ pub fn approximate(
         )));
     }
     let parameters = chord_length_parameters(ordered, closed)?;
+    approximate_at(ordered, parameters, dimension, closed, k, options)
+}
+
+/// [`approximate`] with K = `k` at the given non-decreasing parameters in [0, 1].
+pub(crate) fn approximate_at(
+    ordered: &[[f64; 3]],
+    parameters: Vec<f64>,
+    dimension: usize,
+    closed: bool,
+    k: usize,
+    options: &ApproximationOptions,
+) -> Result<Approximation> {
+    let n = ordered.len();
     let controls = control_layout(k, closed, ordered);
     let unknowns = if closed { k } else { k - 4 };
     let segments = if closed { k } else { k - 3 };

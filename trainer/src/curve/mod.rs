@@ -44,6 +44,7 @@ mod grid_map;
 mod kohonen;
 mod least_squares;
 mod metrics;
+mod noise;
 mod ordering;
 mod pipeline;
 mod plot;
@@ -80,6 +81,7 @@ pub use kohonen::{
 pub use metrics::{
     adjacency_fraction, directed_distance, distance_to_polyline, hausdorff_distance,
 };
+pub use noise::BandReport;
 pub use ordering::{LongSteps, Ordering, order_points};
 pub use pipeline::{CurveOptions, CurveReconstruction, reconstruct_curve};
 pub use plot::{PlotLayers, PlotOptions, Projection, plot_scene, render_svg, write_plot};

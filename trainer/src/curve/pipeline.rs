@@ -5,8 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 
-use super::fit::{Approximation, ApproximationOptions, approximate, interpolate};
+use super::fit::{Approximation, ApproximationOptions, approximate, approximate_at, interpolate};
 use super::kohonen::{KohonenChain, KohonenOptions, Topology, TrainingReport, train_chain};
+use super::noise::{BandReport, band_parameters};
 use super::ordering::{Ordering, order_points};
 use super::points::CurvePoints;
 use super::refine::{RefineOptions, RefineReport, refine_order};
@@ -59,6 +60,9 @@ pub struct CurveReconstruction {
     pub ordering: Ordering,
     /// The least-squares spline through the ordered points.
     pub approximation: Approximation,
+    /// When the noise across the curve is wider than the spacing: how the approximation
+    /// was parametrized instead of by chord length.
+    pub band: Option<BandReport>,
     /// The spline through every ordered point.
     pub interpolation: BSplineCurve,
 }
@@ -85,9 +89,27 @@ pub fn reconstruct_curve(
     let ordered = ordering.ordered_points(points);
     let closed = ordering.closed;
     let dimension = points.dimension();
-    let approximation = approximate(&ordered, dimension, closed, &options.approximation)?;
+    let band = band_parameters(&ordered, dimension, closed);
+    let approximation = match &band {
+        Some(band) => {
+            let k = options
+                .approximation
+                .control_points
+                .unwrap_or(band.control_points);
+            approximate_at(
+                &ordered,
+                band.parameters.clone(),
+                dimension,
+                closed,
+                k,
+                &options.approximation,
+            )?
+        }
+        None => approximate(&ordered, dimension, closed, &options.approximation)?,
+    };
     let interpolation = interpolate(&ordered, dimension, closed)?;
     Ok(CurveReconstruction {
+        band: band.map(|b| b.report),
         chain,
         training,
         chain_ordering,

@@ -648,3 +648,35 @@ fn open_curves_end_where_they_end() {
         }
     }
 }
+
+/// Noise wider than the spacing (1 % of the size on 1 000 points: about 5 spacings) makes
+/// the order zig-zag; the fit is parametrized along the band's middle with fewer control
+/// points and stays within 1.2 % of the true curve (measured 0.7–0.8 %; chord lengths along
+/// the zig-zag gave 2.2–2.5 %). Data with noise below the spacing is fitted as before.
+#[test]
+fn a_noisy_band_is_fitted_along_its_middle() {
+    for curve in [SampleCurve::Ellipse, SampleCurve::Peanut] {
+        let count = 1_000;
+        let probe = sample(curve, count, 1);
+        let length: f64 = probe.truth.windows(2).map(|w| distance(w[0], w[1])).sum();
+        let noise = 0.01 * probe.size / (length / count as f64);
+        for seed in 1..=3 {
+            let s = sample_curve(
+                curve,
+                &SampleOptions {
+                    count,
+                    noise,
+                    seed,
+                    ..SampleOptions::default()
+                },
+            )
+            .unwrap();
+            let result = run(&s, seed);
+            let band = result.band.as_ref().expect("a noisy band");
+            assert!(band.control_points < count / 5, "{band:?}");
+            let (_, _, hausdorff, _) = score(&s, &result);
+            assert!(hausdorff <= 0.012, "{curve:?} seed {seed}: {hausdorff}");
+        }
+        assert!(run(&probe, 1).band.is_none());
+    }
+}
