@@ -6,10 +6,12 @@
 //! neighbours over about the band's width gives a polyline along the band's middle; chord
 //! lengths along that polyline follow the curve.
 
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::fit::default_control_points;
 use crate::error::Result;
+use crate::fidelity::median;
 use crate::geometry::vector::{distance, dot, sub};
 
 /// Order neighbours on each side that the noise estimate fits a line to.
@@ -88,14 +90,6 @@ fn polyline_length(points: &[[f64; 3]], closed: bool) -> f64 {
     (0..if closed { n } else { n - 1 })
         .map(|i| distance(points[i], points[(i + 1) % n]))
         .sum()
-}
-
-fn median(values: &mut [f64]) -> f64 {
-    if values.is_empty() {
-        return 0.0;
-    }
-    let middle = values.len() / 2;
-    *values.select_nth_unstable_by(middle, f64::total_cmp).1
 }
 
 /// The order neighbours of point `i` within `w` of it (wrapping when closed).
@@ -204,22 +198,10 @@ pub(crate) fn moving_average(ordered: &[[f64; 3]], closed: bool, w: usize) -> Ve
         .collect()
 }
 
-/// Solves the 3 × 3 system `a x = b` by Cramer's rule; `None` when it is singular.
+/// Solves the 3 × 3 system `a x = b`; `None` when it is singular.
 fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(a);
-    if d.abs() <= 1e-300 || !d.is_finite() {
-        return None;
-    }
-    Some([0, 1, 2].map(|col| {
-        let mut m = a;
-        for row in 0..3 {
-            m[row][col] = b[row];
-        }
-        det(m) / d
-    }))
+    let x = Matrix3::from_fn(|i, j| a[i][j])
+        .lu()
+        .solve(&Vector3::from(b))?;
+    x.iter().all(|v| v.is_finite()).then(|| [x[0], x[1], x[2]])
 }
