@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use serde::Serialize;
 
@@ -81,7 +81,7 @@ pub fn run(args: &Args) -> Result<()> {
         "head" => sample_shape(&Shape::Head, args.count, args.seed)?,
         file if file.ends_with(".obj") || file.ends_with(".ply") => {
             let mesh = read_mesh(Path::new(file))?;
-            sample_mesh(&mesh, args.count, args.seed)?
+            sample_mesh(&mesh, args.count, args.seed).with_context(|| format!("sampling {file}"))?
         }
         other => bail!(
             "unknown shape {other:?}: expected sphere, ellipsoid, torus, head, or an .obj/.ply mesh"

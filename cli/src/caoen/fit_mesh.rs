@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use serde::Serialize;
 
 use neurosurf_trainer::caoen::{
@@ -47,7 +47,8 @@ pub fn run(args: &Args) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
     neurosurf_trainer::io::check_output(&args.out)?;
     let mesh = read_mesh(&args.mesh)?;
-    let map = spherical_parameterization(&mesh)?;
+    let map = spherical_parameterization(&mesh)
+        .with_context(|| format!("mapping {} onto the sphere", args.mesh.display()))?;
     neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
     let fit = fit_parameterized(&mesh, &map.points, args.keys, &MeshFitOptions::default())?;
     let blob = caoen::to_blob(&fit.network, scalar, b"neurosurf caoen fit-mesh")?;

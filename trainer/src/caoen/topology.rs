@@ -172,7 +172,8 @@ pub fn check_sphere_topology(mesh: &Mesh) -> Result<()> {
         .find(|&&(a, b)| !directed.contains_key(&(b, a)))
     {
         return Err(Error::invalid(format!(
-            "edge ({a}, {b}) is on a boundary: the mesh is not closed"
+            "edge ({a}, {b}) (vertex numbers from 0) is on a boundary: the mesh is not \
+             closed; a Cao En fit needs a closed surface without holes"
         )));
     }
     let parts = edge_components(&mesh).len();

@@ -45,7 +45,10 @@ pub fn sample_mesh(mesh: &Mesh, count: usize, seed: u64) -> Result<PointSet> {
         }
     }
     if table.is_empty() {
-        return Err(Error::invalid("the mesh has zero total area"));
+        return Err(Error::invalid(
+            "the mesh has zero total area: every triangle's vertices coincide or lie on a \
+             line; give a mesh with faces that enclose area",
+        ));
     }
     if !total.is_finite() {
         return Err(Error::invalid("the mesh's total area overflows"));
