@@ -290,17 +290,26 @@ fn shading_folds_into_the_network_and_meshes_carry_texture_coordinates() {
 fn key_counts_beyond_the_core_are_refused_before_fitting() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("k.nsb");
-    // 257 key points on the sphere: one past the core's 256.
-    let text: String = (0..257)
-        .map(|i| {
-            let t = f64::from(i) * 2.399_963;
-            let z = 1.0 - 2.0 * (f64::from(i) + 0.5) / 257.0;
-            let r = (1.0 - z * z).sqrt();
-            format!("{} {} {}\n", r * t.cos(), r * t.sin(), z)
-        })
-        .collect();
+    // n key points spread over a sphere (a golden-angle spiral).
+    let sphere = |n: u32| -> String {
+        (0..n)
+            .map(|i| {
+                let t = f64::from(i) * 2.399_963;
+                let z = 1.0 - 2.0 * (f64::from(i) + 0.5) / f64::from(n);
+                let r = (1.0 - z * z).sqrt();
+                format!("{} {} {}\n", r * t.cos(), r * t.sin(), z)
+            })
+            .collect()
+    };
+    // 256 key points: exactly what the core holds, written and loaded back.
     let keys = dir.path().join("keys.txt");
-    fs::write(&keys, text).unwrap();
+    fs::write(&keys, sphere(256)).unwrap();
+    let fit = ok(&["caoen", "fit", s(&keys), "--out", s(&out), "--json"]);
+    assert!(fit.contains("256"), "{fit}");
+    ok(&["info", s(&out)]);
+    fs::remove_file(&out).unwrap();
+    // 257: one past.
+    fs::write(&keys, sphere(257)).unwrap();
     let error = fails(&["caoen", "fit", s(&keys), "--out", s(&out)]);
     assert!(
         error.contains("257 key points") && error.contains("256"),

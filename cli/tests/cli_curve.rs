@@ -281,12 +281,12 @@ fn curves_beyond_the_core_are_refused_before_training_and_large_sets_fit_by_defa
         s(&points),
         "--closed",
         "--control",
-        "600",
+        "513",
         "--out",
         s(&model),
     ]);
     assert!(
-        many.contains("--control 600") && many.contains("512"),
+        many.contains("--control 513") && many.contains("512"),
         "{many}"
     );
     assert!(!model.exists());
