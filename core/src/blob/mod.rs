@@ -26,10 +26,11 @@
 //! The core reads exactly one version, [`FORMAT_VERSION`]; any other gets
 //! [`BlobError::UnsupportedVersion`] (checked before the CRC), never a reinterpretation.
 //!
-//! - **3**: an implicit payload carries its [frame](crate::frame) (origin and power-of-two
-//!   scale) after the width; modules and guards are stored in the frame's coordinates, so
-//!   their parameters no longer depend on the data's units. The other kinds' payloads are
-//!   unchanged.
+//! - **3**: implicit, curve, spline-surface and surface-network payloads carry a
+//!   [frame](crate::frame) (origin and power-of-two scale): implicit modules and guards, and
+//!   curve and surface control points, are stored in the frame's coordinates, and a surface
+//!   network's outputs are moved by it, so their parameters no longer depend on the data's
+//!   units. Cao En and RBF payloads are unchanged.
 //! - **2**: every implicit module starts with its normalization c, A — nodes included — and a
 //!   node's a′ layer reads [b_left, b_right, A·(x − c)] (2N + 3 inputs; see
 //!   [`crate::implicit::ModuleLayout`]). The other kinds' payloads are unchanged.
