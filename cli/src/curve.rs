@@ -11,7 +11,7 @@ use serde::Serialize;
 use neurosurf_trainer::curve::{
     BENCHMARK_SIZES, BSplineCurve, BandReport, CurveOptions, CurvePoints, FitSummary, LongSteps,
     PlotLayers, PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, TrainingReport,
-    benchmark, curve_svg, curve_to_blob, export_curve, export_surface, fit_surface,
+    benchmark, curve_svg, curve_to_blob, curves_dxf, export_curve, export_surface, fit_surface,
     interpolation_parameter, reconstruct_curve, sample_curve, surface_mesh, surface_to_blob,
     write_plot,
 };
@@ -501,34 +501,45 @@ pub struct ExportArgs {
     /// coordinates.
     #[arg(long, value_name = "FILE")]
     svg: Option<PathBuf>,
+    /// Write a curve as a DXF (R2000) `SPLINE` entity: degree 3, clamped knots over the
+    /// parameter range [0, 1], in the model's coordinates.
+    #[arg(long, value_name = "FILE")]
+    dxf: Option<PathBuf>,
 }
 
 fn export(args: &ExportArgs) -> Result<()> {
-    if args.json.is_none() && args.svg.is_none() {
-        anyhow::bail!("nothing to export: give --json FILE, --svg FILE or both");
+    if args.json.is_none() && args.svg.is_none() && args.dxf.is_none() {
+        anyhow::bail!("nothing to export: give --json FILE, --svg FILE, --dxf FILE or several");
     }
-    for path in [&args.json, &args.svg].into_iter().flatten() {
+    for path in [&args.json, &args.svg, &args.dxf].into_iter().flatten() {
         neurosurf_trainer::io::check_output(path)?;
     }
     let model = LoadedModel::read(&args.model)?;
-    let (json, svg) = match &model {
+    let (json, svg, dxf) = match &model {
         LoadedModel::Curve { decoded, .. } => {
             let json = serde_json::to_string_pretty(&export_curve(&decoded.curve)?)?;
             let svg = match &args.svg {
                 Some(_) => Some(curve_svg(&decoded.curve)?),
                 None => None,
             };
-            (json, svg)
+            let dxf = match &args.dxf {
+                Some(_) => Some(curves_dxf(std::slice::from_ref(&decoded.curve))?),
+                None => None,
+            };
+            (json, svg, dxf)
         }
         LoadedModel::SplineSurface { decoded, .. } => {
-            if args.svg.is_some() {
-                anyhow::bail!(
-                    "{}: a spline surface has no SVG form; export it with --json",
-                    args.model.display()
-                );
+            for (given, form) in [(&args.svg, "SVG"), (&args.dxf, "DXF")] {
+                if given.is_some() {
+                    anyhow::bail!(
+                        "{}: a spline surface has no {form} form here; export it with --json",
+                        args.model.display()
+                    );
+                }
             }
             (
                 serde_json::to_string_pretty(&export_surface(&decoded.surface)?)?,
+                None,
                 None,
             )
         }
@@ -544,6 +555,10 @@ fn export(args: &ExportArgs) -> Result<()> {
     }
     if let (Some(path), Some(svg)) = (&args.svg, svg) {
         write_atomic(path, svg.as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    if let (Some(path), Some(dxf)) = (&args.dxf, dxf) {
+        write_atomic(path, &dxf)?;
         println!("wrote {}", path.display());
     }
     Ok(())

@@ -379,8 +379,50 @@ fn the_fit_reports_the_order_and_a_wrong_topology() {
     assert!(!right.contains("warning"), "{right}");
 }
 
-/// The exported knots and control points (by de Boor's algorithm) and the SVG path's cubic
-/// Béziers reproduce `eval` to 10⁻⁶ of the curve's size.
+/// de Boor's algorithm for a cubic B-spline at t in its domain.
+fn de_boor(knots: &[f64], control: &[Vec<f64>], t: f64) -> Vec<f64> {
+    let m = control.len();
+    let k = (3..m).rev().find(|&k| knots[k] <= t).unwrap_or(3);
+    let mut p: Vec<Vec<f64>> = (0..4).map(|j| control[k - 3 + j].clone()).collect();
+    for r in 1..4 {
+        for j in (r..4).rev() {
+            let i = k - 3 + j;
+            let a = (t - knots[i]) / (knots[i + 4 - r] - knots[i]);
+            p[j] = (0..p[j].len())
+                .map(|c| (1.0 - a) * p[j - 1][c] + a * p[j][c])
+                .collect();
+        }
+    }
+    p[3].clone()
+}
+
+/// The knots and control points of the one `SPLINE` entity of an ASCII DXF file, read from
+/// its group codes (40: a knot; 10, 20, 30: a control point's x, y, z).
+fn dxf_spline(text: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let lines: Vec<&str> = text.lines().map(str::trim).collect();
+    let (mut knots, mut control) = (Vec::new(), Vec::<Vec<f64>>::new());
+    let mut inside = false;
+    for pair in lines.chunks(2) {
+        let (code, value) = (pair[0], pair.get(1).copied().unwrap_or(""));
+        if code == "0" {
+            inside = value == "SPLINE";
+            continue;
+        }
+        if !inside {
+            continue;
+        }
+        match code {
+            "40" => knots.push(value.parse().unwrap()),
+            "10" => control.push(vec![value.parse().unwrap()]),
+            "20" | "30" => control.last_mut().unwrap().push(value.parse().unwrap()),
+            _ => {}
+        }
+    }
+    (knots, control)
+}
+
+/// The exported knots and control points (JSON and DXF, by de Boor's algorithm) and the SVG
+/// path's cubic Béziers reproduce `eval` to 10⁻⁶ of the curve's size.
 #[test]
 fn exports_reproduce_eval() {
     let dir = tempfile::tempdir().unwrap();
@@ -402,6 +444,7 @@ fn exports_reproduce_eval() {
         }
         ok(&fit);
         let (json_path, svg_path) = (dir.path().join("c.json"), dir.path().join("c.svg"));
+        let dxf_path = dir.path().join("c.dxf");
         ok(&[
             "curve",
             "export",
@@ -410,7 +453,12 @@ fn exports_reproduce_eval() {
             s(&json_path),
             "--svg",
             s(&svg_path),
+            "--dxf",
+            s(&dxf_path),
         ]);
+        let (dxf_knots, dxf_control) = dxf_spline(&fs::read_to_string(&dxf_path).unwrap());
+        assert_eq!(dxf_knots.len(), dxf_control.len() + 4);
+        assert_eq!(dxf_knots[..4], [0.0; 4], "clamped");
         let t_path = t_file(dir.path());
         let csv = ok(&["eval", s(&blob), "--points", s(&t_path), "--scalar", "f64"]);
         let rows: Vec<Vec<f64>> = csv
@@ -455,18 +503,8 @@ fn exports_reproduce_eval() {
             let t = row[0].clamp(0.0, 1.0);
             let want = [row[1], row[2]];
             // de Boor on the exported knots.
-            let m = control.len();
-            let k = (3..m).rev().find(|&k| knots[k] <= t).unwrap_or(3);
-            let mut p: Vec<Vec<f64>> = (0..4).map(|j| control[k - 3 + j].clone()).collect();
-            for r in 1..4 {
-                for j in (r..4).rev() {
-                    let i = k - 3 + j;
-                    let a = (t - knots[i]) / (knots[i + 4 - r] - knots[i]);
-                    p[j] = (0..2)
-                        .map(|c| (1.0 - a) * p[j - 1][c] + a * p[j][c])
-                        .collect();
-                }
-            }
+            let p = de_boor(&knots, &control, t);
+            let from_dxf = de_boor(&dxf_knots, &dxf_control, t);
             // The Bézier segment holding t.
             let st = t * segments as f64;
             let i = (st.floor() as usize).min(segments - 1);
@@ -476,8 +514,12 @@ fn exports_reproduce_eval() {
             for c in 0..2 {
                 let bezier: f64 = (0..4).map(|j| w[j] * b[j][c]).sum();
                 assert!(
-                    (p[3][c] - want[c]).abs() < 1e-6,
+                    (p[c] - want[c]).abs() < 1e-6,
                     "de Boor at {t}: {p:?} {want:?}"
+                );
+                assert!(
+                    (from_dxf[c] - want[c]).abs() < 1e-6,
+                    "DXF at {t}: {from_dxf:?} {want:?}"
                 );
                 assert!(
                     (bezier - want[c]).abs() < 1e-6,

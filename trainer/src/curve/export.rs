@@ -95,6 +95,70 @@ pub fn export_curve(curve: &BSplineCurve) -> Result<CurveExport> {
     })
 }
 
+/// `export` with clamped knots: the same curve, parameter for parameter, on the knots
+/// 0, 0, 0, 0, 1/s, …, (s − 1)/s, 1, 1, 1, 1 that CAD tools assume, so that it starts at its
+/// first control point and ends at its last. Each end of the domain is inserted as a knot
+/// (Boehm's algorithm) until it has multiplicity 3, and what lies outside the domain is
+/// dropped; the control point count stays m.
+pub fn clamped(export: &CurveExport) -> CurveExport {
+    let (mut knots, mut control) = (export.knots.clone(), export.control_points.clone());
+    let [start, end] = export.domain;
+    clamp_start(&mut knots, &mut control, start);
+    // The end is the start of the reversed curve, on knots t ↦ −t.
+    knots.reverse();
+    knots.iter_mut().for_each(|k| *k = -*k);
+    control.reverse();
+    clamp_start(&mut knots, &mut control, -end);
+    knots.reverse();
+    knots.iter_mut().for_each(|k| *k = -*k);
+    control.reverse();
+    CurveExport {
+        knots,
+        control_points: control,
+        ..export.clone()
+    }
+}
+
+/// Clamps a degree-[`DEGREE`] B-spline at the start `a` of its domain (a knot of multiplicity
+/// 1 with [`DEGREE`] knots before it): inserts `a` twice, drops the two control points and
+/// knots before it, and sets the first knot to `a`.
+fn clamp_start(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, a: f64) {
+    for _ in 1..DEGREE {
+        insert_knot(knots, control, a);
+    }
+    let first = knots.iter().position(|&k| k >= a).unwrap_or(0);
+    let drop = first.saturating_sub(1);
+    knots.drain(..drop);
+    control.drain(..drop);
+    knots[0] = a;
+}
+
+/// Inserts the knot `t` once into a degree-[`DEGREE`] B-spline (Boehm): the curve is
+/// unchanged, one control point more.
+fn insert_knot(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, t: f64) {
+    let p = DEGREE;
+    // The span k with knots[k] ≤ t < knots[k + 1].
+    let k = knots.iter().rposition(|&u| u <= t).unwrap_or(p);
+    let mut inserted = Vec::with_capacity(control.len() + 1);
+    for i in 0..=control.len() {
+        let point = if i + p <= k {
+            control[i].clone()
+        } else if i > k {
+            control[i - 1].clone()
+        } else {
+            let alpha = (t - knots[i]) / (knots[i + p] - knots[i]);
+            control[i - 1]
+                .iter()
+                .zip(&control[i])
+                .map(|(a, b)| (1.0 - alpha) * a + alpha * b)
+                .collect()
+        };
+        inserted.push(point);
+    }
+    *control = inserted;
+    knots.insert(k + 1, t);
+}
+
 /// `surface` as degrees, knots and its control grid.
 ///
 /// # Errors
@@ -277,6 +341,21 @@ mod tests {
         ]
     }
 
+    /// de Boor on `e` gives `curve` at 201 parameters, to 10⁻¹².
+    fn assert_reproduces(curve: &BSplineCurve, e: &CurveExport) {
+        for i in 0..=200 {
+            let t = f64::from(i) / 200.0;
+            let reference = curve.point(t);
+            let exported = de_boor(&e.knots, &e.control_points, t);
+            for k in 0..curve.dimension {
+                assert!(
+                    (exported[k] - reference[k]).abs() < 1e-12,
+                    "{t}: {exported:?} against {reference:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn knots_and_control_points_reproduce_the_curve() {
         for curve in curves() {
@@ -284,17 +363,28 @@ mod tests {
             assert_eq!(e.knots.len(), e.control_points.len() + DEGREE + 1);
             assert_eq!(e.knots[DEGREE], 0.0);
             assert!((e.knots[e.control_points.len()] - 1.0).abs() < 1e-15);
-            for i in 0..=200 {
-                let t = f64::from(i) / 200.0;
-                let reference = curve.point(t);
-                let exported = de_boor(&e.knots, &e.control_points, t);
-                for k in 0..curve.dimension {
-                    assert!(
-                        (exported[k] - reference[k]).abs() < 1e-12,
-                        "{t}: {exported:?}"
-                    );
-                }
+            assert_reproduces(&curve, &e);
+        }
+    }
+
+    #[test]
+    fn clamped_knots_reproduce_the_curve_and_start_and_end_at_control_points() {
+        for curve in curves() {
+            let e = clamped(&export_curve(&curve).unwrap());
+            let m = e.control_points.len();
+            assert_eq!(
+                m,
+                curve.control.len() + if curve.closed { DEGREE } else { 0 }
+            );
+            assert_eq!(e.knots.len(), m + DEGREE + 1);
+            assert_eq!(e.knots[..=DEGREE], [0.0; DEGREE + 1]);
+            assert!(e.knots[m..].iter().all(|&k| (k - 1.0).abs() < 1e-15));
+            let (a, b) = (curve.point(0.0), curve.point(1.0));
+            for k in 0..curve.dimension {
+                assert!((e.control_points[0][k] - a[k]).abs() < 1e-12);
+                assert!((e.control_points[m - 1][k] - b[k]).abs() < 1e-12);
             }
+            assert_reproduces(&curve, &e);
         }
     }
 

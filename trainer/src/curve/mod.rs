@@ -37,6 +37,7 @@ mod basis;
 mod bench;
 mod blob;
 mod convergence;
+mod dxf;
 mod export;
 mod fit;
 mod grid;
@@ -67,8 +68,10 @@ pub use blob::{
     surface_to_blob,
 };
 pub use convergence::Convergence;
+pub use dxf::curves_dxf;
 pub use export::{
-    CurveExport, DEGREE, SurfaceExport, bezier_segments, curve_svg, export_curve, export_surface,
+    CurveExport, DEGREE, SurfaceExport, bezier_segments, clamped, curve_svg, export_curve,
+    export_surface,
 };
 pub use fit::{
     Approximation, ApproximationOptions, approximate, check_curve_capacity,
