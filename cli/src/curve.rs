@@ -158,6 +158,10 @@ pub struct FitArgs {
     /// Keep the paper's order as the chain gives it (no 2-opt repair).
     #[arg(long)]
     no_refine: bool,
+    /// Round every corner: without it, points where the data turns sharply between two
+    /// straight arms become sharp corners of the approximation.
+    #[arg(long)]
+    no_corners: bool,
     #[command(flatten)]
     blob: BlobArgs,
     /// Also draw the points, their order and the curve (`.svg` or `.png`).
@@ -194,6 +198,8 @@ struct FitReport<'a> {
     order_long_steps: LongSteps,
     /// How a band of noise wider than the spacing was parametrized, if it was.
     band: Option<BandReport>,
+    /// The points kept as sharp corners of the approximation, in order along it.
+    corners: Vec<Vec<f64>>,
     refine_reversals: Option<usize>,
     refine_insertions: Option<usize>,
     #[serde(flatten)]
@@ -229,6 +235,7 @@ fn fit(args: &FitArgs) -> Result<()> {
         );
     }
     options.approximation.smoothing = args.smoothing;
+    options.approximation.corners = !args.no_corners;
     if args.no_refine {
         options.refine = None;
     }
@@ -298,6 +305,16 @@ fn fit(args: &FitArgs) -> Result<()> {
         chain_converged: result.training.convergence.converged(),
         order_long_steps: result.ordering.long_steps(&points, LONG_STEP),
         band: result.band.clone(),
+        corners: if args.interpolate {
+            Vec::new()
+        } else {
+            result
+                .approximation
+                .corners
+                .iter()
+                .map(|&i| ordered[i][..dimension].to_vec())
+                .collect()
+        },
         refine_reversals: result.refinement.as_ref().map(|r| r.reversals),
         refine_insertions: result.refinement.as_ref().map(|r| r.insertions),
         fit: summary,
@@ -333,6 +350,13 @@ fn fit(args: &FitArgs) -> Result<()> {
             band.noise / band.spacing,
             band.window,
             report.control_points
+        );
+    }
+    if !report.corners.is_empty() {
+        println!(
+            "{} sharp corner{} kept (--no-corners rounds them)",
+            report.corners.len(),
+            if report.corners.len() == 1 { "" } else { "s" }
         );
     }
     println!(

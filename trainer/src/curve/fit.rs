@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 use super::basis::{cubic_basis, locate};
+use super::corners::find_corners;
 use neurosurf_core::curve::DEFAULT_CURVE_POINTS;
 
 use super::least_squares::{Affine, NormalEquations};
@@ -29,6 +30,14 @@ pub struct ApproximationOptions {
     /// to the mean diagonal of the data term (1e-6: only keeps spans without data
     /// well-posed; raise it to smooth).
     pub smoothing: f64,
+    /// Keep the corners [`find_corners`] detects sharp: each falls on a knot where three
+    /// control points coincide (on by default).
+    #[serde(default = "keep_corners")]
+    pub corners: bool,
+}
+
+fn keep_corners() -> bool {
+    true
 }
 
 impl Default for ApproximationOptions {
@@ -36,6 +45,7 @@ impl Default for ApproximationOptions {
         ApproximationOptions {
             control_points: None,
             smoothing: 1e-6,
+            corners: true,
         }
     }
 }
@@ -51,6 +61,9 @@ pub struct Approximation {
     pub rms_residual: f64,
     /// max |C(tⱼ) − Qⱼ|.
     pub max_residual: f64,
+    /// The ordered points kept as sharp corners (indices, in order).
+    #[serde(default)]
+    pub corners: Vec<usize>,
 }
 
 /// Chord-length parameters: t₀ = 0, tⱼ = Σ_{i<j} |Q_{i+1} − Q_i| / L with L the polygon's
@@ -156,6 +169,12 @@ pub fn approximate(
 }
 
 /// [`approximate`] with K = `k` at the given non-decreasing parameters in [0, 1].
+///
+/// With [`ApproximationOptions::corners`], each corner [`find_corners`] detects is kept
+/// sharp (three coinciding control points at a knot), and the parameters then move to their
+/// feet on the curve a few times. Residuals cannot decide whether a corner is real: a
+/// rounded corner passes as close to the points as a sharp one when none lies at its tip,
+/// so the decision is the detector's.
 pub(crate) fn approximate_at(
     ordered: &[[f64; 3]],
     parameters: Vec<f64>,
@@ -164,39 +183,113 @@ pub(crate) fn approximate_at(
     k: usize,
     options: &ApproximationOptions,
 ) -> Result<Approximation> {
-    let n = ordered.len();
-    let controls = control_layout(k, closed, ordered);
-    let unknowns = if closed { k } else { k - 4 };
     let segments = if closed { k } else { k - 3 };
-    let mut equations = NormalEquations::new(unknowns);
-    for (&t, &q) in parameters.iter().zip(ordered) {
-        let (i, u) = locate(t, segments);
-        let b = cubic_basis(u);
-        let row: Vec<(f64, &Affine)> = (0..4).map(|a| (b[a], &controls[(i + a) % k])).collect();
-        equations.add_row(&row, q, 1.0);
-    }
-    let weight = options.smoothing * equations.mean_diagonal();
-    let differences = if closed { 0..k } else { 1..k - 1 };
-    for c in differences {
-        let row = [
-            (1.0, &controls[(c + k - 1) % k]),
-            (-2.0, &controls[c]),
-            (1.0, &controls[(c + 1) % k]),
-        ];
-        equations.add_row(&row, [0.0; 3], weight);
-    }
-    let solution = equations.solve().ok_or_else(|| {
-        Error::invalid(format!(
-            "the least-squares system for {k} control points over {n} points is singular: \
-             use fewer control points or more smoothing"
-        ))
-    })?;
-    let control: Vec<[f64; 3]> = controls.iter().map(|a| a.evaluate(&solution)).collect();
-    let curve = BSplineCurve {
-        dimension,
-        closed,
-        control,
+    let fit = |corners: &[(usize, usize)], corrections: usize| {
+        let shape = (dimension, closed, k);
+        fit_at(
+            ordered,
+            parameters.clone(),
+            shape,
+            options,
+            corners,
+            corrections,
+        )
     };
+    let corners = if options.corners {
+        corner_knots(
+            &find_corners(ordered, closed),
+            &parameters,
+            segments,
+            closed,
+        )
+    } else {
+        Vec::new()
+    };
+    let smooth = fit(&[], 0)?;
+    if corners.is_empty() {
+        return Ok(smooth);
+    }
+    // A safety net, not the test: corners that leave the fit far worse than the smooth one
+    // (or singular) were not corners the control points can hold.
+    match fit(&corners, PARAMETER_CORRECTIONS) {
+        Ok(sharp) if sharp.rms_residual <= WORSE_WITH_CORNERS * smooth.rms_residual => Ok(sharp),
+        _ => Ok(smooth),
+    }
+}
+
+/// A fit with corners is dropped when its RMS residual exceeds the smooth fit's this many
+/// times.
+const WORSE_WITH_CORNERS: f64 = 1.5;
+
+/// The fit of `ordered` at `parameters` with `shape` = (dimension, closed, K), the control
+/// points at each of `corners` (index, knot) tied, and `corrections` rounds of moving every
+/// parameter near a corner to its foot on the curve and solving again.
+fn fit_at(
+    ordered: &[[f64; 3]],
+    parameters: Vec<f64>,
+    (dimension, closed, k): (usize, bool, usize),
+    options: &ApproximationOptions,
+    corners: &[(usize, usize)],
+    corrections: usize,
+) -> Result<Approximation> {
+    let n = ordered.len();
+    let segments = if closed { k } else { k - 3 };
+    let mut parameters = move_to_knots(parameters, corners, segments, closed);
+    let knots: Vec<usize> = corners.iter().map(|c| c.1).collect();
+    let (controls, unknowns) = tie_corners(control_layout(k, closed, ordered), &knots);
+    let solve = |parameters: &[f64]| -> Result<BSplineCurve> {
+        let mut equations = NormalEquations::new(unknowns);
+        for (&t, &q) in parameters.iter().zip(ordered) {
+            let (i, u) = locate(t, segments);
+            let b = cubic_basis(u);
+            let row: Vec<(f64, &Affine)> = (0..4).map(|a| (b[a], &controls[(i + a) % k])).collect();
+            equations.add_row(&row, q, 1.0);
+        }
+        let weight = options.smoothing * equations.mean_diagonal();
+        let differences = if closed { 0..k } else { 1..k - 1 };
+        // No bending penalty at a corner's three control points.
+        let at_corner = |c: usize| knots.iter().any(|&i| (c + k - i) % k <= 2);
+        for c in differences.filter(|&c| !at_corner(c)) {
+            let row = [
+                (1.0, &controls[(c + k - 1) % k]),
+                (-2.0, &controls[c]),
+                (1.0, &controls[(c + 1) % k]),
+            ];
+            equations.add_row(&row, [0.0; 3], weight);
+        }
+        let solution = equations.solve().ok_or_else(|| {
+            Error::invalid(format!(
+                "the least-squares system for {k} control points over {n} points is \
+                 singular: use fewer control points or more smoothing"
+            ))
+        })?;
+        Ok(BSplineCurve {
+            dimension,
+            closed,
+            control: controls.iter().map(|a| a.evaluate(&solution)).collect(),
+        })
+    };
+    let mut curve = solve(&parameters)?;
+    // Next to a corner the curve slows to a stop at its tip (three coinciding control
+    // points), so parameters spread evenly along the data put points at the wrong places on
+    // it: each point moves to its foot on the curve and the fit is solved again.
+    // Only within a few segments of a corner: elsewhere evenly spread parameters are right,
+    // and moving them lets the fit follow the noise.
+    let reach = CORRECTED_SEGMENTS / segments as f64;
+    let near_corner = |t: f64| {
+        corners.iter().any(|&(_, knot)| {
+            let d = (t - knot as f64 / segments as f64).abs();
+            (if closed { d.min(1.0 - d) } else { d }) < reach
+        })
+    };
+    for _ in 0..corrections {
+        for (t, &q) in parameters.iter_mut().zip(ordered) {
+            if near_corner(*t) {
+                *t = foot_parameter(&curve, q, *t);
+            }
+        }
+        curve = solve(&parameters)?;
+    }
     let residuals: Vec<f64> = parameters
         .iter()
         .zip(ordered)
@@ -209,7 +302,144 @@ pub(crate) fn approximate_at(
         parameters,
         rms_residual,
         max_residual,
+        corners: corners.iter().map(|c| c.0).collect(),
     })
+}
+
+/// Corners keep at least this many knots between them.
+const MIN_KNOTS_APART: usize = 4;
+
+/// Parameters within this many segments of a corner move to their feet on the curve.
+const CORRECTED_SEGMENTS: f64 = 4.0;
+
+/// Times the parameters of a fit with corners move to their feet on the curve.
+const PARAMETER_CORRECTIONS: usize = 4;
+
+/// The parameter of the point of `curve` nearest `q`, from `t` by Gauss–Newton steps of at
+/// most half a segment each (a closed curve's parameter wraps).
+fn foot_parameter(curve: &BSplineCurve, q: [f64; 3], t: f64) -> f64 {
+    let most = 0.5 / curve.segments() as f64;
+    let mut t = t;
+    for _ in 0..4 {
+        let (c, d) = (curve.point(t), curve.tangent(t));
+        let speed = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if !(speed > 0.0 && speed.is_finite()) {
+            break;
+        }
+        let along = (0..3).map(|a| (q[a] - c[a]) * d[a]).sum::<f64>() / speed;
+        t += along.clamp(-most, most);
+        t = if curve.closed {
+            t.rem_euclid(1.0)
+        } else {
+            t.clamp(0.0, 1.0)
+        };
+    }
+    t
+}
+
+/// The knot each corner of `corners` (index, turn) is kept at, as (index, knot) in order: the
+/// knot nearest its parameter, sharpest corners first, each at least [`MIN_KNOTS_APART`]
+/// knots from the others (its three control points are its own, and at least one free one
+/// lies between two corners) and, open, off the pinned ends (knots 2 ..=
+/// segments − 2).
+fn corner_knots(
+    corners: &[(usize, f64)],
+    parameters: &[f64],
+    segments: usize,
+    closed: bool,
+) -> Vec<(usize, usize)> {
+    let mut sharpest: Vec<(usize, f64)> = corners.to_vec();
+    sharpest.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let apart = |a: usize, b: usize| {
+        let d = a.abs_diff(b);
+        if closed { d.min(segments - d) } else { d }
+    };
+    let mut kept: Vec<(usize, usize)> = Vec::new();
+    for (index, _) in sharpest {
+        let nearest = (parameters[index] * segments as f64).round() as usize;
+        let knot = if closed { nearest % segments } else { nearest };
+        let allowed = closed || (2..=segments.saturating_sub(2)).contains(&knot);
+        if allowed
+            && kept
+                .iter()
+                .all(|&(_, other)| apart(knot, other) >= MIN_KNOTS_APART)
+        {
+            kept.push((index, knot));
+        }
+    }
+    kept.sort_by_key(|&(_, knot)| knot);
+    kept
+}
+
+/// `parameters` moved piecewise linearly so that each corner's point lands on its knot
+/// (knot / `segments`); order is kept, and an open curve's ends stay at 0 and 1.
+fn move_to_knots(
+    parameters: Vec<f64>,
+    corners: &[(usize, usize)],
+    segments: usize,
+    closed: bool,
+) -> Vec<f64> {
+    if corners.is_empty() {
+        return parameters;
+    }
+    // Anchors (from, to), increasing in both.
+    let mut anchors: Vec<(f64, f64)> = corners
+        .iter()
+        .map(|&(i, knot)| (parameters[i], knot as f64 / segments as f64))
+        .collect();
+    if closed {
+        // Wrap around: the last anchor before 0 and the first after 1.
+        let (first, last) = (anchors[0], anchors[anchors.len() - 1]);
+        anchors.insert(0, (last.0 - 1.0, last.1 - 1.0));
+        anchors.push((first.0 + 1.0, first.1 + 1.0));
+    } else {
+        anchors.insert(0, (0.0, 0.0));
+        anchors.push((1.0, 1.0));
+    }
+    parameters
+        .iter()
+        .map(|&t| {
+            let j = anchors
+                .windows(2)
+                .position(|w| t <= w[1].0)
+                .unwrap_or(anchors.len() - 2);
+            let ((a, x), (b, y)) = (anchors[j], anchors[j + 1]);
+            let moved = if b > a {
+                x + (t - a) / (b - a) * (y - x)
+            } else {
+                x
+            };
+            if closed {
+                moved.rem_euclid(1.0)
+            } else {
+                moved.clamp(0.0, 1.0)
+            }
+        })
+        .collect()
+}
+
+/// `controls` with the three control points at each corner knot i (P_i, P_{i+1}, P_{i+2},
+/// cyclically) made one, and the unknowns still in use numbered densely; returns them and
+/// their count.
+fn tie_corners(mut controls: Vec<Affine>, knots: &[usize]) -> (Vec<Affine>, usize) {
+    let k = controls.len();
+    for &i in knots {
+        let tip = controls[i % k].clone();
+        controls[(i + 1) % k] = tip.clone();
+        controls[(i + 2) % k] = tip;
+    }
+    let mut used: Vec<usize> = controls
+        .iter()
+        .flat_map(|a| a.terms.iter().map(|t| t.0))
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    for a in &mut controls {
+        for term in &mut a.terms {
+            term.0 = used.binary_search(&term.0).unwrap_or(0);
+        }
+    }
+    (controls, used.len())
 }
 
 /// The K control points as affine functions of the unknowns (see [`approximate`]).

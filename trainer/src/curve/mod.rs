@@ -37,6 +37,7 @@ mod basis;
 mod bench;
 mod blob;
 mod convergence;
+mod corners;
 mod dxf;
 mod export;
 mod fit;
@@ -68,6 +69,7 @@ pub use blob::{
     surface_to_blob,
 };
 pub use convergence::Convergence;
+pub use corners::{ARM_STRAIGHTNESS, CORNER_ANGLE, MAX_CORNER_ANGLE, find_corners};
 pub use dxf::curves_dxf;
 pub use export::{
     CurveExport, DEGREE, SurfaceExport, bezier_segments, clamped, curve_svg, export_curve,

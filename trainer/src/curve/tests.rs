@@ -680,3 +680,88 @@ fn a_noisy_band_is_fitted_along_its_middle() {
         assert!(run(&probe, 1).band.is_none());
     }
 }
+
+/// `n` points spread at random along the polygon `vertices`, with Gaussian noise `noise`.
+fn polygon_points(vertices: &[[f64; 2]], n: usize, noise: f64, seed: u64) -> Vec<[f64; 3]> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let edges: Vec<([f64; 2], [f64; 2])> = (0..vertices.len())
+        .map(|k| (vertices[k], vertices[(k + 1) % vertices.len()]))
+        .collect();
+    let length =
+        |(a, b): ([f64; 2], [f64; 2])| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+    let total: f64 = edges.iter().map(|&e| length(e)).sum();
+    (0..n)
+        .map(|_| {
+            let mut s = rng.random::<f64>() * total;
+            let mut edge = edges[edges.len() - 1];
+            for &e in &edges {
+                if s < length(e) {
+                    edge = e;
+                    break;
+                }
+                s -= length(e);
+            }
+            let u = (s / length(edge)).min(1.0);
+            let (a, b) = edge;
+            [
+                a[0] + u * (b[0] - a[0]) + noise * gaussian(&mut rng),
+                a[1] + u * (b[1] - a[1]) + noise * gaussian(&mut rng),
+                0.0,
+            ]
+        })
+        .collect()
+}
+
+/// The largest distance from the polygon to the curve and back, × the polygon's diagonal.
+fn polygon_hausdorff(vertices: &[[f64; 2]], curve: &BSplineCurve) -> f64 {
+    let polyline = curve.polyline(20_000);
+    let truth: Vec<[f64; 3]> = (0..vertices.len())
+        .flat_map(|k| {
+            let (a, b) = (vertices[k], vertices[(k + 1) % vertices.len()]);
+            (0..2_000).map(move |j| {
+                let u = j as f64 / 2_000.0;
+                [a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1]), 0.0]
+            })
+        })
+        .collect();
+    let lower = [0, 1].map(|k| vertices.iter().map(|v| v[k]).fold(f64::INFINITY, f64::min));
+    let upper = [0, 1].map(|k| {
+        vertices
+            .iter()
+            .map(|v| v[k])
+            .fold(f64::NEG_INFINITY, f64::max)
+    });
+    let diagonal = ((upper[0] - lower[0]).powi(2) + (upper[1] - lower[1]).powi(2)).sqrt();
+    hausdorff_distance(&polyline, &truth) / diagonal
+}
+
+/// Corners are kept sharp: a square and an L from 2 000 noisy points get a corner at each
+/// vertex, are within 0.15 % of their diagonal (measured 0.11–0.13 %; where the tip sits
+/// between two samples the sharp corner can land a sample's spacing from the true one), and
+/// no farther off than with the corners rounded.
+#[test]
+fn corners_of_polygons_stay_sharp() {
+    let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let l_shape = [
+        [0.0, 0.0],
+        [2.0, 0.0],
+        [2.0, 0.7],
+        [0.7, 0.7],
+        [0.7, 2.0],
+        [0.0, 2.0],
+    ];
+    for (vertices, seed) in [(&square[..], 11), (&l_shape[..], 12)] {
+        let raw = polygon_points(vertices, 2_000, 2e-4, seed);
+        let points = CurvePoints::new(2, raw).unwrap();
+        let mut options = CurveOptions::new(Topology::Closed, seed);
+        let sharp = reconstruct_curve(&points, &options).unwrap();
+        assert_eq!(sharp.approximation.corners.len(), vertices.len());
+        let error = polygon_hausdorff(vertices, &sharp.approximation.curve);
+        options.approximation.corners = false;
+        let rounded = reconstruct_curve(&points, &options).unwrap();
+        assert!(rounded.approximation.corners.is_empty());
+        let rounded_error = polygon_hausdorff(vertices, &rounded.approximation.curve);
+        assert!(error <= 1.5e-3, "{error}");
+        assert!(error <= rounded_error, "{error} against {rounded_error}");
+    }
+}
