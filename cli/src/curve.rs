@@ -158,6 +158,10 @@ pub struct FitArgs {
     /// Keep the paper's order as the chain gives it (no 2-opt repair).
     #[arg(long)]
     no_refine: bool,
+    /// Use the fewest control points that keep every point within this distance of the
+    /// curve (in the points' units) instead of the default count.
+    #[arg(long, value_name = "DISTANCE", conflicts_with = "control")]
+    tolerance: Option<f64>,
     /// Round every corner: without it, points where the data turns sharply between two
     /// straight arms become sharp corners of the approximation.
     #[arg(long)]
@@ -236,6 +240,12 @@ fn fit(args: &FitArgs) -> Result<()> {
     }
     options.approximation.smoothing = args.smoothing;
     options.approximation.corners = !args.no_corners;
+    if let Some(tolerance) = args.tolerance {
+        if !(tolerance.is_finite() && tolerance > 0.0) {
+            anyhow::bail!("--tolerance {tolerance}: give a positive distance in the points' units");
+        }
+        options.approximation.tolerance = Some(tolerance);
+    }
     if args.no_refine {
         options.refine = None;
     }

@@ -576,3 +576,38 @@ fn smoothing_is_an_option() {
         assert!(error.contains("--smoothing"), "{error}");
     }
 }
+
+/// `--tolerance` picks the control count (its fit meets it), and a tolerance that is not a
+/// positive distance, or one with `--control`, is refused before training.
+#[test]
+fn tolerance_is_an_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("e.txt");
+    let out = dir.path().join("e.nsb");
+    ok(&[
+        "curve",
+        "sample",
+        "ellipse",
+        "-n",
+        "300",
+        "--out",
+        s(&points),
+    ]);
+    let (points, out) = (s(&points), s(&out));
+    let fit = |extra: &[&'static str]| -> Vec<&str> {
+        let mut args = vec!["curve", "fit", points, "--out", out];
+        args.extend_from_slice(extra);
+        args
+    };
+    let report = json(&ok(&fit(&["--closed", "--tolerance", "0.01", "--json"])));
+    assert!(report["max_residual"].as_f64().unwrap() <= 0.01, "{report}");
+    assert!(report["control_points"].as_u64().unwrap() < 60, "{report}");
+    for bad in [
+        &["--tolerance", "0"][..],
+        &["--tolerance", "nan"],
+        &["--tolerance", "1", "--control", "9"],
+    ] {
+        let error = fails(&fit(bad));
+        assert!(error.contains("--tolerance"), "{error}");
+    }
+}

@@ -30,6 +30,10 @@ pub struct ApproximationOptions {
     /// to the mean diagonal of the data term (1e-6: only keeps spans without data
     /// well-posed; raise it to smooth).
     pub smoothing: f64,
+    /// When set (and [`Self::control_points`] is not), the fewest control points whose fit
+    /// keeps every point within this distance of its place on the curve (data units).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
     /// Keep the corners [`find_corners`] detects sharp: each falls on a knot where three
     /// control points coincide (on by default).
     #[serde(default = "keep_corners")]
@@ -45,6 +49,7 @@ impl Default for ApproximationOptions {
         ApproximationOptions {
             control_points: None,
             smoothing: 1e-6,
+            tolerance: None,
             corners: true,
         }
     }
@@ -165,7 +170,65 @@ pub fn approximate(
         )));
     }
     let parameters = chord_length_parameters(ordered, closed)?;
-    approximate_at(ordered, parameters, dimension, closed, k, options)
+    match (options.control_points, options.tolerance) {
+        (None, Some(tolerance)) => {
+            approximate_within(ordered, parameters, dimension, closed, tolerance, options)
+        }
+        _ => approximate_at(ordered, parameters, dimension, closed, k, options),
+    }
+}
+
+/// [`approximate_at`] with the fewest control points K (between 8, or fewer points, and
+/// the core's limit) whose fit has a largest residual within `tolerance`, by bisection over
+/// K (the residual falls with K, though not strictly, so the K found meets the tolerance and
+/// is the least within a few).
+///
+/// # Errors
+/// [`Error::InvalidInput`] for a tolerance that is not positive and finite, or one that even
+/// the most control points miss (naming the residual they reach).
+pub(crate) fn approximate_within(
+    ordered: &[[f64; 3]],
+    parameters: Vec<f64>,
+    dimension: usize,
+    closed: bool,
+    tolerance: f64,
+    options: &ApproximationOptions,
+) -> Result<Approximation> {
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(Error::invalid(format!(
+            "--tolerance {tolerance}: give a positive distance in the points' units"
+        )));
+    }
+    let n = ordered.len();
+    let most = (if closed { n } else { n + 2 }).min(DEFAULT_CURVE_POINTS);
+    let fewest = MIN_CONTROL_POINTS.max(8).min(most);
+    let fit = |k: usize| approximate_at(ordered, parameters.clone(), dimension, closed, k, options);
+    let meets = |a: &Approximation| a.max_residual <= tolerance;
+    let best = match fit(most) {
+        Ok(a) if meets(&a) => a,
+        Ok(a) => {
+            return Err(Error::invalid(format!(
+                "--tolerance {tolerance:e}: even {most} control points leave a point {:.3e} \
+                 from the curve; give a larger tolerance, or --interpolate to pass through \
+                 every point",
+                a.max_residual
+            )));
+        }
+        Err(e) => return Err(e),
+    };
+    // The least K known to meet the tolerance, and one known not to (or below the range).
+    let (mut low, mut high, mut found) = (fewest - 1, most, best);
+    while high - low > 1 {
+        let mid = low + (high - low) / 2;
+        match fit(mid) {
+            Ok(a) if meets(&a) => {
+                high = mid;
+                found = a;
+            }
+            _ => low = mid,
+        }
+    }
+    Ok(found)
 }
 
 /// [`approximate`] with K = `k` at the given non-decreasing parameters in [0, 1].

@@ -5,7 +5,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 
-use super::fit::{Approximation, ApproximationOptions, approximate, approximate_at, interpolate};
+use super::fit::{
+    Approximation, ApproximationOptions, approximate, approximate_at, approximate_within,
+    chord_length_parameters, interpolate,
+};
 use super::kohonen::{KohonenChain, KohonenOptions, Topology, TrainingReport, train_chain};
 use super::noise::{BandReport, band_parameters};
 use super::ordering::{Ordering, order_points};
@@ -90,22 +93,40 @@ pub fn reconstruct_curve(
     let closed = ordering.closed;
     let dimension = points.dimension();
     let band = band_parameters(&ordered, dimension, closed);
-    let approximation = match &band {
-        Some(band) => {
-            let k = options
-                .approximation
-                .control_points
-                .unwrap_or(band.control_points);
-            approximate_at(
-                &ordered,
-                band.parameters.clone(),
-                dimension,
-                closed,
-                k,
-                &options.approximation,
-            )?
-        }
-        None => approximate(&ordered, dimension, closed, &options.approximation)?,
+    let within = |parameters: Vec<f64>, tolerance: f64| {
+        approximate_within(
+            &ordered,
+            parameters,
+            dimension,
+            closed,
+            tolerance,
+            &options.approximation,
+        )
+    };
+    let tolerance = match options.approximation.control_points {
+        None => options.approximation.tolerance,
+        Some(_) => None,
+    };
+    let approximation = match (&band, tolerance) {
+        (Some(band), Some(tolerance)) => within(band.parameters.clone(), tolerance)?,
+        (None, Some(tolerance)) => within(chord_length_parameters(&ordered, closed)?, tolerance)?,
+        (band, None) => match band {
+            Some(band) => {
+                let k = options
+                    .approximation
+                    .control_points
+                    .unwrap_or(band.control_points);
+                approximate_at(
+                    &ordered,
+                    band.parameters.clone(),
+                    dimension,
+                    closed,
+                    k,
+                    &options.approximation,
+                )?
+            }
+            None => approximate(&ordered, dimension, closed, &options.approximation)?,
+        },
     };
     let interpolation = interpolate(&ordered, dimension, closed)?;
     Ok(CurveReconstruction {

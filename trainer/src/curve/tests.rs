@@ -765,3 +765,36 @@ fn corners_of_polygons_stay_sharp() {
         assert!(error <= rounded_error, "{error} against {rounded_error}");
     }
 }
+
+/// `tolerance` gives a fit within it whose next smaller control count misses it, with fewer
+/// control points than the default on smooth data; a tolerance below the noise is refused
+/// naming the residual reached.
+#[test]
+fn a_tolerance_picks_the_fewest_control_points_that_meet_it() {
+    let sample = sample(SampleCurve::Peanut, 600, 5);
+    let points = sample.curve_points().unwrap();
+    let mut options = CurveOptions::new(Topology::Closed, 5);
+    let default = reconstruct_curve(&points, &options).unwrap();
+    let tolerance = 0.02 * sample.size;
+    options.approximation.tolerance = Some(tolerance);
+    let within = reconstruct_curve(&points, &options).unwrap();
+    let k = within.approximation.curve.control.len();
+    assert!(within.approximation.max_residual <= tolerance);
+    assert!(k < default.approximation.curve.control.len(), "{k}");
+    let ordered = within.ordering.ordered_points(&points);
+    let fewer = ApproximationOptions {
+        control_points: Some(k - 1),
+        ..ApproximationOptions::default()
+    };
+    let parameters = fit::chord_length_parameters(&ordered, true).unwrap();
+    let missed = fit::approximate_at(&ordered, parameters, 2, true, k - 1, &fewer).unwrap();
+    assert!(missed.max_residual > tolerance, "{k} - 1 meets it too");
+    options.approximation.tolerance = Some(1e-9 * sample.size);
+    let error = reconstruct_curve(&points, &options)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("--tolerance") && error.contains("512"),
+        "{error}"
+    );
+}
