@@ -10,10 +10,10 @@ use serde::Serialize;
 
 use neurosurf_trainer::curve::{
     BENCHMARK_SIZES, BSplineCurve, BandReport, CurveOptions, CurvePoints, FitSummary, LongSteps,
-    PlotLayers, PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology, TrainingReport,
-    benchmark, curve_svg, curve_to_blob, curves_dxf, export_curve, export_surface, fit_surface,
-    interpolation_parameter, reconstruct_curve, sample_curve, surface_mesh, surface_to_blob,
-    write_plot,
+    MIN_POINTS, PlotLayers, PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, Topology,
+    TrainingReport, benchmark, curve_svg, curve_to_blob, curves_dxf, export_curve, export_surface,
+    fit_surface, interpolation_parameter, point_groups, reconstruct_curve, sample_curve,
+    surface_mesh, surface_to_blob, write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
@@ -204,6 +204,11 @@ struct FitReport<'a> {
     band: Option<BandReport>,
     /// The points kept as sharp corners of the approximation, in order along it.
     corners: Vec<Vec<f64>>,
+    /// Sizes of the separate groups the points form (largest first; one entry when they
+    /// form one curve), counting groups of at least 1 % of the points.
+    groups: Vec<usize>,
+    /// Points in smaller groups: stray points far from the others.
+    stray_points: usize,
     refine_reversals: Option<usize>,
     refine_insertions: Option<usize>,
     #[serde(flatten)]
@@ -249,6 +254,12 @@ fn fit(args: &FitArgs) -> Result<()> {
     if args.no_refine {
         options.refine = None;
     }
+    let significant = (points.len() / 100).max(MIN_POINTS);
+    let (groups, strays): (Vec<Vec<usize>>, Vec<Vec<usize>>) = point_groups(points.points())
+        .into_iter()
+        .partition(|g| g.len() >= significant);
+    let groups: Vec<usize> = groups.iter().map(Vec::len).collect();
+    let stray_points: usize = strays.iter().map(Vec::len).sum();
     let start = Instant::now();
     let result = reconstruct_curve(&points, &options)?;
     let seconds = start.elapsed().as_secs_f64();
@@ -325,6 +336,8 @@ fn fit(args: &FitArgs) -> Result<()> {
                 .map(|&i| ordered[i][..dimension].to_vec())
                 .collect()
         },
+        groups,
+        stray_points,
         refine_reversals: result.refinement.as_ref().map(|r| r.reversals),
         refine_insertions: result.refinement.as_ref().map(|r| r.insertions),
         fit: summary,
@@ -360,6 +373,37 @@ fn fit(args: &FitArgs) -> Result<()> {
             band.noise / band.spacing,
             band.window,
             report.control_points
+        );
+    }
+    if report.groups.len() > 1 {
+        println!(
+            "warning: the points form {} separate groups ({} points): one curve bridges them; \
+             fit each group on its own",
+            report.groups.len(),
+            report
+                .groups
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    if report.stray_points > 0 {
+        println!(
+            "warning: {} stray point{} far from the others: the curve reaches out to {}; \
+             remove {} if noise",
+            report.stray_points,
+            if report.stray_points == 1 { "" } else { "s" },
+            if report.stray_points == 1 {
+                "it"
+            } else {
+                "them"
+            },
+            if report.stray_points == 1 {
+                "it"
+            } else {
+                "them"
+            }
         );
     }
     if !report.corners.is_empty() {

@@ -611,3 +611,44 @@ fn tolerance_is_an_option() {
         assert!(error.contains("--tolerance"), "{error}");
     }
 }
+
+/// Two circles far apart are reported as two groups, and a far point as a stray one; one
+/// circle is one group.
+#[test]
+fn separate_groups_and_stray_points_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let circle = |cx: f64, n: usize| -> String {
+        (0..n)
+            .map(|i| {
+                let a = std::f64::consts::TAU * (i as f64 + 0.4 * (i % 3) as f64) / n as f64;
+                format!("{} {}\n", cx + a.cos(), a.sin())
+            })
+            .collect()
+    };
+    let (one, two) = (dir.path().join("one.txt"), dir.path().join("two.txt"));
+    fs::write(&one, circle(0.0, 150)).unwrap();
+    fs::write(&two, circle(0.0, 150) + &circle(3.0, 100) + "9 9\n").unwrap();
+    let out = dir.path().join("c.nsb");
+    let fit = |points: &Path| {
+        json(&ok(&[
+            "curve",
+            "fit",
+            s(points),
+            "--closed",
+            "--out",
+            s(&out),
+            "--json",
+        ]))
+    };
+    let report = fit(&one);
+    assert_eq!(report["groups"], serde_json::json!([150]), "{report}");
+    assert_eq!(report["stray_points"], 0);
+    let report = fit(&two);
+    assert_eq!(report["groups"], serde_json::json!([150, 100]), "{report}");
+    assert_eq!(report["stray_points"], 1);
+    let text = ok(&["curve", "fit", s(&two), "--closed", "--out", s(&out)]);
+    assert!(
+        text.contains("2 separate groups") && text.contains("1 stray point"),
+        "{text}"
+    );
+}

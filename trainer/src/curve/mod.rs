@@ -43,6 +43,7 @@ mod export;
 mod fit;
 mod grid;
 mod grid_map;
+mod groups;
 mod kohonen;
 mod least_squares;
 mod metrics;
@@ -80,6 +81,7 @@ pub use fit::{
     chord_length_parameters, default_control_points, interpolate, interpolation_parameter,
 };
 pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
+pub use groups::{GROUP_NEIGHBOURS, GROUP_REACH, point_groups};
 pub use kohonen::{
     KohonenChain, KohonenOptions, MAX_NEURONS, Topology, TrainingReport, train_chain,
 };
