@@ -202,7 +202,11 @@ pub(crate) fn approximate_within(
     let n = ordered.len();
     let most = (if closed { n } else { n + 2 }).min(DEFAULT_CURVE_POINTS);
     let fewest = MIN_CONTROL_POINTS.max(8).min(most);
-    let fit = |k: usize| approximate_at(ordered, parameters.clone(), dimension, closed, k, options);
+    // The corners depend on the points alone: found once for every K tried.
+    let detected = detect(ordered, closed, options);
+    let shape = (dimension, closed);
+    let fit =
+        |k: usize| fit_with_corners(ordered, parameters.clone(), shape, k, options, &detected);
     let meets = |a: &Approximation| a.max_residual <= tolerance;
     let best = match fit(most) {
         Ok(a) if meets(&a) => a,
@@ -246,6 +250,35 @@ pub(crate) fn approximate_at(
     k: usize,
     options: &ApproximationOptions,
 ) -> Result<Approximation> {
+    let detected = detect(ordered, closed, options);
+    fit_with_corners(
+        ordered,
+        parameters,
+        (dimension, closed),
+        k,
+        options,
+        &detected,
+    )
+}
+
+/// The corners of `ordered` (index, turn) when `options` keeps corners, else none.
+fn detect(ordered: &[[f64; 3]], closed: bool, options: &ApproximationOptions) -> Vec<(usize, f64)> {
+    if options.corners {
+        find_corners(ordered, closed)
+    } else {
+        Vec::new()
+    }
+}
+
+/// [`approximate_at`] with the corners already `detected`.
+fn fit_with_corners(
+    ordered: &[[f64; 3]],
+    parameters: Vec<f64>,
+    (dimension, closed): (usize, bool),
+    k: usize,
+    options: &ApproximationOptions,
+    detected: &[(usize, f64)],
+) -> Result<Approximation> {
     let segments = if closed { k } else { k - 3 };
     let fit = |corners: &[(usize, usize)], corrections: usize| {
         let shape = (dimension, closed, k);
@@ -258,16 +291,7 @@ pub(crate) fn approximate_at(
             corrections,
         )
     };
-    let corners = if options.corners {
-        corner_knots(
-            &find_corners(ordered, closed),
-            &parameters,
-            segments,
-            closed,
-        )
-    } else {
-        Vec::new()
-    };
+    let corners = corner_knots(detected, &parameters, segments, closed);
     let smooth = fit(&[], 0)?;
     if corners.is_empty() {
         return Ok(smooth);
