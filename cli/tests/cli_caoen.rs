@@ -352,3 +352,60 @@ fn key_counts_beyond_the_core_are_refused_before_fitting() {
     assert!(error.contains("--keys") && error.contains("257"), "{error}");
     assert!(!out.exists());
 }
+
+/// The Stanford bunny as shipped (unused vertices, five holes at the base) is mapped onto the
+/// sphere and fitted: the holes are capped by the command, the map does not fold (the
+/// command fails otherwise), and the surface lies within 0.6 % of the diagonal of the scan
+/// (two-sided RMS over the surface and the scan).
+#[test]
+fn fit_mesh_takes_the_scanned_bunny_with_its_holes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bunny.nsb");
+    let bunny = format!("{}/../data/stanford-bunny.obj", env!("CARGO_MANIFEST_DIR"));
+    let report = json(&ok(&[
+        "caoen",
+        "fit-mesh",
+        &bunny,
+        "--keys",
+        "256",
+        "--out",
+        s(&out),
+        "--json",
+    ]));
+    assert_eq!(report["closing"]["holes"].as_array().unwrap().len(), 5);
+    assert_eq!(report["closing"]["unused_vertices"], 1113);
+    let rms = report["distance"]["rms"].as_f64().unwrap();
+    let hausdorff = report["distance"]["hausdorff"].as_f64().unwrap();
+    assert!(rms <= 0.006 && hausdorff < 0.05, "{report}");
+    assert!(
+        report["area_distortion"].as_f64().unwrap() < 4.0,
+        "{report}"
+    );
+    // The blob loads and meshes.
+    let mesh = dir.path().join("bunny.obj");
+    ok(&["caoen", "mesh", s(&out), "--out", s(&mesh)]);
+    // A torus is another genus: refused, naming it.
+    let torus = dir.path().join("torus.obj");
+    let mut text = String::new();
+    let (around, across) = (24, 12);
+    for i in 0..around {
+        for j in 0..across {
+            let (a, b) = (
+                std::f64::consts::TAU * i as f64 / around as f64,
+                std::f64::consts::TAU * j as f64 / across as f64,
+            );
+            let r = 1.0 + 0.35 * b.cos();
+            text += &format!("v {} {} {}\n", r * a.cos(), r * a.sin(), 0.35 * b.sin());
+        }
+    }
+    for i in 0..around {
+        for j in 0..across {
+            let v = |i: usize, j: usize| (i % around) * across + (j % across) + 1;
+            let (p, q, r, t) = (v(i, j), v(i + 1, j), v(i, j + 1), v(i + 1, j + 1));
+            text += &format!("f {p} {q} {t}\nf {p} {t} {r}\n");
+        }
+    }
+    fs::write(&torus, text).unwrap();
+    let error = fails(&["caoen", "fit-mesh", s(&torus), "--out", s(&out)]);
+    assert!(error.contains("genus 1"), "{error}");
+}

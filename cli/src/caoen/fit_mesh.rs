@@ -1,4 +1,5 @@
-//! `neurosurf caoen fit-mesh`: a Cao En surface fitted to a closed genus-0 mesh (spot).
+//! `neurosurf caoen fit-mesh`: a Cao En surface fitted to a genus-0 mesh (spot, a scan with
+//! holes such as the Stanford bunny: unused vertices are dropped and holes capped first).
 
 use std::path::{Path, PathBuf};
 
@@ -6,7 +7,8 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use neurosurf_trainer::caoen::{
-    self, MeshFitOptions, SurfaceDistance, fit_parameterized, spherical_parameterization,
+    self, Closing, MeshFitOptions, SurfaceDistance, close_for_sphere, fit_parameterized,
+    spherical_parameterization,
 };
 use neurosurf_trainer::evaluate::Precision;
 use neurosurf_trainer::io::read_mesh;
@@ -15,7 +17,7 @@ use super::super::output::{self, blob_scalar, wrote_blob};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A closed, genus-0 triangle mesh (`.obj` or `.ply`).
+    /// A genus-0 triangle mesh (`.obj` or `.ply`); holes are capped.
     mesh: PathBuf,
     /// Key points (farthest-first on the surface; at most 256 for the core).
     #[arg(long, default_value_t = 200)]
@@ -37,6 +39,10 @@ struct Report<'a> {
     blob_bytes: usize,
     key_points: usize,
     vertices: usize,
+    /// What was repaired before the map: unused vertices removed, holes capped.
+    closing: &'a Closing,
+    /// The sphere map's largest per-vertex stretch (1 for an area-preserving map).
+    area_distortion: f64,
     /// RMS of |y(xⱼ) − pⱼ| at the mesh vertices, of the bounding diagonal.
     vertex_rms: f64,
     /// Surface against the mesh, of the bounding diagonal.
@@ -46,10 +52,12 @@ struct Report<'a> {
 pub fn run(args: &Args) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
     neurosurf_trainer::io::check_output(&args.out)?;
+    neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
     let mesh = read_mesh(&args.mesh)?;
+    let (mesh, closing) = close_for_sphere(&mesh)
+        .with_context(|| format!("preparing {} for a sphere map", args.mesh.display()))?;
     let map = spherical_parameterization(&mesh)
         .with_context(|| format!("mapping {} onto the sphere", args.mesh.display()))?;
-    neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
     let fit = fit_parameterized(&mesh, &map.points, args.keys, &MeshFitOptions::default())?;
     let blob = caoen::to_blob(&fit.network, scalar, b"neurosurf caoen fit-mesh")?;
     neurosurf_trainer::blob::write_checked(&args.out, &blob)?;
@@ -58,11 +66,26 @@ pub fn run(args: &Args) -> Result<()> {
         blob_bytes: blob.len(),
         key_points: fit.network.key_count(),
         vertices: mesh.vertex_count(),
+        closing: &closing,
+        area_distortion: map.area_distortion,
         vertex_rms: fit.vertex_rms,
         distance: fit.distance,
     };
     if args.json {
         return output::json(&report);
+    }
+    if closing.unused_vertices > 0 || !closing.holes.is_empty() {
+        println!(
+            "removed {} unused vertices; capped {} holes ({} boundary edges)",
+            closing.unused_vertices,
+            closing.holes.len(),
+            closing
+                .holes
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     println!(
         "{} key points on {} vertices: RMS {:.4} at the vertices, two-sided RMS {:.4}, \

@@ -2,9 +2,9 @@
 //! reference evaluation (`network`), construction from key/target points and least-squares
 //! fitting of V and of q per key point (`fit`), blob conversion (`blob`, keys ordered for
 //! the core's group skipping under compact blending by `groups`), and polygon meshes
-//! from an icosphere or a torus grid (`mesh`). Fitting to a closed genus-0 mesh:
-//! `topology` (welding, parts, holes), `spherical` (the spherical Tutte embedding with
-//! stretch reweighting), `mesh_fit` (keys, least squares against every vertex, the error
+//! from an icosphere or a torus grid (`mesh`). Fitting to a genus-0 mesh:
+//! `topology` (welding, parts, capping holes), `spherical` (a planar Tutte embedding lifted
+//! to the sphere, balanced by stretch reweighting), `mesh_fit` (keys, least squares against every vertex, the error
 //! table), `distance` (two-sided surface-to-mesh distance). Pictures: `render` (depth buffer
 //! through the projection network) and `raymarch` (the convex implicit form in the core).
 //! Applications: `morph` (metamorphosis with empty key points), `distort` (S³ → ℝ³),
@@ -83,7 +83,8 @@ pub use texture::{
     position_part, texture_coordinates,
 };
 pub use topology::{
-    cap_holes, check_sphere_topology, edge_components, oriented_boundary_loops, weld,
+    Closing, cap_holes, cap_holes_planar, check_sphere_topology, close_for_sphere,
+    drop_unused_vertices, edge_components, oriented_boundary_loops, weld,
 };
 
 #[cfg(test)]
