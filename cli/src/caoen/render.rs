@@ -48,7 +48,7 @@ pub struct Args {
     #[command(flatten)]
     camera: Camera,
     /// Starting grid of the depth buffer: icosphere level (torus: 10·2ˢ × 5·2ˢ), refined per
-    /// triangle until samples are < 0.7 pixel apart.
+    /// triangle until its screen edges are at most 3 pixels, then rasterized.
     #[arg(long, default_value_t = 3)]
     subdivisions: usize,
     /// Ray-march the implicit form f(x) = Σ (x·wᵢ)₊^q with wᵢ = tᵢ/|tᵢ|² (the solid f ≤ level)

@@ -200,8 +200,26 @@ impl CaoEnNetwork {
     }
 
     /// y at x.
+    ///
+    /// The same sums in the same order as [`CaoEnNetwork::evaluate`] (so the same bits),
+    /// without the Jacobian.
     pub fn position(&self, x: &[f64]) -> Vec<f64> {
-        self.evaluate(x).position
+        let mut a = vec![0.0; self.target_dimension()];
+        let mut b = 0.0;
+        for (i, (w, t)) in self.weights.iter().zip(&self.targets).enumerate() {
+            let f = self.blend(i, inner(w, x)).0;
+            b += f;
+            for (g, &tg) in t.iter().enumerate() {
+                a[g] += f * tg;
+            }
+        }
+        if !self.normalized {
+            return a;
+        }
+        if b == 0.0 {
+            return vec![0.0; a.len()];
+        }
+        a.iter().map(|v| v / b).collect()
     }
 
     /// The exact unit normal at a sphere (m = 3) or torus point for p = 3, with the core's

@@ -4,13 +4,21 @@
 //! Each model's network is first turned into a screen network (paper §8): its targets are
 //! replaced by their projections onto the screen axes α, β and the view direction, so the
 //! same network evaluates screen coordinates and depth directly. Source points (an icosphere
-//! or a torus grid) are mapped, and wherever adjacent samples land more than
-//! [`MAX_SAMPLE_GAP`] pixels apart an intermediate source point is generated (the paper's gap
-//! filling: each source triangle is split in four until its screen edges are short enough),
-//! then every sample updates the depth buffer of its pixel if it is nearer. A last pass fills
-//! isolated empty pixels between two filled neighbours (from rounding at the edges of
-//! samples). Shading: ambient + diffuse·max(0, n·l) with n the network's exact unit normal at
-//! the sample's source point.
+//! or a torus grid) are mapped, and each source triangle whose screen edges are longer than
+//! [`MAX_SAMPLE_GAP`] pixels is split in four at the midpoints of its source edges (the
+//! paper's gap filling, stopped at a few pixels instead of below one). Each piece is then
+//! rasterized: every pixel centre inside its screen triangle takes the interpolated depth and
+//! source point if nearer; a piece too thin to hold a pixel centre draws its corners. Pieces
+//! facing away from the camera (by their screen winding and the model's normals, outward or
+//! inward) are culled: a closed surface hides them, and a sliver at a fold seen from behind
+//! would otherwise win a pixel by its interpolated depth and show as a dark speck. A last
+//! pass fills isolated empty pixels between two filled neighbours.
+//!
+//! Shading is deferred: only the source point that wins a pixel gets its exact unit normal
+//! n (ambient + diffuse·max(0, n·l)), so a picture costs one normal per pixel however many
+//! surfaces overlap there, and the position network runs only at the pieces' corners. Inside
+//! a piece of at most 3 pixels the surface departs from the flat triangle by well under a
+//! pixel wherever the mapping is smooth on that scale.
 
 use image::RgbImage;
 
@@ -20,8 +28,8 @@ use crate::error::{Error, Result};
 use crate::geometry::vector::{cross, inner};
 use crate::plot::{MAX_SIDE, Rgb};
 
-/// Largest screen distance, in pixels, between adjacent samples of a splatted triangle.
-pub const MAX_SAMPLE_GAP: f64 = 0.7;
+/// Largest screen edge, in pixels, of a rasterized piece.
+pub const MAX_SAMPLE_GAP: f64 = 3.0;
 /// Deepest subdivision of one source triangle (4¹² pieces).
 const MAX_DEPTH: u32 = 12;
 /// Ambient share of the shading.
@@ -128,6 +136,9 @@ pub struct Rendering {
     pub depth: Vec<f64>,
     /// Which model drew each pixel (`None`: background).
     pub model: Vec<Option<usize>>,
+    /// The source point behind each drawn pixel (deferred shading; empty for pictures shaded
+    /// as they are drawn).
+    sources: Vec<[f64; 4]>,
 }
 
 impl Rendering {
@@ -138,7 +149,78 @@ impl Rendering {
             image: RgbImage::from_pixel(view.width, view.height, image::Rgb([0xff; 3])),
             depth: vec![f64::INFINITY; pixels],
             model: vec![None; pixels],
+            sources: Vec::new(),
         }
+    }
+
+    /// Records source point `x` (up to 4 coordinates) at screen point `s` for deferred
+    /// shading if nearer than what is there.
+    fn record(&mut self, s: [f64; 3], model: usize, x: [f64; 4]) {
+        let (w, h) = (self.image.width(), self.image.height());
+        if !(s[0] >= 0.0 && s[1] >= 0.0 && s[0] < f64::from(w) && s[1] < f64::from(h)) {
+            return;
+        }
+        let i = s[1] as usize * w as usize + s[0] as usize;
+        if s[2] < self.depth[i] {
+            self.depth[i] = s[2];
+            self.model[i] = Some(model);
+            self.sources[i] = x;
+        }
+    }
+
+    /// Rasterizes a screen triangle with source points `x`: every pixel centre inside takes
+    /// the interpolated depth and source point if nearer. A triangle facing away (its signed
+    /// screen area positive if `back_is_positive`, negative otherwise) is culled. Returns
+    /// whether it held a centre or was culled.
+    fn raster(
+        &mut self,
+        s: &[[f64; 3]; 3],
+        x: &[[f64; 4]; 3],
+        model: usize,
+        back_is_positive: bool,
+    ) -> bool {
+        let (w, h) = (self.image.width() as i64, self.image.height() as i64);
+        let low = |k: usize| s.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+        let high = |k: usize| s.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+        let (x0, x1) = (
+            ((low(0) - 0.5).ceil() as i64).max(0),
+            ((high(0) - 0.5).floor() as i64).min(w - 1),
+        );
+        let (y0, y1) = (
+            ((low(1) - 0.5).ceil() as i64).max(0),
+            ((high(1) - 0.5).floor() as i64).min(h - 1),
+        );
+        let area =
+            (s[1][0] - s[0][0]) * (s[2][1] - s[0][1]) - (s[1][1] - s[0][1]) * (s[2][0] - s[0][0]);
+        if area == 0.0 || !area.is_finite() || x0 > x1 || y0 > y1 {
+            return false;
+        }
+        if (area > 0.0) == back_is_positive {
+            return true;
+        }
+        let mut any = false;
+        for py in y0..=y1 {
+            for px in x0..=x1 {
+                let c = [px as f64 + 0.5, py as f64 + 0.5];
+                let edge = |a: [f64; 3], b: [f64; 3]| {
+                    ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])) / area
+                };
+                let l = [edge(s[1], s[2]), edge(s[2], s[0]), edge(s[0], s[1])];
+                if l.iter().any(|&v| v < -1e-9) {
+                    continue;
+                }
+                any = true;
+                let depth = l[0] * s[0][2] + l[1] * s[1][2] + l[2] * s[2][2];
+                let i = py as usize * w as usize + px as usize;
+                if depth < self.depth[i] {
+                    self.depth[i] = depth;
+                    self.model[i] = Some(model);
+                    self.sources[i] =
+                        [0, 1, 2, 3].map(|k| l[0] * x[0][k] + l[1] * x[1][k] + l[2] * x[2][k]);
+                }
+            }
+        }
+        any
     }
 
     /// Draws at screen point `s` if nearer than what is there; returns whether it did.
@@ -218,7 +300,8 @@ pub fn depth_buffer_image(
         )));
     }
     let mut picture = Rendering::new(view);
-    for (index, &(network, color)) in models.iter().enumerate() {
+    picture.sources = vec![[0.0; 4]; picture.depth.len()];
+    for (index, &(network, _)) in models.iter().enumerate() {
         network.validate()?;
         let (m, p) = (network.source_dimension(), network.target_dimension());
         let (sources, triangles) = match (network.domain, m, p) {
@@ -245,11 +328,13 @@ pub fn depth_buffer_image(
             let y = screen.position(x);
             [offset[0] + y[0], offset[1] + y[1], offset[2] + y[2]]
         };
-        let mapped: Vec<[f64; 3]> = sources.iter().map(|x| to_screen(x)).collect();
-        let draw = |x: &[f64], s: [f64; 3], picture: &mut Rendering| {
-            let n = network.normal(x).unwrap_or([0.0, 0.0, 0.0]);
-            picture.splat(s, index, view.shade(n, color));
+        let four = |x: &[f64]| -> [f64; 4] {
+            let mut out = [0.0; 4];
+            out[..x.len()].copy_from_slice(x);
+            out
         };
+        let mapped: Vec<[f64; 3]> = sources.iter().map(|x| to_screen(x)).collect();
+        let back_is_positive = normals_point_out(network, &sources);
         let mut stack: Vec<Piece> = triangles
             .iter()
             .map(|t| {
@@ -274,8 +359,11 @@ pub fn depth_buffer_image(
                     && p[1] < f64::from(view.height) + 2.0
             });
             if gap <= MAX_SAMPLE_GAP || depth >= MAX_DEPTH || (!on_screen && gap < 4.0) {
-                for k in 0..3 {
-                    draw(&x[k], s[k], &mut picture);
+                let corners = [four(&x[0]), four(&x[1]), four(&x[2])];
+                if !picture.raster(&s, &corners, index, back_is_positive) {
+                    for k in 0..3 {
+                        picture.record(s[k], index, corners[k]);
+                    }
                 }
                 continue;
             }
@@ -293,8 +381,55 @@ pub fn depth_buffer_image(
             stack.push(([ab, bc, ca], [sab, sbc, sca], next));
         }
     }
+    picture.shade_deferred(models, view);
     picture.fill_gaps();
     Ok(picture)
+}
+
+/// Whether the network's exact normals point away from its surface's centroid at most of
+/// `sources`: then a piece whose screen triangle has positive signed area (the screen's y
+/// axis points down) faces away from the camera. A closed surface hides such pieces behind
+/// the ones facing the camera; culling them keeps a fold or a sliver seen from behind from
+/// winning a pixel by its interpolated depth.
+fn normals_point_out(network: &CaoEnNetwork, sources: &[Vec<f64>]) -> bool {
+    let positions: Vec<Vec<f64>> = sources.iter().map(|x| network.position(x)).collect();
+    let count = positions.len().max(1) as f64;
+    let centre = [0, 1, 2].map(|k| positions.iter().map(|p| p[k]).sum::<f64>() / count);
+    let outward: f64 = sources
+        .iter()
+        .zip(&positions)
+        .filter_map(|(x, p)| {
+            let n = network.normal(x)?;
+            Some((0..3).map(|k| n[k] * (p[k] - centre[k])).sum::<f64>())
+        })
+        .sum();
+    outward >= 0.0
+}
+
+impl Rendering {
+    /// Shades every drawn pixel from the exact normal at its source point (projected back
+    /// onto the model's domain), on all threads.
+    fn shade_deferred(&mut self, models: &[(&CaoEnNetwork, Rgb)], view: &View) {
+        use rayon::prelude::*;
+        let width = self.image.width() as usize;
+        let colors: Vec<(usize, image::Rgb<u8>)> = self
+            .model
+            .par_iter()
+            .zip(&self.sources)
+            .enumerate()
+            .filter_map(|(i, (model, x))| {
+                let (network, color) = models[(*model)?];
+                let m = network.source_dimension().min(4);
+                let point = on_domain(network.domain, &x[..m]);
+                let n = network.normal(&point).unwrap_or([0.0; 3]);
+                Some((i, view.shade(n, color)))
+            })
+            .collect();
+        for (i, color) in colors {
+            self.image
+                .put_pixel((i % width) as u32, (i / width) as u32, color);
+        }
+    }
 }
 
 /// The paper's projection network (§8): targets replaced by (α·t, −β·t, d·t) scaled to

@@ -372,3 +372,52 @@ fn the_default_fit_follows_a_star_between_its_keys() {
         }
     }
 }
+
+/// `position` skips the Jacobian but keeps the sums of `evaluate` in their order: the same
+/// bits, for every blending, normalized or not, on the sphere and the torus.
+#[test]
+fn position_alone_equals_the_full_evaluation_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let (keys, targets) = ellipsoid(30);
+    for blending in [Blending::Power, Blending::Exponential, Blending::Compact] {
+        for normalized in [false, true] {
+            let network =
+                from_key_points(Domain::Sphere, blending, normalized, &keys, &targets, 3.0)
+                    .unwrap();
+            for _ in 0..50 {
+                let x = unit(&mut rng, 3);
+                assert_eq!(network.position(&x), network.evaluate(&x).position);
+            }
+        }
+    }
+    let torus_keys: Vec<Vec<f64>> = (0..12)
+        .map(|i| {
+            let (a, b) = (i as f64 * 0.7, i as f64 * 1.9);
+            vec![a.cos(), a.sin(), b.cos(), b.sin()]
+        })
+        .collect();
+    let torus_targets: Vec<Vec<f64>> = torus_keys
+        .iter()
+        .map(|k| {
+            vec![
+                k[0] * (1.0 + 0.3 * k[2]),
+                k[1] * (1.0 + 0.3 * k[2]),
+                0.3 * k[3],
+            ]
+        })
+        .collect();
+    let torus = from_key_points(
+        Domain::Torus,
+        Blending::Exponential,
+        true,
+        &torus_keys,
+        &torus_targets,
+        4.0,
+    )
+    .unwrap();
+    for _ in 0..50 {
+        let (a, b) = (rng.random_range(0.0..6.3f64), rng.random_range(0.0..6.3f64));
+        let x = [a.cos(), a.sin(), b.cos(), b.sin()];
+        assert_eq!(torus.position(&x), torus.evaluate(&x).position);
+    }
+}
