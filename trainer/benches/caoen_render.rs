@@ -46,26 +46,8 @@ fn main() {
         let network = fit.network;
         // Framed like `caoen render`: the bounding sphere of the meshed surface.
         let surface = sphere_mesh(&network, 3).expect("mesh").mesh.positions;
-        let count = surface.len() as f64;
-        let centre = [0, 1, 2].map(|k| surface.iter().map(|p| p[k]).sum::<f64>() / count);
-        let radius = surface
-            .iter()
-            .map(|p| {
-                (0..3)
-                    .map(|k| (p[k] - centre[k]).powi(2))
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .fold(0.0, f64::max);
-        let view = View::framing(
-            centre,
-            radius,
-            [-1.0, -0.3, -0.5],
-            [0.0, 1.0, 0.0],
-            400,
-            400,
-        )
-        .expect("view");
+        let view = View::framing_points(&surface, [-1.0, -0.3, -0.5], [0.0, 1.0, 0.0], 400, 400)
+            .expect("view");
         let mut drawn = 0;
         let render = median(|| {
             let picture =

@@ -138,23 +138,9 @@ fn sample_points(network: &CaoEnNetwork) -> Result<Vec<[f64; 3]>> {
 
 /// A view of `camera` framing the bounding sphere of `points`.
 fn framing(points: &[[f64; 3]], camera: &Camera) -> Result<View> {
-    let count = points.len().max(1) as f64;
-    let centre = points
-        .iter()
-        .fold([0.0; 3], |c, p| [0, 1, 2].map(|k| c[k] + p[k] / count));
-    let radius = points
-        .iter()
-        .map(|p| {
-            (0..3)
-                .map(|k| (p[k] - centre[k]).powi(2))
-                .sum::<f64>()
-                .sqrt()
-        })
-        .fold(0.0, f64::max);
     let [width, height] = camera.size;
-    Ok(View::framing(
-        centre,
-        1.05 * radius.max(1e-9),
+    Ok(View::framing_points(
+        points,
         camera.direction,
         camera.up,
         width,

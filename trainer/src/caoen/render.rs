@@ -57,6 +57,41 @@ pub struct View {
 }
 
 impl View {
+    /// A camera framing every point of `points` (their centroid, and 1.05 times the largest
+    /// distance from it), as [`View::framing`].
+    ///
+    /// # Errors
+    /// As [`View::framing`].
+    pub fn framing_points(
+        points: &[[f64; 3]],
+        direction: [f64; 3],
+        up: [f64; 3],
+        width: u32,
+        height: u32,
+    ) -> Result<View> {
+        let count = points.len().max(1) as f64;
+        let centre = points
+            .iter()
+            .fold([0.0; 3], |c, p| [0, 1, 2].map(|k| c[k] + p[k] / count));
+        let radius = points
+            .iter()
+            .map(|p| {
+                (0..3)
+                    .map(|k| (p[k] - centre[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .fold(0.0, f64::max);
+        View::framing(
+            centre,
+            1.05 * radius.max(1e-9),
+            direction,
+            up,
+            width,
+            height,
+        )
+    }
+
     /// A camera looking along `direction` with `up` roughly up, framing the sphere of
     /// `radius` around `centre` in a `width` × `height` picture; the light comes from over
     /// the viewer's left shoulder.
