@@ -72,6 +72,18 @@ fn drawn_pixels(path: &Path) -> usize {
     picture.pixels().filter(|p| p.0 != [255, 255, 255]).count()
 }
 
+/// Drawn pixels on a PNG's outermost rows and columns.
+fn drawn_border_pixels(path: &Path) -> usize {
+    let picture = image::open(path).unwrap().to_rgb8();
+    let (w, h) = picture.dimensions();
+    picture
+        .enumerate_pixels()
+        .filter(|(x, y, p)| {
+            (*x == 0 || *y == 0 || *x == w - 1 || *y == h - 1) && p.0 != [255, 255, 255]
+        })
+        .count()
+}
+
 #[test]
 fn the_teapot_is_four_surfaces_with_the_handle_on_the_torus() {
     let dir = tempfile::tempdir().unwrap();
@@ -165,13 +177,62 @@ fn render_draws_the_depth_buffer_and_ray_marches_convex_shapes() {
         "--json",
     ]));
     assert_eq!(marched["mode"], "ray-marched implicit form");
-    // Faces 1 from the origin, framed at radius 1.05: the solid lies between the unit ball's
-    // disc and the polyhedron's circumscribed one.
+    // Framed on the solid itself: it spans the picture but no drawn pixel touches the border.
     let covered = marched["covered_pixels"].as_f64().unwrap();
-    assert!(
-        covered > 0.85 * disc && covered < 1.3 * disc,
-        "{covered} vs {disc}"
-    );
+    assert!(covered > 0.5 * 100.0 * 100.0, "{covered}");
+    assert_eq!(drawn_border_pixels(&png), 0);
+    // A cube (the six axis feet at 0.8, corners 1.3 out) with the ball (1 out): each
+    // combination frames and draws, and the difference leaves the cube's corners.
+    let cube_feet = dir.path().join("cube.txt");
+    fs::write(
+        &cube_feet,
+        "0.8 0 0\n-0.8 0 0\n0 0.8 0\n0 -0.8 0\n0 0 0.8\n0 0 -0.8\n",
+    )
+    .unwrap();
+    let cube = fit(dir.path(), &cube_feet, "cube.nsb", true);
+    let mut covered_by = std::collections::BTreeMap::new();
+    for csg in ["union", "intersection", "difference"] {
+        let report = json(&ok(&[
+            "caoen",
+            "render",
+            s(&cube),
+            s(&ball),
+            "--ray-march",
+            "--csg",
+            csg,
+            "--size",
+            "100,100",
+            "--out",
+            s(&png),
+            "--json",
+        ]));
+        assert_eq!(report["mode"], format!("ray-marched {csg}"));
+        assert_eq!(drawn_border_pixels(&png), 0, "{csg}");
+        covered_by.insert(csg, report["covered_pixels"].as_u64().unwrap());
+    }
+    assert!(covered_by["intersection"] > 0 && covered_by["difference"] > 0);
+    assert!(covered_by["union"] > covered_by["intersection"]);
+    let e = fails(&[
+        "caoen",
+        "render",
+        s(&cube),
+        s(&ball),
+        "--ray-march",
+        "--out",
+        s(&png),
+    ]);
+    assert!(e.contains("--csg"), "{e}");
+    let e = fails(&[
+        "caoen",
+        "render",
+        s(&cube),
+        "--ray-march",
+        "--csg",
+        "union",
+        "--out",
+        s(&png),
+    ]);
+    assert!(e.contains("two models"), "{e}");
     // The stretched bean is not convex in the foot-point sense.
     let bean = fit(
         dir.path(),
@@ -190,7 +251,7 @@ fn render_draws_the_depth_buffer_and_ray_marches_convex_shapes() {
         "--out",
         s(&png),
     ]);
-    assert!(e.contains("one model"), "{e}");
+    assert!(e.contains("--csg"), "{e}");
     let e = fails(&[
         "caoen",
         "render",

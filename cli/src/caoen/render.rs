@@ -1,5 +1,6 @@
 //! `neurosurf caoen render`: depth-buffer pictures of Cao En surfaces (paper §10.3), or the
-//! ray-marched implicit form of a convex shape (§9, §10.1).
+//! ray-marched implicit form of a convex shape, alone or combined with a second one (§9,
+//! §10.1).
 
 use std::path::{Path, PathBuf};
 
@@ -8,7 +9,8 @@ use neurosurf_core::caoen::{Blending, Domain};
 use serde::Serialize;
 
 use neurosurf_trainer::caoen::{
-    self, CaoEnNetwork, Rendering, View, convex_implicit, depth_buffer_image, ray_marched_image,
+    self, CaoEnNetwork, ConvexSolid, Csg, Rendering, View, convex_implicit, depth_buffer_image,
+    ray_march_framing, ray_marched_image,
 };
 use neurosurf_trainer::plot::Rgb;
 use neurosurf_trainer::render::write_png;
@@ -41,8 +43,8 @@ pub struct Camera {
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Cao En blobs (sphere or torus networks, p = 3); with --ray-march exactly one, whose
-    /// targets are the feet of a convex polyhedron's face planes.
+    /// Cao En blobs (sphere or torus networks, p = 3); with --ray-march one, or two with
+    /// --csg, whose targets are the feet of a convex polyhedron's face planes.
     #[arg(required = true)]
     models: Vec<PathBuf>,
     #[command(flatten)]
@@ -61,12 +63,24 @@ pub struct Args {
     /// The level s of the implicit form's surface f = s.
     #[arg(long, default_value_t = 1.0, requires = "ray_march")]
     level: f64,
+    /// How two ray-marched solids A and B (the first and second model) combine: where either
+    /// is, where both are, or where A is and B is not.
+    #[arg(long, value_enum, requires = "ray_march")]
+    csg: Option<CsgArg>,
     /// The PNG to write.
     #[arg(long)]
     out: PathBuf,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+}
+
+/// `--csg` values.
+#[derive(Copy, Clone, Debug, clap::ValueEnum)]
+enum CsgArg {
+    Union,
+    Intersection,
+    Difference,
 }
 
 #[derive(Serialize)]
@@ -87,11 +101,29 @@ pub fn run(args: &Args) -> Result<()> {
         .map(|p| read_network(p, "render"))
         .collect::<Result<Vec<_>>>()?;
     let (mode, rendering) = if args.ray_march {
-        let [network] = networks.as_slice() else {
-            bail!("--ray-march renders one model, got {}", networks.len());
+        let csg = match (networks.len(), args.csg) {
+            (1, None) => Csg::Union,
+            (1, Some(_)) => bail!("--csg combines two models, got one: give a second blob"),
+            (2, Some(CsgArg::Union)) => Csg::Union,
+            (2, Some(CsgArg::Intersection)) => Csg::Intersection,
+            (2, Some(CsgArg::Difference)) => Csg::Difference,
+            (2, None) => bail!(
+                "--ray-march draws one model, or two combined by --csg \
+                 union|intersection|difference; got two and no --csg"
+            ),
+            (n, _) => bail!("--ray-march draws one model, or two with --csg; got {n}"),
         };
-        ("ray-marched implicit form", ray_march(network, args)?)
+        let mode = match (networks.len(), csg) {
+            (1, _) => "ray-marched implicit form",
+            (_, Csg::Union) => "ray-marched union",
+            (_, Csg::Intersection) => "ray-marched intersection",
+            (_, Csg::Difference) => "ray-marched difference",
+        };
+        (mode, ray_march(&networks, csg, args)?)
     } else {
+        if args.csg.is_some() {
+            bail!("--csg needs --ray-march");
+        }
         (
             "depth buffer",
             depth_picture(&networks, &args.camera, args.subdivisions)?,
@@ -179,49 +211,52 @@ pub(super) fn depth_picture_framed(
     Ok(depth_buffer_image(&models, &view, subdivisions)?)
 }
 
-/// Ray-marches the implicit form of a sphere network whose targets are the feet of a convex
-/// polyhedron's face planes (checked: every target lies on the polyhedron).
-fn ray_march(network: &CaoEnNetwork, args: &Args) -> Result<Rendering> {
-    if network.domain != Domain::Sphere.code()
-        || network.source_dimension() != 3
-        || network.target_dimension() != 3
-    {
-        bail!(
-            "--ray-march needs a sphere network with m = 3 and p = 3 (its targets are the face \
-             feet), got m = {}, p = {}",
-            network.source_dimension(),
-            network.target_dimension()
-        );
-    }
-    let feet: Vec<[f64; 3]> = network.targets.iter().map(|t| [t[0], t[1], t[2]]).collect();
-    check_convex(&feet)?;
+/// Ray-marches the implicit forms of sphere networks whose targets are the feet of convex
+/// polyhedra's face planes (checked: every target lies on its polyhedron), combined by `csg`
+/// when there are two.
+fn ray_march(networks: &[CaoEnNetwork], csg: Csg, args: &Args) -> Result<Rendering> {
     if !(args.sharpness >= 1.0 && args.sharpness.fract() == 0.0) {
         bail!(
             "--sharpness must be a whole number ≥ 1 for power blending, got {}",
             args.sharpness
         );
     }
-    let implicit = convex_implicit(&feet, Blending::Power, args.sharpness)?;
-    let reach = feet
+    let mut implicit = Vec::with_capacity(networks.len());
+    for (i, network) in networks.iter().enumerate() {
+        if network.domain != Domain::Sphere.code()
+            || network.source_dimension() != 3
+            || network.target_dimension() != 3
+        {
+            bail!(
+                "--ray-march needs sphere networks with m = 3 and p = 3 (their targets are the \
+                 face feet); model {} is m = {}, p = {}",
+                i + 1,
+                network.source_dimension(),
+                network.target_dimension()
+            );
+        }
+        let feet: Vec<[f64; 3]> = network.targets.iter().map(|t| [t[0], t[1], t[2]]).collect();
+        check_convex(&feet)?;
+        implicit.push(convex_implicit(&feet, Blending::Power, args.sharpness)?);
+    }
+    let solids = implicit
         .iter()
-        .map(|t| (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt())
-        .fold(0.0, f64::max);
+        .map(|network| ConvexSolid::new(network, args.level))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
     let [width, height] = args.camera.size;
-    let view = View::framing(
-        [0.0; 3],
-        1.05 * reach,
+    let view = ray_march_framing(
+        &solids,
         args.camera.direction,
         args.camera.up,
         width,
         height,
     )?;
-    Ok(ray_marched_image(
-        &implicit,
-        args.level,
-        &view,
-        1.5 * reach,
-        PALETTE[1],
-    )?)
+    let colored: Vec<(&ConvexSolid, Rgb)> = solids
+        .iter()
+        .zip(PALETTE[1..].iter())
+        .map(|(s, &c)| (s, c))
+        .collect();
+    Ok(ray_marched_image(&colored, csg, &view)?)
 }
 
 /// Every foot tᵢ must lie in every face's half-space x·tⱼ ≤ |tⱼ|² (else face i is cut off

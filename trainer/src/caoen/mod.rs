@@ -74,7 +74,9 @@ pub use mesh_fit::{
 };
 pub use morph::{MAX_FRAMES, Morph, morph_meshes};
 pub use network::{CaoEnNetwork, Evaluation, on_domain};
-pub use raymarch::{convex_implicit, ray_marched_image};
+pub use raymarch::{
+    ConvexSolid, Csg, convex_implicit, framing as ray_march_framing, ray_marched_image,
+};
 pub use render::{MAX_SAMPLE_GAP, Rendering, View, depth_buffer_image};
 pub use spherical::{SphericalMap, flipped_triangles, spherical_parameterization};
 pub use teapot::{HANDLE_KEYS, HANDLE_SPAN, TeapotPart, fit_teapot};
