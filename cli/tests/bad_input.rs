@@ -147,6 +147,22 @@ const COMMANDS: &[Command] = &[
         args: &["parametric", "tessellate", "{in}", "--out", "{out}"],
         reads: Reads::Blob,
     },
+    Command {
+        args: &["caoen", "normals", "{in}", "--out", "{out}"],
+        reads: Reads::Blob,
+    },
+    Command {
+        args: &[
+            "caoen",
+            "perspective",
+            "{in}",
+            "--eye",
+            "0,0,5",
+            "--out",
+            "{out}",
+        ],
+        reads: Reads::Blob,
+    },
 ];
 
 /// Runs `command` with `{in}` and `{out}` replaced; returns the arguments and the output.

@@ -409,3 +409,97 @@ fn fit_mesh_takes_the_scanned_bunny_with_its_holes() {
     let error = fails(&["caoen", "fit-mesh", s(&torus), "--out", s(&out)]);
     assert!(error.contains("genus 1"), "{error}");
 }
+
+/// The paper's derived networks from the command line: the approximate normals (angle error
+/// reported) and the perspective view (screen error reported), each a blob that the host and
+/// the simulated target evaluate alike in both scalars.
+#[test]
+fn normal_and_perspective_networks_are_blobs_the_target_evaluates() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("bean.nsb");
+    ok(&[
+        "caoen",
+        "fit",
+        s(&targets_file(dir.path())),
+        "--out",
+        s(&model),
+    ]);
+    let sources = sphere_points(dir.path());
+    let normals = dir.path().join("normals.nsb");
+    let report = json(&ok(&[
+        "caoen",
+        "normals",
+        s(&model),
+        "--out",
+        s(&normals),
+        "--json",
+    ]));
+    assert_eq!(report["key_points"], 26);
+    let (mean, max) = (
+        report["mean_error_degrees"].as_f64().unwrap(),
+        report["max_error_degrees"].as_f64().unwrap(),
+    );
+    assert!(mean > 0.0 && mean <= max && max < 45.0, "{report}");
+    let near = dir.path().join("near.nsb");
+    let far = dir.path().join("far.nsb");
+    let mut relative = Vec::new();
+    for (eye, out) in [("0.5,0.8,3", &near), ("1.5,2.4,9", &far)] {
+        let report = json(&ok(&[
+            "caoen",
+            "perspective",
+            s(&model),
+            "--eye",
+            eye,
+            "--focal",
+            "2",
+            "--out",
+            s(out),
+            "--json",
+        ]));
+        assert!(
+            report["max_error_at_keys"].as_f64().unwrap() < 1e-6,
+            "{report}"
+        );
+        relative.push(
+            report["max_screen_error"].as_f64().unwrap()
+                / report["screen_extent"].as_f64().unwrap(),
+        );
+    }
+    println!(
+        "perspective screen error / picture: near {:.2e}, far {:.2e}",
+        relative[0], relative[1]
+    );
+    assert!(
+        relative[1] < relative[0] && relative[0] < 0.05,
+        "{relative:?}"
+    );
+    for blob in [&normals, &near] {
+        for scalar in ["f32", "q16.16"] {
+            let common = [s(blob), "--points", s(&sources), "--scalar", scalar];
+            let host = ok(&[&["eval"], &common[..]].concat());
+            let target = ok(&[&["sim"], &common[..]].concat());
+            assert!(host == target, "{scalar}\n{host}\n---\n{target}");
+        }
+    }
+    let e = fails(&[
+        "caoen",
+        "perspective",
+        s(&model),
+        "--eye",
+        "0,0,0.1",
+        "--out",
+        s(&dir.path().join("inside.nsb")),
+    ]);
+    assert!(e.contains("in front of the eye"), "{e}");
+    assert!(!dir.path().join("inside.nsb").exists());
+    let e = fails(&[
+        "caoen",
+        "perspective",
+        s(&model),
+        "--eye",
+        "0,0,0",
+        "--out",
+        s(&dir.path().join("nowhere.nsb")),
+    ]);
+    assert!(e.contains("--look-at"), "{e}");
+}

@@ -2,10 +2,13 @@
 //! from key and target points, mesh it, fit the teapot, render, morph, distort, compress
 //! images.
 
+mod derived;
 mod distort;
 mod fit_mesh;
 mod image;
 mod morph;
+mod normals;
+mod perspective;
 mod render;
 mod shade;
 mod teapot;
@@ -42,8 +45,14 @@ pub enum Command {
     /// The teapot as four Cao En surfaces (body, lid, spout on the sphere; the handle on the
     /// torus): four blobs, the combined mesh, optionally a picture.
     Teapot(teapot::Args),
+    /// The paper's approximate-normal network: the same key points, the exact normals at
+    /// them as targets; reports its angle error against the exact normals.
+    Normals(normals::Args),
+    /// The paper's perspective approximation: a network whose outputs are the screen
+    /// coordinates and depth of a pinhole camera's view; reports its error.
+    Perspective(perspective::Args),
     /// Depth-buffer picture (PNG) of Cao En surfaces with gap filling, or with --ray-march
-    /// the implicit form of a convex shape.
+    /// the implicit form of convex shapes, alone or combined (CSG).
     Render(render::Args),
     /// Metamorphosis between two networks (any key counts): a sequence of meshes and
     /// optionally pictures.
@@ -62,6 +71,8 @@ pub fn run(command: &Command) -> Result<()> {
         Command::Shade(args) => shade::run(args),
         Command::FitMesh(args) => fit_mesh::run(args),
         Command::Teapot(args) => teapot::run(args),
+        Command::Normals(args) => normals::run(args),
+        Command::Perspective(args) => perspective::run(args),
         Command::Render(args) => render::run(args),
         Command::Morph(args) => morph::run(args),
         Command::Distort(args) => distort::run(args),

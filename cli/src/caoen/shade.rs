@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use serde::Serialize;
 
-use neurosurf_trainer::caoen::{self, LIGHTING_CHECK_SUBDIVISIONS, fold_lighting};
-use neurosurf_trainer::evaluate::Precision;
+use neurosurf_trainer::caoen::{LIGHTING_CHECK_SUBDIVISIONS, fold_lighting};
 
-use super::super::output::{self, blob_scalar, comma_list, wrote_blob};
+use super::super::output::comma_list;
+use super::derived::BlobOut;
 use super::read_network;
 
 #[derive(Debug, clap::Args)]
@@ -20,15 +20,9 @@ pub struct Args {
     /// lights: output 3 + j is N·Lⱼ (unclamped: shade with max(0, ·)).
     #[arg(long = "light", value_parser = comma_list::<f64, 3>, required = true, allow_hyphen_values = true)]
     lights: Vec<[f64; 3]>,
-    /// How the blob stores the network: `f32` or `q16.16`.
-    #[arg(long, default_value = "f32")]
-    scalar: Precision,
-    /// Output blob (p = 3 + the number of lights).
-    #[arg(long)]
-    out: PathBuf,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    json: bool,
+    /// The blob gets p = 3 + the number of lights.
+    #[command(flatten)]
+    output: BlobOut,
 }
 
 #[derive(Serialize)]
@@ -47,15 +41,15 @@ struct Report<'a> {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let scalar = blob_scalar(args.scalar)?;
-    neurosurf_trainer::io::check_output(&args.out)?;
+    let scalar = args.output.prepare()?;
     let network = read_network(&args.model, "shade")?;
     let fit = fold_lighting(&network, &args.lights)?;
-    let blob = caoen::to_blob(&fit.network, scalar, b"neurosurf caoen shade")?;
-    neurosurf_trainer::blob::write_checked(&args.out, &blob)?;
+    let bytes = args
+        .output
+        .write(&fit.network, scalar, b"neurosurf caoen shade")?;
     let report = Report {
-        out: &args.out,
-        blob_bytes: blob.len(),
+        out: &args.output.out,
+        blob_bytes: bytes,
         key_points: fit.network.key_count(),
         target_dimension: fit.network.target_dimension(),
         lights: &fit.lights,
@@ -64,18 +58,16 @@ pub fn run(args: &Args) -> Result<()> {
         rms_error_between: fit.rms_error_between,
         check_subdivisions: LIGHTING_CHECK_SUBDIVISIONS,
     };
-    if args.json {
-        return output::json(&report);
-    }
-    println!(
-        "{} key points, {} outputs (position, then N·L per light): |output − N·L| ≤ {:.1e} at \
-         the key points, ≤ {:.4} (RMS {:.4}) between them",
-        report.key_points,
-        report.target_dimension,
-        report.max_error_at_keys,
-        report.max_error_between,
-        report.rms_error_between
-    );
-    wrote_blob(&args.out, blob.len(), scalar, None);
-    Ok(())
+    let summary = || {
+        format!(
+            "{} key points, {} outputs (position, then N·L per light): |output − N·L| ≤ {:.1e} \
+             at the key points, ≤ {:.4} (RMS {:.4}) between them",
+            report.key_points,
+            report.target_dimension,
+            report.max_error_at_keys,
+            report.max_error_between,
+            report.rms_error_between
+        )
+    };
+    args.output.finish(&report, summary, bytes, scalar)
 }

@@ -45,6 +45,8 @@ mod mesh;
 mod mesh_fit;
 mod morph;
 mod network;
+mod normals;
+mod perspective;
 mod raymarch;
 mod render;
 mod spherical;
@@ -74,6 +76,8 @@ pub use mesh_fit::{
 };
 pub use morph::{MAX_FRAMES, Morph, morph_meshes};
 pub use network::{CaoEnNetwork, Evaluation, on_domain};
+pub use normals::{NormalFit, approximate_normals};
+pub use perspective::{PerspectiveCamera, PerspectiveFit, perspective_network};
 pub use raymarch::{
     ConvexSolid, Csg, convex_implicit, framing as ray_march_framing, ray_marched_image,
 };

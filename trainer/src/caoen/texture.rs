@@ -255,7 +255,7 @@ pub fn fold_lighting(network: &CaoEnNetwork, lights: &[[f64; 3]]) -> Result<Ligh
 
 /// Source points between the key points: the icosphere of [`LIGHTING_CHECK_SUBDIVISIONS`] on
 /// the sphere, a 36 × 18 grid on the torus.
-fn check_points(domain: u8) -> Result<Vec<Vec<f64>>> {
+pub(super) fn check_points(domain: u8) -> Result<Vec<Vec<f64>>> {
     if domain == 1 {
         return Ok(super::mesh::torus_grid(36, 18)?.sources);
     }
