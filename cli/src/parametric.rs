@@ -13,6 +13,7 @@ use clap::{Subcommand, ValueEnum};
 use serde::Serialize;
 
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
+use neurosurf_trainer::geometry::drop_unused_vertices;
 use neurosurf_trainer::io::{
     Mesh, data_file, read_mesh, read_parameters, read_query_points, write_atomic, write_mesh,
 };
@@ -615,11 +616,29 @@ struct FillReport<'a> {
     #[serde(flatten)]
     mesh: MeshReport<'a>,
     holes: usize,
+    filled: usize,
+    /// The holes left open, each with why.
+    unfilled: Vec<Unfilled>,
     new_vertices: usize,
     new_triangles: usize,
     region_vertices: usize,
+    /// Vertices no triangle used (left by a punched hole or in the input), removed.
+    removed_unused_vertices: usize,
 }
 
+/// A hole that stays open.
+#[derive(Serialize)]
+struct Unfilled {
+    /// Its number among the mesh's boundary loops.
+    hole: usize,
+    boundary_vertices: usize,
+    /// The mean of its boundary vertices, to find it.
+    centre: [f64; 3],
+    reason: String,
+}
+
+/// Fills every hole it can (best effort): the holes that cannot be filled are reported with
+/// the reason and stay open; it fails only when none could be filled.
 fn fill_holes(args: &FillHoleArgs) -> Result<()> {
     let mut mesh = read_mesh(&args.mesh)?;
     if let Some([vertex, rings]) = args.punch {
@@ -637,33 +656,79 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
         bail!("{} has no holes (no boundary edges)", args.mesh.display());
     }
     let (mut new_vertices, mut new_triangles, mut region_vertices) = (0, 0, 0);
+    let mut unfilled = Vec::new();
     for (index, hole) in holes.iter().enumerate() {
-        let filled = fill_hole(&mesh, hole, &options).with_context(|| {
-            format!(
-                "cannot fill hole {index} ({} boundary vertices)",
-                hole.len()
-            )
-        })?;
-        new_vertices += filled.new_vertices.len();
-        new_triangles += filled.new_triangles;
-        region_vertices += filled.region_vertices;
-        mesh = filled.mesh;
+        // Filling appends vertices and triangles, so the other loops keep their indices.
+        match fill_hole(&mesh, hole, &options) {
+            Ok(filled) => {
+                new_vertices += filled.new_vertices.len();
+                new_triangles += filled.new_triangles;
+                region_vertices += filled.region_vertices;
+                mesh = filled.mesh;
+            }
+            Err(e) => {
+                let count = hole.len().max(1) as f64;
+                let centre = hole.iter().fold([0.0; 3], |c, &v| {
+                    let p = mesh.positions[v as usize];
+                    [0, 1, 2].map(|k| c[k] + p[k] / count)
+                });
+                unfilled.push(Unfilled {
+                    hole: index,
+                    boundary_vertices: hole.len(),
+                    centre,
+                    reason: e.to_string(),
+                });
+            }
+        }
     }
+    if unfilled.len() == holes.len() {
+        let reasons: Vec<String> = unfilled
+            .iter()
+            .map(|u| {
+                format!(
+                    "hole {} ({} boundary vertices): {}",
+                    u.hole, u.boundary_vertices, u.reason
+                )
+            })
+            .collect();
+        bail!(
+            "{}: none of its {} holes could be filled (try another --rings):\n  {}",
+            args.mesh.display(),
+            holes.len(),
+            reasons.join("\n  ")
+        );
+    }
+    let (mesh, removed_unused_vertices) = drop_unused_vertices(&mesh);
     write_mesh(&args.out, &mesh, None)?;
     let report = FillReport {
         mesh: MeshReport::of(&args.out, &mesh),
         holes: holes.len(),
+        filled: holes.len() - unfilled.len(),
+        unfilled,
         new_vertices,
         new_triangles,
         region_vertices,
+        removed_unused_vertices,
     };
     if args.json {
         return output::json(&report);
     }
     println!(
-        "filled {} hole(s): {} new vertices, {} new triangles, networks trained on {} vertices",
-        report.holes, report.new_vertices, report.new_triangles, report.region_vertices
+        "filled {} of {} hole(s): {} new vertices, {} new triangles, networks trained on {} \
+         vertices; {} unused vertices removed",
+        report.filled,
+        report.holes,
+        report.new_vertices,
+        report.new_triangles,
+        report.region_vertices,
+        report.removed_unused_vertices
     );
+    for u in &report.unfilled {
+        println!(
+            "left open: hole {} ({} boundary vertices, around {:.4}, {:.4}, {:.4}): {}",
+            u.hole, u.boundary_vertices, u.centre[0], u.centre[1], u.centre[2], u.reason
+        );
+    }
     report.mesh.print();
     Ok(())
 }

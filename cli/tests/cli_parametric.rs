@@ -236,8 +236,46 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         (Some(1), Some(true))
     );
     assert!(report["new_vertices"].as_u64().unwrap() > 5, "{report}");
+    // The punched triangles' inner vertices are gone from the output, not left unused.
+    assert!(
+        report["removed_unused_vertices"].as_u64().unwrap() > 0,
+        "{report}"
+    );
+    assert_eq!(unused_obj_vertices(&filled), 0);
     let e = fails(&["parametric", "fill-hole", s(&fandisk), "--out", s(&filled)]);
     assert!(e.contains("has no holes"), "{e}");
+
+    // Best effort on a real scan: the bunny's 5 holes, one of whose outlines crosses itself
+    // in every plane; the others are filled, the open one is named, and the command succeeds.
+    let bunny = neurosurf_trainer::io::data_file("stanford-bunny.obj").unwrap();
+    let report = json(&ok(&[
+        "parametric",
+        "fill-hole",
+        s(&bunny),
+        "--out",
+        s(&filled),
+        "--json",
+    ]));
+    assert_eq!(report["holes"], 5, "{report}");
+    assert!(report["filled"].as_u64().unwrap() >= 4, "{report}");
+    for open in report["unfilled"].as_array().unwrap() {
+        assert!(!open["reason"].as_str().unwrap().is_empty(), "{report}");
+    }
+    assert_eq!(unused_obj_vertices(&filled), 0);
+}
+
+/// Vertices of an OBJ file that no face uses.
+fn unused_obj_vertices(path: &Path) -> usize {
+    let text = fs::read_to_string(path).unwrap();
+    let count = text.lines().filter(|l| l.starts_with("v ")).count();
+    let mut used = vec![false; count];
+    for line in text.lines().filter(|l| l.starts_with("f ")) {
+        for corner in line.split_whitespace().skip(1) {
+            let v: usize = corner.split('/').next().unwrap().parse().unwrap();
+            used[v - 1] = true;
+        }
+    }
+    used.iter().filter(|u| !**u).count()
 }
 
 #[test]

@@ -54,6 +54,7 @@ mod teapot;
 mod texture;
 mod topology;
 
+pub use crate::geometry::mesh_graph::drop_unused_vertices;
 pub use blob::{DecodedCaoEn, from_blob, to_blob};
 pub use capacity::check_key_count;
 pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
@@ -89,8 +90,8 @@ pub use texture::{
     position_part, texture_coordinates,
 };
 pub use topology::{
-    Closing, cap_holes, cap_holes_planar, check_sphere_topology, close_for_sphere,
-    drop_unused_vertices, edge_components, oriented_boundary_loops, weld,
+    Closing, cap_holes, cap_holes_planar, check_sphere_topology, close_for_sphere, edge_components,
+    oriented_boundary_loops, weld,
 };
 
 #[cfg(test)]

@@ -5,6 +5,7 @@
 use std::collections::HashMap;
 
 use crate::error::{Error, Result};
+use crate::geometry::mesh_graph::drop_unused_vertices;
 use crate::io::Mesh;
 use crate::parametric::{
     PlanarMesh, SymmetricMatrix, distance_to_polygon, inside_polygon, triangulate_polygon,
@@ -357,40 +358,6 @@ fn membrane(planar: &PlanarMesh, rim: &[[f64; 3]]) -> Result<Vec<[f64; 3]>> {
         *p = [rhs[0][i - m], rhs[1][i - m], rhs[2][i - m]];
     }
     Ok(positions)
-}
-
-/// Removes the vertices no triangle uses (scans often keep them), renumbering the rest in
-/// order. Returns the mesh and how many were removed.
-pub fn drop_unused_vertices(mesh: &Mesh) -> (Mesh, usize) {
-    let mut used = vec![false; mesh.positions.len()];
-    for t in &mesh.triangles {
-        for &v in t {
-            if let Some(u) = used.get_mut(v as usize) {
-                *u = true;
-            }
-        }
-    }
-    let mut index = vec![u32::MAX; mesh.positions.len()];
-    let mut positions = Vec::with_capacity(mesh.positions.len());
-    for (v, &p) in mesh.positions.iter().enumerate() {
-        if used[v] {
-            index[v] = positions.len() as u32;
-            positions.push(p);
-        }
-    }
-    let removed = mesh.positions.len() - positions.len();
-    let triangles = mesh
-        .triangles
-        .iter()
-        .map(|t| t.map(|v| index.get(v as usize).copied().unwrap_or(u32::MAX)))
-        .collect();
-    (
-        Mesh {
-            positions,
-            triangles,
-        },
-        removed,
-    )
 }
 
 /// What [`close_for_sphere`] changed.

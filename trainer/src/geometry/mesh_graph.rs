@@ -1,5 +1,6 @@
 //! Connectivity of triangle meshes: one-rings (the mesh variant of LLE, §4.2), edge use
-//! counts, boundary loops and the watertightness test every stitched or filled mesh must pass.
+//! counts, boundary loops, unused vertices and the watertightness test every stitched or
+//! filled mesh must pass.
 
 use std::collections::HashMap;
 
@@ -124,4 +125,38 @@ pub fn boundary_loops(triangles: &[[u32; 3]]) -> Result<Vec<Vec<u32>>> {
         loops.push(cycle);
     }
     Ok(loops)
+}
+
+/// Removes the vertices no triangle uses (scans often keep them), renumbering the rest in
+/// order. Returns the mesh and how many were removed.
+pub fn drop_unused_vertices(mesh: &Mesh) -> (Mesh, usize) {
+    let mut used = vec![false; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for &v in t {
+            if let Some(u) = used.get_mut(v as usize) {
+                *u = true;
+            }
+        }
+    }
+    let mut index = vec![u32::MAX; mesh.positions.len()];
+    let mut positions = Vec::with_capacity(mesh.positions.len());
+    for (v, &p) in mesh.positions.iter().enumerate() {
+        if used[v] {
+            index[v] = positions.len() as u32;
+            positions.push(p);
+        }
+    }
+    let removed = mesh.positions.len() - positions.len();
+    let triangles = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| index.get(v as usize).copied().unwrap_or(u32::MAX)))
+        .collect();
+    (
+        Mesh {
+            positions,
+            triangles,
+        },
+        removed,
+    )
 }

@@ -4,4 +4,6 @@
 pub mod mesh_graph;
 pub mod vector;
 
-pub use mesh_graph::{EdgeReport, boundary_loops, edge_report, edge_uses, one_rings};
+pub use mesh_graph::{
+    EdgeReport, boundary_loops, drop_unused_vertices, edge_report, edge_uses, one_rings,
+};
