@@ -125,9 +125,10 @@ pub enum MethodArg {
 
 #[derive(Debug, clap::Args)]
 pub struct EmbeddingArgs {
-    /// Neighbours per point k.
-    #[arg(long, default_value_t = LleOptions::default().neighbors)]
-    neighbors: usize,
+    /// Neighbours per point k. Default: 10, or the first of 12, 14, 16, 20 whose embedding
+    /// does not fold.
+    #[arg(long)]
+    neighbors: Option<usize>,
     /// Gram regularization δ (C + δ·tr(C)·I).
     #[arg(long, default_value_t = LleOptions::default().regularization)]
     regularization: f64,
@@ -135,10 +136,12 @@ pub struct EmbeddingArgs {
 
 impl EmbeddingArgs {
     fn options(&self) -> LleOptions {
+        let default = LleOptions::default();
         LleOptions {
-            neighbors: self.neighbors,
+            neighbors: self.neighbors.unwrap_or(default.neighbors),
             regularization: self.regularization,
-            ..LleOptions::default()
+            more_neighbors: self.neighbors.is_none(),
+            ..default
         }
     }
 }
@@ -220,7 +223,7 @@ fn embed(args: &EmbedArgs) -> Result<()> {
     let report = EmbedReport {
         out: &args.out,
         points: points.len(),
-        neighbors: args.embedding.neighbors,
+        neighbors: embedding.neighbors,
         eigenvalues: embedding.eigenvalues,
         eigen_iterations: embedding.iterations,
         flipped_fraction: embedding.folds.flipped_pairs,

@@ -15,6 +15,11 @@ use crate::error::{Error, Result};
 use crate::geometry::mesh_graph::one_rings;
 use crate::io::Mesh;
 
+/// The other k [`embed_points`] tries, in order, when the embedding folds and
+/// [`LleOptions::more_neighbors`] is on: k = 10 goes on with 12, 14, 16, 20, then 8 and 6.
+/// Noise and dense samples want a wider neighbourhood, thin features a narrower one.
+pub const OTHER_NEIGHBORS: [isize; 6] = [2, 4, 6, 10, -2, -4];
+
 /// Embedding settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LleOptions {
@@ -24,6 +29,11 @@ pub struct LleOptions {
     pub regularization: f64,
     /// Reject embeddings that fold or collapse (true).
     pub check_folds: bool,
+    /// When the embedding folds at k, try k + [`OTHER_NEIGHBORS`] before refusing (true):
+    /// noisy or dense samples often need a wider neighbourhood to see the surface rather
+    /// than the noise. Off when the user chose k.
+    #[serde(default)]
+    pub more_neighbors: bool,
 }
 
 impl Default for LleOptions {
@@ -32,6 +42,7 @@ impl Default for LleOptions {
             neighbors: 10,
             regularization: 1e-3,
             check_folds: true,
+            more_neighbors: true,
         }
     }
 }
@@ -47,17 +58,57 @@ pub struct Embedding {
     pub iterations: usize,
     /// Flip and collapse fractions of the result.
     pub folds: FoldReport,
+    /// Neighbours per point k the embedding used (for a mesh, whose one-rings are the
+    /// neighbourhoods, the option it was given).
+    pub neighbors: usize,
 }
 
-/// LLE of an unstructured point set with k nearest neighbours.
+/// LLE of an unstructured point set with k nearest neighbours; with
+/// [`LleOptions::more_neighbors`], the first of k and k + [`OTHER_NEIGHBORS`] (from 4 to
+/// fewer than the points) whose embedding does not fold.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for too few points for k, non-finite coordinates, duplicate points,
-/// points on a line, a failed eigen solve, or (with `check_folds`) an embedding that folds.
+/// points on a line, a failed eigen solve, or (with `check_folds`) an embedding that folds at
+/// every k tried.
 pub fn embed_points(points: &[[f64; 3]], options: &LleOptions) -> Result<Embedding> {
     let diagonal = check_points(points, options.neighbors + 1)?;
-    let neighbors = nearest_neighbors(points, options.neighbors, diagonal)?;
-    embed_with_neighbors(points, &neighbors, options)
+    let mut tried = vec![options.neighbors];
+    if options.more_neighbors && options.check_folds {
+        tried.extend(
+            OTHER_NEIGHBORS
+                .iter()
+                .filter_map(|&step| options.neighbors.checked_add_signed(step))
+                .filter(|&k| k >= 4 && k < points.len()),
+        );
+    }
+    let mut first_error = None;
+    for &k in &tried {
+        let neighbors = nearest_neighbors(points, k, diagonal)?;
+        let options = LleOptions {
+            neighbors: k,
+            ..*options
+        };
+        match embed_with_neighbors(points, &neighbors, &options) {
+            Ok(embedding) => return Ok(embedding),
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    let error = first_error.unwrap_or_else(|| Error::invalid("no neighbourhood size to try"));
+    if tried.len() == 1 {
+        return Err(Error::invalid(format!(
+            "{error} (with k = {} neighbours; more neighbours, --neighbors, often flatten noisy \
+             or dense samples)",
+            options.neighbors
+        )));
+    }
+    let ks: Vec<String> = tried.iter().map(usize::to_string).collect();
+    Err(Error::invalid(format!(
+        "{error} (tried k = {} neighbours; another --neighbors may still help)",
+        ks.join(", ")
+    )))
 }
 
 /// LLE of a mesh's vertices with their one-rings as neighbourhoods (§4.2). Every vertex must
@@ -107,5 +158,6 @@ pub fn embed_with_neighbors(
         eigenvalues: [eigen.values[0], eigen.values[1]],
         iterations: eigen.iterations,
         folds,
+        neighbors: options.neighbors,
     })
 }

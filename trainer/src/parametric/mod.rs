@@ -88,7 +88,9 @@ pub use coons::{
     Bezier, CoonsBoundary, bezier_point, coons_boundary, coons_grid, coons_point, fit_bezier,
 };
 pub use eigen::{Eigenpairs, MAX_EIGEN_ITERATIONS, smallest_nonconstant};
-pub use embedding::{Embedding, LleOptions, embed_mesh, embed_points, embed_with_neighbors};
+pub use embedding::{
+    Embedding, LleOptions, OTHER_NEIGHBORS, embed_mesh, embed_points, embed_with_neighbors,
+};
 pub use fit::{MIN_FIT_POINTS, SurfaceFit, fit_network};
 pub use folds::{
     COLLAPSE_RATIO, FoldReport, MAX_COLLAPSE_FRACTION, MAX_FLIP_FRACTION, check_flat, fold_report,

@@ -47,6 +47,38 @@ fn lle_with_noise_still_recovers_the_cylinder() {
     assert!(r2 > 0.95 && keep > 0.6);
 }
 
+/// 5 000 samples of a saddle with noise of 1 % of the diagonal fold at k = 10 and 12 (the
+/// noise fills the small neighbourhoods: 7 % and 3 % of neighbour pairs flip); by default the
+/// embedding goes on to wider ones and flattens, while a k the user chose is kept and the
+/// refusal names --neighbors.
+#[test]
+fn a_dense_noisy_saddle_embeds_by_default() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let sigma = 0.01 * 8.0_f64.sqrt();
+    let points: Vec<[f64; 3]> = (0..5_000)
+        .map(|_| {
+            let (x, y) = (
+                2.0 * rng.random::<f64>() - 1.0,
+                2.0 * rng.random::<f64>() - 1.0,
+            );
+            // A Gaussian from Box–Muller.
+            let (a, b) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
+            let noise = sigma * (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos();
+            [x, y, 0.5 * (x * x - y * y) + noise]
+        })
+        .collect();
+    let chosen = LleOptions {
+        more_neighbors: false,
+        ..LleOptions::default()
+    };
+    let refused = embed_points(&points, &chosen).unwrap_err().to_string();
+    assert!(refused.contains("--neighbors"), "{refused}");
+    let e = embed_points(&points, &LleOptions::default()).unwrap();
+    println!("noisy saddle: k = {}, {:?}", e.neighbors, e.folds);
+    assert!(e.neighbors > 10 && e.folds.is_flat());
+}
+
 #[test]
 fn a_closed_sphere_is_rejected_as_folded() {
     let sample = sample_surface(SampleSurface::Sphere, 1000, 0.0, 7).unwrap();
