@@ -175,23 +175,40 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         "--out",
         s(&top),
     ]);
-    // The same patch lifted by 0.05: stitched to the first, a closed pillow.
-    let lifted: String = fs::read_to_string(&top)
-        .unwrap()
-        .lines()
-        .map(|line| match line.strip_prefix("v ") {
-            Some(rest) => {
-                let c: Vec<f64> = rest
-                    .split_whitespace()
-                    .map(|x| x.parse().unwrap())
-                    .collect();
-                format!("v {} {} {}\n", c[0], c[1], c[2] + 0.05)
-            }
-            None => format!("{line}\n"),
-        })
-        .collect();
-    let bottom = dir.path().join("bottom.obj");
-    fs::write(&bottom, lifted).unwrap();
+    // The same patch lifted by `dz`.
+    let lifted = |dz: f64, name: &str| {
+        let text: String = fs::read_to_string(&top)
+            .unwrap()
+            .lines()
+            .map(|line| match line.strip_prefix("v ") {
+                Some(rest) => {
+                    let c: Vec<f64> = rest
+                        .split_whitespace()
+                        .map(|x| x.parse().unwrap())
+                        .collect();
+                    format!("v {} {} {}\n", c[0], c[1], c[2] + dz)
+                }
+                None => format!("{line}\n"),
+            })
+            .collect();
+        let path = dir.path().join(name);
+        fs::write(&path, text).unwrap();
+        path
+    };
+    // 1.5 above (more than half the patch's size): the loops do not meet, no seam.
+    let far = lifted(1.5, "far.obj");
+    let e = fails(&[
+        "parametric",
+        "stitch",
+        s(&top),
+        s(&far),
+        "--out",
+        s(&dir.path().join("dragged.ply")),
+    ]);
+    assert!(e.contains("do not meet"), "{e}");
+    assert!(!dir.path().join("dragged.ply").exists());
+    // 0.05 above: stitched to the first, a closed pillow.
+    let bottom = lifted(0.05, "bottom.obj");
     let stitched = dir.path().join("pillow.ply");
     let report = json(&ok(&[
         "parametric",

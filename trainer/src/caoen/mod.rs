@@ -54,10 +54,11 @@ mod teapot;
 mod texture;
 mod topology;
 
+pub use crate::geometry::bounding_diagonal;
 pub use crate::geometry::mesh_graph::drop_unused_vertices;
 pub use blob::{DecodedCaoEn, from_blob, to_blob};
 pub use capacity::check_key_count;
-pub use distance::{SurfaceDistance, TriangleTree, bounding_diagonal, surface_distance};
+pub use distance::{SurfaceDistance, TriangleTree, surface_distance};
 pub use distort::Distortion;
 pub use fit::{
     AUTO_SHARPNESS, AUTO_SPACING, BetweenKeys, between_keys, cube_directions, fit_auto, fit_shape,

@@ -1,9 +1,12 @@
-//! Geometry every family shares: small vector helpers on `[f64; 3]` and the connectivity of
-//! triangle meshes (one-rings, edge uses, boundary loops, the watertightness test).
+//! Geometry every family shares: small vector helpers on `[f64; 3]`, mesh bounds and the
+//! connectivity of triangle meshes (one-rings, edge uses, boundary loops, unused vertices, the
+//! watertightness test).
 
+pub mod bounds;
 pub mod mesh_graph;
 pub mod vector;
 
+pub use bounds::bounding_diagonal;
 pub use mesh_graph::{
     EdgeReport, boundary_loops, drop_unused_vertices, edge_report, edge_uses, one_rings,
 };

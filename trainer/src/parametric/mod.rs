@@ -111,7 +111,7 @@ pub use samples::{SampleSurface, SurfaceSample, sample_surface};
 pub use sparse::{Cholesky, CompressedMatrix, SymmetricMatrix};
 pub use split::{Split, stratified_split};
 pub use stitch::{
-    ANCHOR_WEIGHT, CONSTRAINT_WEIGHT, Seam, Stitched, boundary_seam, face_outward,
+    ANCHOR_WEIGHT, CONSTRAINT_WEIGHT, MAX_SEAM_GAP, Seam, Stitched, boundary_seam, face_outward,
     orient_consistently, signed_volume, stitch,
 };
 pub use synthesis::{SynthesizedSurface, synthesize};

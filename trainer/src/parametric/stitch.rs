@@ -18,6 +18,7 @@
 use super::laplacian::cotangent_laplacian;
 use super::sparse::SymmetricMatrix;
 use crate::error::{Error, Result};
+use crate::geometry::bounding_diagonal;
 use crate::geometry::mesh_graph::{boundary_loops, edge_report};
 use crate::io::Mesh;
 
@@ -25,6 +26,11 @@ use crate::io::Mesh;
 pub const CONSTRAINT_WEIGHT: f64 = 10.0;
 /// Weight of the pull towards the original positions.
 pub const ANCHOR_WEIGHT: f64 = 1e-1;
+
+/// The largest gap a seam accepts between its two loops, as a share of the smaller patch's
+/// bounding diagonal: beyond it the loops do not meet, and stitching would drag one patch
+/// across to the other.
+pub const MAX_SEAM_GAP: f64 = 0.25;
 
 /// Vertices of two patches that must coincide, pairwise.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
@@ -323,8 +329,9 @@ pub fn face_outward(mesh: &mut Mesh) {
 /// same vertices at the same fractions, paired in order.
 ///
 /// # Errors
-/// [`Error::InvalidInput`] for a missing patch, a patch without exactly one boundary loop, or
-/// `a == b`.
+/// [`Error::InvalidInput`] for a missing patch, a patch without exactly one boundary loop,
+/// `a == b`, or loops farther apart than [`MAX_SEAM_GAP`] of the smaller patch (the patches
+/// are left as they were).
 pub fn boundary_seam(patches: &mut [Mesh], a: usize, b: usize) -> Result<Seam> {
     if a == b || a >= patches.len() || b >= patches.len() {
         return Err(Error::invalid(
@@ -363,6 +370,28 @@ pub fn boundary_seam(patches: &mut [Mesh], a: usize, b: usize) -> Result<Seam> {
                 best = (cost, lb);
             }
         }
+    }
+    // How far apart the aligned loops are, against the smaller patch.
+    let gap = {
+        let pb = &patches[b].positions;
+        let fb = arc_fractions(pb, &best.1);
+        la.iter()
+            .zip(&fa)
+            .map(|(&v, &f)| {
+                let (q, p) = (point_at(pb, &best.1, &fb, f).0, pa[v as usize]);
+                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+            })
+            .fold(0.0, f64::max)
+    };
+    let size = bounding_diagonal(&patches[a]).min(bounding_diagonal(&patches[b]));
+    if gap > MAX_SEAM_GAP * size {
+        return Err(Error::invalid(format!(
+            "the boundaries of patches {a} and {b} are up to {gap:.4e} apart, {:.0} % of the \
+             smaller patch's size {size:.4e} (at most {:.0} %): they do not meet, so a seam \
+             would drag one patch onto the other; move the patches together or seam others",
+            100.0 * gap / size,
+            100.0 * MAX_SEAM_GAP
+        )));
     }
     let mut loops = [la, best.1];
     let fractions = [
