@@ -625,6 +625,8 @@ struct FillReport<'a> {
     new_vertices: usize,
     new_triangles: usize,
     region_vertices: usize,
+    /// Holes whose region LLE folded, embedded by Tutte's method instead.
+    tutte_embeddings: usize,
     /// Vertices no triangle used (left by a punched hole or in the input), removed.
     removed_unused_vertices: usize,
 }
@@ -659,6 +661,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
         bail!("{} has no holes (no boundary edges)", args.mesh.display());
     }
     let (mut new_vertices, mut new_triangles, mut region_vertices) = (0, 0, 0);
+    let mut tutte_embeddings = 0;
     let mut unfilled = Vec::new();
     for (index, hole) in holes.iter().enumerate() {
         // Filling appends vertices and triangles, so the other loops keep their indices.
@@ -667,6 +670,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
                 new_vertices += filled.new_vertices.len();
                 new_triangles += filled.new_triangles;
                 region_vertices += filled.region_vertices;
+                tutte_embeddings += usize::from(filled.tutte);
                 mesh = filled.mesh;
             }
             Err(e) => {
@@ -711,6 +715,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
         new_vertices,
         new_triangles,
         region_vertices,
+        tutte_embeddings,
         removed_unused_vertices,
     };
     if args.json {

@@ -261,6 +261,19 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
     assert_eq!(unused_obj_vertices(&filled), 0);
     let e = fails(&["parametric", "fill-hole", s(&fandisk), "--out", s(&filled)]);
     assert!(e.contains("has no holes"), "{e}");
+    // A hole across fandisk's crease: LLE folds its region, Tutte's embedding fills it.
+    let report = json(&ok(&[
+        "parametric",
+        "fill-hole",
+        s(&fandisk),
+        "--punch",
+        "1444,3",
+        "--out",
+        s(&filled),
+        "--json",
+    ]));
+    assert_eq!(report["tutte_embeddings"], 1, "{report}");
+    assert_eq!(report["watertight"], true, "{report}");
 
     // Best effort on a real scan: the bunny's 5 holes, one of whose outlines crosses itself
     // in every plane; the others are filled, the open one is named, and the command succeeds.

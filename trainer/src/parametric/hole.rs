@@ -7,6 +7,11 @@
 //! The region is every vertex within [`HoleOptions::rings`] edges of the hole boundary. The
 //! grid step in the parameter plane is the mean parameter-plane length of the region's
 //! edges, so the new triangles match the surrounding mesh density.
+//!
+//! Where LLE folds the region (a crease such as fandisk's, or a strongly curved one), and the
+//! region is an annulus (the hole inside, one outer loop), the hole is closed by a temporary
+//! fan and the disk gets Tutte's embedding ([`super::tutte_disk`]) instead: it cannot fold,
+//! and the hole's outline is star-shaped around the fan's centre, so it is a simple polygon.
 
 use std::collections::VecDeque;
 
@@ -15,6 +20,7 @@ use super::fit::{SurfaceFit, fit_network};
 use super::grid::grid_inside;
 use super::planar::triangulate_polygon;
 use super::topology::TopologyOptions;
+use super::tutte::tutte_disk;
 use crate::error::{Error, Result};
 use crate::geometry::mesh_graph::{boundary_loops, one_rings};
 use crate::io::Mesh;
@@ -53,6 +59,8 @@ pub struct HoleFill {
     pub region_vertices: usize,
     /// The network fitted to the region.
     pub fit: SurfaceFit,
+    /// Whether the region was embedded by Tutte's method because LLE folded it.
+    pub tutte: bool,
 }
 
 /// Fills the hole bounded by `hole` (a boundary loop of `mesh`, as [`boundary_loops`]
@@ -113,9 +121,20 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
             "a hole vertex belongs to no triangle of the region",
         ));
     }
-    let embedding = embed_mesh(&region, &options.embedding)?;
-    let fit = fit_network(&region.positions, &embedding.parameters, &options.topology)?;
-    let uv = &embedding.parameters;
+    let local_hole: Vec<u32> = hole.iter().map(|&v| local[v as usize]).collect();
+    let (parameters, tutte) = match embed_mesh(&region, &options.embedding) {
+        Ok(embedding) => (embedding.parameters, false),
+        Err(folded) => {
+            let plane = annulus_embedding(&region, &local_hole).map_err(|e| {
+                Error::invalid(format!(
+                    "{folded}; and Tutte's embedding does not apply: {e}"
+                ))
+            })?;
+            (plane, true)
+        }
+    };
+    let fit = fit_network(&region.positions, &parameters, &options.topology)?;
+    let uv = &parameters;
     let polygon: Vec<[f64; 2]> = hole
         .iter()
         .map(|&v| uv[local[v as usize] as usize])
@@ -166,7 +185,43 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
         new_triangles,
         region_vertices: region.positions.len(),
         fit,
+        tutte,
     })
+}
+
+/// Tutte's embedding of an annulus around `hole`: the hole closed by a fan around a new
+/// centre, the outer loop on the circle; scaled like LLE's (mean 0, unit variance per
+/// coordinate on average).
+fn annulus_embedding(region: &Mesh, hole: &[u32]) -> Result<Vec<[f64; 2]>> {
+    let loops = boundary_loops(&region.triangles)?;
+    let outer: Vec<&Vec<u32>> = loops.iter().filter(|l| !same_cycle(l, hole)).collect();
+    let [outer] = outer.as_slice() else {
+        return Err(Error::invalid(format!(
+            "the region around the hole has {} other boundary loops, not one",
+            outer.len()
+        )));
+    };
+    let n = region.positions.len();
+    let mut disk = region.clone();
+    disk.positions.push([0.0; 3]);
+    let m = hole.len();
+    disk.triangles
+        .extend((0..m).map(|k| [hole[k], hole[(k + 1) % m], n as u32]));
+    let mut plane = tutte_disk(&disk, outer)?;
+    plane.truncate(n);
+    let mean = plane.iter().fold([0.0; 2], |c, p| {
+        [c[0] + p[0] / n as f64, c[1] + p[1] / n as f64]
+    });
+    let variance = plane
+        .iter()
+        .map(|p| (p[0] - mean[0]).powi(2) + (p[1] - mean[1]).powi(2))
+        .sum::<f64>()
+        / (2.0 * n as f64);
+    let scale = 1.0 / variance.sqrt().max(f64::MIN_POSITIVE);
+    Ok(plane
+        .iter()
+        .map(|p| [(p[0] - mean[0]) * scale, (p[1] - mean[1]) * scale])
+        .collect())
 }
 
 /// Edge hops from the nearest of `sources`, up to `max` (usize::MAX beyond).

@@ -71,6 +71,7 @@ mod stitch;
 mod synthesis;
 mod topology;
 mod train;
+mod tutte;
 mod weights;
 
 pub use crate::geometry::mesh_graph::{
@@ -117,6 +118,7 @@ pub use stitch::{
 pub use synthesis::{SynthesizedSurface, synthesize};
 pub use topology::{Candidate, TopologyOptions, TopologySearch};
 pub use train::{Samples, TrainReport, TrainSettings, mean_square, randomize, train};
+pub use tutte::tutte_disk;
 pub use weights::{embedding_matrix, reconstruction_weights};
 
 #[cfg(test)]

@@ -369,10 +369,11 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
     let (lo, hi) =
         crate::parametric::fit::bounds(original.positions.iter().map(|p| p.as_slice()), 3);
     let diagonal = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt();
-    // Measured over seeds 100, 500, …, 6000: 8 of 11 holes filled, all watertight, worst new
-    // vertex 0.0196 from the removed triangles (0.26 % of the 7.62 diagonal); 1500, 2000 and
-    // 4000 lie across sharp creases whose rings fold in the embedding and are refused.
-    for seed in [100u32, 1000, 3500, 6000] {
+    // Measured over seeds 100, 500, …, 6000: 8 of 11 holes filled by LLE, all watertight,
+    // worst new vertex 0.0196 from the removed triangles (0.26 % of the 7.62 diagonal); 1500,
+    // 2000 and 4000 lie across sharp creases whose rings fold in LLE and are filled through
+    // Tutte's embedding, smooth across the crease (the last seeds below).
+    for seed in [100u32, 1000, 3500, 6000, 1500, 2000, 4000] {
         let (holed, removed) = punch_hole(&original, seed, 3).unwrap();
         let hole = boundary_loops(&holed.triangles).unwrap();
         assert_eq!(hole.len(), 1);
@@ -400,14 +401,12 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
         );
         assert!(report.is_watertight(), "{report:?}");
         assert!(!filled.new_vertices.is_empty());
-        assert!(worst < 0.005 * diagonal, "{worst}");
+        let crease = [1500, 2000, 4000].contains(&seed);
+        assert_eq!(filled.tutte, crease, "seed {seed}");
+        let bound = if crease { 0.01 } else { 0.005 };
+        assert!(worst < bound * diagonal, "seed {seed}: {worst}");
     }
     let (holed, _) = punch_hole(&original, 1500, 3).unwrap();
-    let hole = boundary_loops(&holed.triangles).unwrap();
-    let e = fill_hole(&holed, &hole[0], &HoleOptions::default())
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("cannot flatten"), "{e}");
     let e = fill_hole(&holed, &[0, 1, 2], &HoleOptions::default())
         .unwrap_err()
         .to_string();
