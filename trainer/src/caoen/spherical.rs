@@ -40,7 +40,7 @@
 use super::topology::{check_sphere_topology, neighbours};
 use crate::error::{Error, Result};
 use crate::io::Mesh;
-use crate::parametric::SymmetricMatrix;
+use crate::parametric::weighted_means;
 
 /// Most balancing rounds after the uniform embedding.
 pub const BALANCE_ROUNDS: usize = 30;
@@ -145,8 +145,6 @@ struct Disk {
     ring: Vec<(usize, [f64; 2])>,
     /// Each vertex's side.
     side: Vec<Side>,
-    /// Each off-loop vertex's unknown number (`usize::MAX` on the loop).
-    unknown: Vec<usize>,
     /// Every edge (a < b).
     edges: Vec<(u32, u32)>,
     /// The cap's share of the mesh area (and of the sphere).
@@ -222,14 +220,6 @@ impl Disk {
             placed.push((v as usize, [angle.cos(), angle.sin()]));
             along += l;
         }
-        let mut unknown = vec![usize::MAX; n];
-        let mut count = 0;
-        for (u, s) in unknown.iter_mut().zip(&side) {
-            if *s != Side::Ring {
-                *u = count;
-                count += 1;
-            }
-        }
         let mut edges: Vec<(u32, u32)> = adjacent
             .iter()
             .enumerate()
@@ -244,7 +234,6 @@ impl Disk {
         Ok(Disk {
             ring: placed,
             side,
-            unknown,
             edges,
             cap_share: (cap_area / total).clamp(1e-9, 0.5),
         })
@@ -254,47 +243,7 @@ impl Disk {
     /// loop at the weighted mean of its neighbours (no edge joins the cap to the body, so one
     /// solve serves both).
     fn solve(&self, weights: &[f64]) -> Result<Vec<[f64; 2]>> {
-        let n = self.unknown.len();
-        let mut plane = vec![[0.0; 2]; n];
-        for &(v, at) in &self.ring {
-            plane[v] = at;
-        }
-        let count = self.unknown.iter().filter(|&&u| u != usize::MAX).count();
-        if count == 0 {
-            return Ok(plane);
-        }
-        let mut matrix = SymmetricMatrix::new(count);
-        let mut rhs = vec![vec![0.0; count], vec![0.0; count]];
-        for (&(a, b), &w) in self.edges.iter().zip(weights) {
-            let (a, b) = (a as usize, b as usize);
-            for (i, j) in [(a, b), (b, a)] {
-                let ui = self.unknown[i];
-                if ui == usize::MAX {
-                    continue;
-                }
-                matrix.add(ui, ui, w);
-                match self.unknown[j] {
-                    usize::MAX => {
-                        for k in 0..2 {
-                            rhs[k][ui] += w * plane[j][k];
-                        }
-                    }
-                    uj => matrix.add(ui, uj, -w),
-                }
-            }
-        }
-        matrix.compress()?.cholesky()?.solve(&mut rhs);
-        for (v, &u) in self.unknown.iter().enumerate() {
-            if u != usize::MAX {
-                plane[v] = [rhs[0][u], rhs[1][u]];
-            }
-        }
-        if plane.iter().flatten().any(|c| !c.is_finite()) {
-            return Err(Error::invalid(
-                "the disk embedding is not finite: the edge weights degenerated",
-            ));
-        }
-        Ok(plane)
+        weighted_means(self.side.len(), &self.edges, weights, &self.ring)
     }
 
     /// Inverse stereographic projection: the body's disk onto the sphere below the loop, the

@@ -119,6 +119,7 @@ pub use synthesis::{SynthesizedSurface, synthesize};
 pub use topology::{Candidate, TopologyOptions, TopologySearch};
 pub use train::{Samples, TrainReport, TrainSettings, mean_square, randomize, train};
 pub use tutte::tutte_disk;
+pub(crate) use tutte::weighted_means;
 pub use weights::{embedding_matrix, reconstruction_weights};
 
 #[cfg(test)]

@@ -29,9 +29,7 @@ pub fn tutte_disk(mesh: &Mesh, boundary: &[u32]) -> Result<Vec<[f64; 2]>> {
         .map(|k| length(boundary[k], boundary[(k + 1) % m]))
         .sum();
     let mut plane = vec![[0.0; 2]; n];
-    let mut unknown = vec![usize::MAX; n];
     let mut arc = 0.0;
-    let mut on_boundary = vec![false; n];
     for k in 0..m {
         let angle = if perimeter > 0.0 {
             std::f64::consts::TAU * arc / perimeter
@@ -39,18 +37,7 @@ pub fn tutte_disk(mesh: &Mesh, boundary: &[u32]) -> Result<Vec<[f64; 2]>> {
             std::f64::consts::TAU * k as f64 / m as f64
         };
         plane[boundary[k] as usize] = [angle.cos(), angle.sin()];
-        on_boundary[boundary[k] as usize] = true;
         arc += length(boundary[k], boundary[(k + 1) % m]);
-    }
-    let mut count = 0;
-    for v in 0..n {
-        if !on_boundary[v] {
-            unknown[v] = count;
-            count += 1;
-        }
-    }
-    if count == 0 {
-        return Ok(plane);
     }
     let mut edges: Vec<(u32, u32)> = mesh
         .triangles
@@ -60,23 +47,60 @@ pub fn tutte_disk(mesh: &Mesh, boundary: &[u32]) -> Result<Vec<[f64; 2]>> {
         .collect();
     edges.sort_unstable();
     edges.dedup();
+    let fixed: Vec<(usize, [f64; 2])> = boundary
+        .iter()
+        .map(|&v| (v as usize, plane[v as usize]))
+        .collect();
+    weighted_means(n, &edges, &vec![1.0; edges.len()], &fixed)
+}
+
+/// The plane positions of `n` vertices where those in `fixed` are placed and every other one
+/// is at the mean of its neighbours along `edges` (a < b), weighted by `weights` (positive):
+/// one sparse Cholesky solve per coordinate.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when the solve fails or is not finite (a free vertex not connected
+/// to a fixed one, or degenerate weights).
+pub(crate) fn weighted_means(
+    n: usize,
+    edges: &[(u32, u32)],
+    weights: &[f64],
+    fixed: &[(usize, [f64; 2])],
+) -> Result<Vec<[f64; 2]>> {
+    let mut plane = vec![[0.0; 2]; n];
+    let mut unknown = vec![usize::MAX; n];
+    let mut is_fixed = vec![false; n];
+    for &(v, at) in fixed {
+        plane[v] = at;
+        is_fixed[v] = true;
+    }
+    let mut count = 0;
+    for v in 0..n {
+        if !is_fixed[v] {
+            unknown[v] = count;
+            count += 1;
+        }
+    }
+    if count == 0 {
+        return Ok(plane);
+    }
     let mut matrix = SymmetricMatrix::new(count);
     let mut rhs = vec![vec![0.0; count], vec![0.0; count]];
-    for &(a, b) in &edges {
+    for (&(a, b), &w) in edges.iter().zip(weights) {
         let (a, b) = (a as usize, b as usize);
         for (i, j) in [(a, b), (b, a)] {
             let ui = unknown[i];
             if ui == usize::MAX {
                 continue;
             }
-            matrix.add(ui, ui, 1.0);
+            matrix.add(ui, ui, w);
             match unknown[j] {
                 usize::MAX => {
                     for k in 0..2 {
-                        rhs[k][ui] += plane[j][k];
+                        rhs[k][ui] += w * plane[j][k];
                     }
                 }
-                uj => matrix.add(ui, uj, -1.0),
+                uj => matrix.add(ui, uj, -w),
             }
         }
     }
@@ -88,7 +112,8 @@ pub fn tutte_disk(mesh: &Mesh, boundary: &[u32]) -> Result<Vec<[f64; 2]>> {
     }
     if plane.iter().flatten().any(|c| !c.is_finite()) {
         return Err(Error::invalid(
-            "the disk embedding is not finite: a vertex is not connected to the boundary",
+            "the disk embedding is not finite: a vertex is not connected to the boundary, or \
+             the edge weights degenerated",
         ));
     }
     Ok(plane)
