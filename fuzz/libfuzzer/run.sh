@@ -6,7 +6,8 @@
 #
 # `blob` (the default) fuzzes every model kind's loader and evaluation from the committed
 # corpus fuzz/corpus/ (blobs the trainer wrote); `readers` fuzzes the trainer's file readers
-# from fuzz/corpus-readers/. What it finds is kept in target/fuzz/<target>/corpus; a crash (a
+# from fuzz/corpus-readers/, the first byte of an input picking the reader, or only reader k
+# with NEUROSURF_FUZZ_READER=k (0-8); its logs count the executions per reader. What it finds is kept in target/fuzz/<target>/corpus; a crash (a
 # panic) is written to target/fuzz/<target>/artifacts and fails the run. scripts/test.sh runs a short smoke run; longer campaigns are documented in
 # fuzz/README.md.
 set -euo pipefail

@@ -31,6 +31,12 @@ thread_local! {
     static FOLDER: tempfile::TempDir = tempfile::tempdir().expect("a temporary folder");
 }
 
+/// The reader `data[0]` picks: `data[0] % READER_COUNT`.
+pub fn reader_of(data: &[u8]) -> Option<usize> {
+    data.first()
+        .map(|&selector| usize::from(selector) % READER_COUNT)
+}
+
 /// Writes `data[1..]` to a file and reads it with reader `data[0] % READER_COUNT`; returns the
 /// error's message, if any.
 ///
@@ -38,7 +44,16 @@ thread_local! {
 /// When an error does not name the file (or a reader panics).
 pub fn read(data: &[u8]) -> Option<String> {
     let (&selector, file) = data.split_first()?;
-    let (extension, reader) = READERS[usize::from(selector) % READER_COUNT];
+    read_with(usize::from(selector) % READER_COUNT, file)
+}
+
+/// Writes `file` and reads it with reader `index` (below [`READER_COUNT`]); as [`read`].
+///
+/// # Panics
+/// As [`read`], and for an index past the readers.
+pub fn read_with(index: usize, file: &[u8]) -> Option<String> {
+    let selector = index;
+    let (extension, reader) = READERS[index];
     let path = FOLDER.with(|folder| folder.path().join(format!("input.{extension}")));
     write(&path, file);
     let error = reader(&path).err()?.to_string();
