@@ -2,7 +2,7 @@
 //! `normals`, `perspective`): where the blob goes, in which scalar, and how the summary is
 //! printed.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use serde::Serialize;
@@ -35,11 +35,21 @@ impl BlobOut {
         Ok(scalar)
     }
 
-    /// Writes `network` (checked through the core) and returns the blob's size.
-    pub fn write(&self, network: &CaoEnNetwork, scalar: ScalarKind, tag: &[u8]) -> Result<usize> {
+    /// Writes `network` (checked through the core) and says what was written.
+    pub fn write(
+        &self,
+        network: &CaoEnNetwork,
+        scalar: ScalarKind,
+        tag: &[u8],
+    ) -> Result<Written<'_>> {
         let blob = caoen::to_blob(network, scalar, tag)?;
         neurosurf_trainer::blob::write_checked(&self.out, &blob)?;
-        Ok(blob.len())
+        Ok(Written {
+            out: &self.out,
+            blob_bytes: blob.len(),
+            key_points: network.key_count(),
+            scalar,
+        })
     }
 
     /// Prints `report` as JSON with --json; otherwise `summary` and the written blob.
@@ -47,14 +57,23 @@ impl BlobOut {
         &self,
         report: &impl Serialize,
         summary: impl FnOnce() -> String,
-        bytes: usize,
-        scalar: ScalarKind,
+        written: &Written,
     ) -> Result<()> {
         if self.json {
             return output::json(report);
         }
         println!("{}", summary());
-        wrote_blob(&self.out, bytes, scalar, None);
+        wrote_blob(written.out, written.blob_bytes, written.scalar, None);
         Ok(())
     }
+}
+
+/// The blob a derived network went to: the start of every such command's report.
+#[derive(Serialize)]
+pub struct Written<'a> {
+    pub out: &'a Path,
+    pub blob_bytes: usize,
+    pub key_points: usize,
+    #[serde(skip)]
+    pub scalar: ScalarKind,
 }

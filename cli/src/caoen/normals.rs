@@ -1,14 +1,14 @@
 //! `neurosurf caoen normals`: the paper's approximate-normal network (§7), with its angle
 //! error against the exact normals.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Result;
 use serde::Serialize;
 
 use neurosurf_trainer::caoen::approximate_normals;
 
-use super::derived::BlobOut;
+use super::derived::{BlobOut, Written};
 use super::read_network;
 
 #[derive(Debug, clap::Args)]
@@ -23,9 +23,8 @@ pub struct Args {
 
 #[derive(Serialize)]
 struct Report<'a> {
-    out: &'a Path,
-    blob_bytes: usize,
-    key_points: usize,
+    #[serde(flatten)]
+    written: Written<'a>,
     /// Angle between the normalized output and the exact normal, over the check points.
     mean_error_degrees: f64,
     median_error_degrees: f64,
@@ -37,13 +36,11 @@ pub fn run(args: &Args) -> Result<()> {
     let scalar = args.output.prepare()?;
     let network = read_network(&args.model, "normals")?;
     let fit = approximate_normals(&network)?;
-    let bytes = args
+    let written = args
         .output
         .write(&fit.network, scalar, b"neurosurf caoen normals")?;
     let report = Report {
-        out: &args.output.out,
-        blob_bytes: bytes,
-        key_points: fit.network.key_count(),
+        written,
         mean_error_degrees: fit.mean_degrees,
         median_error_degrees: fit.median_degrees,
         max_error_degrees: fit.max_degrees,
@@ -53,12 +50,12 @@ pub fn run(args: &Args) -> Result<()> {
         format!(
             "{} key points: the approximate normal is {:.2}° from the exact one on average \
              (median {:.2}°, at most {:.2}°) over {} source points",
-            report.key_points,
+            report.written.key_points,
             report.mean_error_degrees,
             report.median_error_degrees,
             report.max_error_degrees,
             report.checked_points
         )
     };
-    args.output.finish(&report, summary, bytes, scalar)
+    args.output.finish(&report, summary, &report.written)
 }

@@ -1,7 +1,7 @@
 //! `neurosurf caoen perspective`: the paper's perspective approximation (§8), a network whose
 //! outputs are screen coordinates and depth, with its error against the exact projection.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Result;
 use serde::Serialize;
@@ -9,7 +9,7 @@ use serde::Serialize;
 use neurosurf_trainer::caoen::{PerspectiveCamera, perspective_network};
 
 use super::super::output::comma_list;
-use super::derived::BlobOut;
+use super::derived::{BlobOut, Written};
 use super::read_network;
 
 #[derive(Debug, clap::Args)]
@@ -36,9 +36,8 @@ pub struct Args {
 
 #[derive(Serialize)]
 struct Report<'a> {
-    out: &'a Path,
-    blob_bytes: usize,
-    key_points: usize,
+    #[serde(flatten)]
+    written: Written<'a>,
     /// Largest screen distance from the exact projection at the key points.
     max_error_at_keys: f64,
     /// Largest and RMS screen distance from the exact projection over the check points.
@@ -55,13 +54,11 @@ pub fn run(args: &Args) -> Result<()> {
     let network = read_network(&args.model, "perspective")?;
     let camera = PerspectiveCamera::new(args.eye, args.look_at, args.up, args.focal)?;
     let fit = perspective_network(&network, &camera)?;
-    let bytes = args
+    let written = args
         .output
         .write(&fit.network, scalar, b"neurosurf caoen perspective")?;
     let report = Report {
-        out: &args.output.out,
-        blob_bytes: bytes,
-        key_points: fit.network.key_count(),
+        written,
         max_error_at_keys: fit.max_error_at_keys,
         max_screen_error: fit.max_screen_error,
         rms_screen_error: fit.rms_screen_error,
@@ -74,7 +71,7 @@ pub fn run(args: &Args) -> Result<()> {
             "{} key points: screen coordinates within {:.1e} of the exact perspective at the \
              key points, {:.2e} (RMS {:.2e}) between them over {} source points, on a picture \
              {:.3} across; depth within {:.1e}",
-            report.key_points,
+            report.written.key_points,
             report.max_error_at_keys,
             report.max_screen_error,
             report.rms_screen_error,
@@ -83,5 +80,5 @@ pub fn run(args: &Args) -> Result<()> {
             report.max_depth_error
         )
     };
-    args.output.finish(&report, summary, bytes, scalar)
+    args.output.finish(&report, summary, &report.written)
 }

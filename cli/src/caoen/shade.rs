@@ -1,7 +1,7 @@
 //! `neurosurf caoen shade`: the cosine law for fixed lights folded into extra outputs of a
 //! shape network (paper §12.3–12.4).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Result;
 use serde::Serialize;
@@ -9,7 +9,7 @@ use serde::Serialize;
 use neurosurf_trainer::caoen::{LIGHTING_CHECK_SUBDIVISIONS, fold_lighting};
 
 use super::super::output::comma_list;
-use super::derived::BlobOut;
+use super::derived::{BlobOut, Written};
 use super::read_network;
 
 #[derive(Debug, clap::Args)]
@@ -27,9 +27,8 @@ pub struct Args {
 
 #[derive(Serialize)]
 struct Report<'a> {
-    out: &'a Path,
-    blob_bytes: usize,
-    key_points: usize,
+    #[serde(flatten)]
+    written: Written<'a>,
     target_dimension: usize,
     lights: &'a [[f64; 3]],
     /// Largest |output − N·L| at the key points (f64).
@@ -44,13 +43,11 @@ pub fn run(args: &Args) -> Result<()> {
     let scalar = args.output.prepare()?;
     let network = read_network(&args.model, "shade")?;
     let fit = fold_lighting(&network, &args.lights)?;
-    let bytes = args
+    let written = args
         .output
         .write(&fit.network, scalar, b"neurosurf caoen shade")?;
     let report = Report {
-        out: &args.output.out,
-        blob_bytes: bytes,
-        key_points: fit.network.key_count(),
+        written,
         target_dimension: fit.network.target_dimension(),
         lights: &fit.lights,
         max_error_at_keys: fit.max_error_at_keys,
@@ -62,12 +59,12 @@ pub fn run(args: &Args) -> Result<()> {
         format!(
             "{} key points, {} outputs (position, then N·L per light): |output − N·L| ≤ {:.1e} \
              at the key points, ≤ {:.4} (RMS {:.4}) between them",
-            report.key_points,
+            report.written.key_points,
             report.target_dimension,
             report.max_error_at_keys,
             report.max_error_between,
             report.rms_error_between
         )
     };
-    args.output.finish(&report, summary, bytes, scalar)
+    args.output.finish(&report, summary, &report.written)
 }
