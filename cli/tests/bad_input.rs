@@ -128,6 +128,10 @@ const COMMANDS: &[Command] = &[
         reads: Reads::Text,
     },
     Command {
+        args: &["parametric", "compare", "{in}"],
+        reads: Reads::Text,
+    },
+    Command {
         args: &["info", "{in}"],
         reads: Reads::Blob,
     },
@@ -373,6 +377,14 @@ fn absurd_option_values_are_refused_by_name() {
         (
             &["curve", "fit", ring, "--control", "{v}", "--out", "{out}"],
             "control",
+        ),
+        (
+            &["patch", "compare", &spot, "--held-out", "{v}"],
+            "held-out",
+        ),
+        (
+            &["patch", "compare", &spot, "--resolution", "{v}"],
+            "resolution",
         ),
         (
             &[

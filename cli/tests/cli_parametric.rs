@@ -379,3 +379,55 @@ fn network_sizes_beyond_the_core_are_refused_before_fitting() {
     }
     assert!(!out.exists());
 }
+
+#[test]
+fn compare_measures_four_methods_on_any_patch_against_a_truth_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("cylinder.txt");
+    ok(&[
+        "patch",
+        "sample",
+        "cylinder",
+        "--points",
+        "600",
+        "--out",
+        s(&points),
+    ]);
+    let table = ok(&["patch", "compare", s(&points), "--max-neurons", "6"]);
+    for method in ["network", "rbf-low", "rbf-high", "delaunay"] {
+        assert!(table.contains(method), "{table}");
+    }
+    // Against the fandisk itself, a patch cut out of it.
+    let fandisk = format!("{}/../data/fandisk.obj", env!("CARGO_MANIFEST_DIR"));
+    let mesh = neurosurf_trainer::io::read_mesh(Path::new(&fandisk)).unwrap();
+    let center = mesh.positions[500];
+    let radius = 0.125 * neurosurf_trainer::geometry::bounding_diagonal(&mesh);
+    let patch: String = mesh
+        .positions
+        .iter()
+        .filter(|p| (0..3).map(|k| (p[k] - center[k]).powi(2)).sum::<f64>() < radius * radius)
+        .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
+        .collect();
+    let cut = dir.path().join("fandisk-patch.txt");
+    fs::write(&cut, patch).unwrap();
+    let report = json(&ok(&[
+        "patch",
+        "compare",
+        s(&cut),
+        "--truth",
+        &fandisk,
+        "--max-neurons",
+        "6",
+        "--json",
+    ]));
+    assert_eq!(report["reference"], "truth mesh");
+    let rows = report["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    for row in rows {
+        let (held, mesh) = (
+            row["held_out_rms"].as_f64().unwrap(),
+            row["mesh_rms"].as_f64().unwrap(),
+        );
+        assert!(held > 0.0 && held < 0.02 && mesh < 0.02, "{row}");
+    }
+}

@@ -6,18 +6,18 @@
 //! Each row reports the mean-square error at the input points (the paper's MSE: 0 for the
 //! interpolating methods), the RMS vertical distance of the output mesh's vertices to the true,
 //! noise-free surface, and the variance of the dihedral angles between neighbouring
-//! triangles (radians², lower is smoother). The RBF baseline is a small dense thin-plate
-//! spline z = Σ wⱼ φ(|x − cⱼ|) + a + b·x + c·y, φ(r) = r² ln r, fitted by least squares with a
-//! 10⁻⁸ ridge (`rbf/` is a 3-D implicit multiquadric and does not fit height fields).
+//! triangles (radians², lower is smoother). The RBF baseline is a thin-plate spline
+//! z = Σ wⱼ φ(|x − cⱼ|) + a + b·x + c·y, φ(r) = r² ln r (`thin_plate`; `rbf/` is a 3-D
+//! implicit multiquadric and does not fit height fields). [`compare_patch`](super::compare_patch)
+//! runs the same methods on any patch, without a known surface.
 
 use std::time::Instant;
-
-use nalgebra::{DMatrix, DVector};
 
 use super::embedding::embed_points;
 use super::pipeline::{ReconstructOptions, Tessellation, reconstruct};
 use super::planar::delaunay;
 use super::samples::{SampleSurface, sample_surface};
+use super::thin_plate::{Centers, ThinPlate};
 use crate::error::{Error, Result};
 use crate::io::Mesh;
 
@@ -96,13 +96,18 @@ pub fn compare_methods(
         seconds,
     ));
 
-    for (method, centers) in [("rbf-low", Centers::Grid(5)), ("rbf-high", Centers::Points)] {
+    let plane: Vec<[f64; 2]> = points.iter().map(|p| [p[0], p[1]]).collect();
+    let heights: Vec<[f64; 1]> = points.iter().map(|p| [p[2]]).collect();
+    for (method, centers) in [
+        ("rbf-low", Centers::Grid(5)),
+        ("rbf-high", Centers::Points(usize::MAX)),
+    ] {
         let start = Instant::now();
-        let spline = ThinPlate::fit(points, centers)?;
-        let mesh = spline.grid_mesh(points, resolution);
+        let spline = ThinPlate::fit(&plane, &heights, centers)?;
+        let mesh = grid_mesh(&spline, points, resolution);
         let mse = points
             .iter()
-            .map(|p| (spline.height(p[0], p[1]) - p[2]).powi(2))
+            .map(|p| (spline.value([p[0], p[1]])[0] - p[2]).powi(2))
             .sum::<f64>()
             / points.len() as f64;
         rows.push(row(method, mse, &mesh, start.elapsed().as_secs_f64()));
@@ -152,103 +157,29 @@ pub fn dihedral_variance(mesh: &Mesh) -> f64 {
     angles.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / angles.len() as f64
 }
 
-/// Where the thin-plate centres go.
-#[derive(Copy, Clone, Debug)]
-enum Centers {
-    /// g × g over the points' (x, y) box.
-    Grid(usize),
-    /// One per point.
-    Points,
-}
-
-/// z = Σ wⱼ φ(|x − cⱼ|) + a + b·x + c·y.
-struct ThinPlate {
-    centers: Vec<[f64; 2]>,
-    weights: Vec<f64>,
-}
-
-impl ThinPlate {
-    fn phi(r2: f64) -> f64 {
-        if r2 > 0.0 { 0.5 * r2 * r2.ln() } else { 0.0 }
+/// The height field z(x, y) of a thin-plate spline on a `resolution²` grid over the points'
+/// (x, y) box.
+fn grid_mesh(spline: &ThinPlate<1>, points: &[[f64; 3]], resolution: usize) -> Mesh {
+    let (lo, hi) = super::fit::bounds(points.iter().map(|p| p.as_slice()), 3);
+    let r = resolution.max(2);
+    let mut positions = Vec::with_capacity(r * r);
+    for j in 0..r {
+        for i in 0..r {
+            let x = lo[0] + (hi[0] - lo[0]) * i as f64 / (r - 1) as f64;
+            let y = lo[1] + (hi[1] - lo[1]) * j as f64 / (r - 1) as f64;
+            positions.push([x, y, spline.value([x, y])[0]]);
+        }
     }
-
-    fn fit(points: &[[f64; 3]], centers: Centers) -> Result<Self> {
-        let (lo, hi) = super::fit::bounds(points.iter().map(|p| p.as_slice()), 3);
-        let centers: Vec<[f64; 2]> = match centers {
-            Centers::Grid(g) => (0..g * g)
-                .map(|k| {
-                    let (i, j) = ((k % g) as f64, (k / g) as f64);
-                    let d = (g - 1).max(1) as f64;
-                    [
-                        lo[0] + (hi[0] - lo[0]) * i / d,
-                        lo[1] + (hi[1] - lo[1]) * j / d,
-                    ]
-                })
-                .collect(),
-            Centers::Points => points.iter().map(|p| [p[0], p[1]]).collect(),
-        };
-        let (n, m) = (points.len(), centers.len() + 3);
-        let a = DMatrix::from_fn(n, m, |i, j| {
-            let p = points[i];
-            match j.checked_sub(centers.len()) {
-                None => Self::phi((p[0] - centers[j][0]).powi(2) + (p[1] - centers[j][1]).powi(2)),
-                Some(0) => 1.0,
-                Some(1) => p[0],
-                Some(_) => p[1],
-            }
-        });
-        let b = DVector::from_fn(n, |i, _| points[i][2]);
-        let mut normal = a.transpose() * &a;
-        let scale = normal.diagonal().max();
-        for k in 0..m {
-            normal[(k, k)] += 1e-8 * scale;
+    let mut triangles = Vec::new();
+    for j in 0..r - 1 {
+        for i in 0..r - 1 {
+            let v = |i: usize, j: usize| (j * r + i) as u32;
+            triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
         }
-        let rhs = a.transpose() * b;
-        let w = normal
-            .lu()
-            .solve(&rhs)
-            .ok_or_else(|| Error::invalid("the thin-plate system is singular"))?;
-        Ok(ThinPlate {
-            centers,
-            weights: w.iter().copied().collect(),
-        })
     }
-
-    fn height(&self, x: f64, y: f64) -> f64 {
-        let c = self.centers.len();
-        self.centers
-            .iter()
-            .zip(&self.weights)
-            .map(|(q, w)| w * Self::phi((x - q[0]).powi(2) + (y - q[1]).powi(2)))
-            .sum::<f64>()
-            + self.weights[c]
-            + self.weights[c + 1] * x
-            + self.weights[c + 2] * y
-    }
-
-    /// The spline on a `resolution²` grid over the points' (x, y) box.
-    fn grid_mesh(&self, points: &[[f64; 3]], resolution: usize) -> Mesh {
-        let (lo, hi) = super::fit::bounds(points.iter().map(|p| p.as_slice()), 3);
-        let r = resolution.max(2);
-        let mut positions = Vec::with_capacity(r * r);
-        for j in 0..r {
-            for i in 0..r {
-                let x = lo[0] + (hi[0] - lo[0]) * i as f64 / (r - 1) as f64;
-                let y = lo[1] + (hi[1] - lo[1]) * j as f64 / (r - 1) as f64;
-                positions.push([x, y, self.height(x, y)]);
-            }
-        }
-        let mut triangles = Vec::new();
-        for j in 0..r - 1 {
-            for i in 0..r - 1 {
-                let v = |i: usize, j: usize| (j * r + i) as u32;
-                triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
-                triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
-            }
-        }
-        Mesh {
-            positions,
-            triangles,
-        }
+    Mesh {
+        positions,
+        triangles,
     }
 }

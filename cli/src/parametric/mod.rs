@@ -2,8 +2,8 @@
 //! embed points in the plane, fit a surface network, tessellate it, stitch patches, fill holes,
 //! and time the pipeline (Table 2).
 //!
-//! One file per command group: the seven `patch` subcommands share their argument types and
-//! output helpers (about 820 lines).
+//! The `patch` subcommands share their argument types and output helpers here; `compare` has
+//! its own file.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -28,6 +28,8 @@ use neurosurf_trainer::table::{Align, Table};
 
 use super::output::{self, blob_scalar, wrote_blob};
 
+mod compare;
+
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Points on a known surface (text, `x y z` per line), shuffled, with optional noise.
@@ -45,6 +47,10 @@ pub enum Command {
     /// Fill the holes of a mesh: one-ring embedding of the rings around each hole, a network
     /// on them, new vertices inside, constrained Delaunay.
     FillHole(FillHoleArgs),
+    /// Compare the network with thin-plate RBF fits and direct Delaunay triangulation on any
+    /// patch (the paper's §7.1), on points held out of every fit and from each mesh back to
+    /// the data.
+    Compare(compare::CompareArgs),
     /// Time embedding and fitting on a patch of the Stanford bunny (the paper's Table 2).
     Bench(BenchArgs),
 }
@@ -57,6 +63,7 @@ pub fn run(command: &Command) -> Result<()> {
         Command::Tessellate(args) => tessellate(args),
         Command::Stitch(args) => stitch_patches(args),
         Command::FillHole(args) => fill_holes(args),
+        Command::Compare(args) => compare::run(args),
         Command::Bench(args) => bench(args),
     }
 }
@@ -135,7 +142,7 @@ pub struct EmbeddingArgs {
 }
 
 impl EmbeddingArgs {
-    fn options(&self) -> LleOptions {
+    pub(super) fn options(&self) -> LleOptions {
         let default = LleOptions::default();
         LleOptions {
             neighbors: self.neighbors.unwrap_or(default.neighbors),
@@ -143,6 +150,35 @@ impl EmbeddingArgs {
             more_neighbors: self.neighbors.is_none(),
             ..default
         }
+    }
+}
+
+/// The network's topology search.
+#[derive(Debug, clap::Args)]
+pub struct NetworkArgs {
+    /// Hidden activation.
+    #[arg(long, value_enum, default_value = "tan-sig")]
+    activation: ActivationArg,
+    /// Most hidden layers the search tries.
+    #[arg(long, default_value_t = TopologyOptions::default().max_layers)]
+    max_layers: usize,
+    /// Most neurons per hidden layer the search tries.
+    #[arg(long, default_value_t = TopologyOptions::default().max_neurons)]
+    max_neurons: usize,
+}
+
+impl NetworkArgs {
+    /// The search settings with `seed`, once the core is known to hold the largest network
+    /// they allow.
+    pub(super) fn options(&self, seed: u64) -> Result<TopologyOptions> {
+        neurosurf_trainer::parametric::check_capacity(self.max_layers, self.max_neurons)?;
+        Ok(TopologyOptions {
+            activation: self.activation.activation(),
+            max_layers: self.max_layers,
+            max_neurons: self.max_neurons,
+            seed,
+            ..TopologyOptions::default()
+        })
     }
 }
 
@@ -257,15 +293,8 @@ pub struct FitArgs {
     parameters: Option<PathBuf>,
     #[command(flatten)]
     embedding: EmbeddingArgs,
-    /// Hidden activation.
-    #[arg(long, value_enum, default_value = "tan-sig")]
-    activation: ActivationArg,
-    /// Most hidden layers the search tries.
-    #[arg(long, default_value_t = TopologyOptions::default().max_layers)]
-    max_layers: usize,
-    /// Most neurons per hidden layer the search tries.
-    #[arg(long, default_value_t = TopologyOptions::default().max_neurons)]
-    max_neurons: usize,
+    #[command(flatten)]
+    network: NetworkArgs,
     /// Seed of the split and the initial weights.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -304,7 +333,7 @@ fn fit(args: &FitArgs) -> Result<()> {
     let scalar = blob_scalar(args.scalar)?;
     neurosurf_trainer::io::check_output(&args.out)?;
     // What the core holds, checked before any embedding or fitting.
-    neurosurf_trainer::parametric::check_capacity(args.max_layers, args.max_neurons)?;
+    let options = args.network.options(args.seed)?;
     let points = read_points(&args.points)?;
     let start = Instant::now();
     let parameters = match &args.parameters {
@@ -319,13 +348,6 @@ fn fit(args: &FitArgs) -> Result<()> {
         }
     };
     let embedding_seconds = start.elapsed().as_secs_f64();
-    let options = TopologyOptions {
-        activation: args.activation.activation(),
-        max_layers: args.max_layers,
-        max_neurons: args.max_neurons,
-        seed: args.seed,
-        ..TopologyOptions::default()
-    };
     let start = Instant::now();
     let fit = fit_network(&points, &parameters, &options)
         .with_context(|| format!("cannot fit a network to {}", args.points.display()))?;
@@ -873,7 +895,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
 }
 
 /// Points from text, PLY or OBJ (its vertices).
-fn read_points(path: &Path) -> Result<Vec<[f64; 3]>> {
+pub(super) fn read_points(path: &Path) -> Result<Vec<[f64; 3]>> {
     if path.extension().and_then(|e| e.to_str()) == Some("obj") {
         return Ok(read_mesh(path)?.positions);
     }
