@@ -431,3 +431,49 @@ fn compare_measures_four_methods_on_any_patch_against_a_truth_mesh() {
         assert!(held > 0.0 && held < 0.02 && mesh < 0.02, "{row}");
     }
 }
+
+#[test]
+fn fit_leaves_out_points_off_the_surface_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let (points, blob) = (dir.path().join("wavy.txt"), dir.path().join("wavy.nsb"));
+    ok(&[
+        "patch",
+        "sample",
+        "wavy",
+        "--points",
+        "600",
+        "--seed",
+        "2",
+        "--out",
+        s(&points),
+    ]);
+    // Six points well above and below the patch.
+    let mut text = fs::read_to_string(&points).unwrap();
+    for k in 0..6 {
+        let x = -0.8 + 0.3 * f64::from(k);
+        text.push_str(&format!(
+            "{x} {} {}\n",
+            0.5 - 0.2 * f64::from(k),
+            if k % 2 == 0 { 0.6 } else { -0.6 }
+        ));
+    }
+    fs::write(&points, text).unwrap();
+    let args = [
+        "patch",
+        "fit",
+        s(&points),
+        "--max-neurons",
+        "6",
+        "--out",
+        s(&blob),
+    ];
+    let report = json(&ok(&[&args[..], &["--json"]].concat()));
+    // The six, and at most two sparse surface points (this clean sample alone loses one).
+    let left_out = report["outliers"].as_u64().unwrap();
+    assert!((6..=8).contains(&left_out), "{report}");
+    let text = ok(&args);
+    let said = format!("less {left_out} off the surface (--keep-outliers fits them)");
+    assert!(text.contains(&said), "{text}");
+    let kept = json(&ok(&[&args[..], &["--json", "--keep-outliers"]].concat()));
+    assert_eq!(kept["outliers"], 0, "{kept}");
+}

@@ -19,9 +19,10 @@ use neurosurf_trainer::io::{
 };
 use neurosurf_trainer::parametric::{
     Activation, BACK_SEED, BENCHMARK_SIZES, BoundaryOptions, HoleOptions, LleOptions,
-    NetworkSummary, SampleSurface, SurfaceNetwork, TopologyOptions, benchmark, boundary_loops,
-    boundary_seam, coons_boundary, coons_grid, delaunay_grid, edge_report, embed_points, fill_hole,
-    fit_network, network_to_blob, punch_hole, sample_surface, stitch, synthesize, wireframe,
+    NetworkSummary, OutlierOptions, SampleSurface, SurfaceNetwork, TopologyOptions, benchmark,
+    boundary_loops, boundary_seam, coons_boundary, coons_grid, delaunay_grid, edge_report,
+    embed_points, fill_hole, fit_robustly, network_to_blob, punch_hole, sample_surface, stitch,
+    synthesize, wireframe,
 };
 use neurosurf_trainer::plot::write_picture;
 use neurosurf_trainer::table::{Align, Table};
@@ -304,9 +305,14 @@ pub struct FitArgs {
     /// Output blob.
     #[arg(long)]
     out: PathBuf,
-    /// Also write the parameters used (`u v` per line), for `parametric tessellate`.
+    /// Also write the parameters used (`u v` per line, for `parametric tessellate`): those of
+    /// the points fitted, without the outliers.
     #[arg(long, value_name = "FILE")]
     parameters_out: Option<PathBuf>,
+    /// Fit every point. By default, points off the surface (off their neighbours' planes, or
+    /// isolated) are left out, and the summary counts them.
+    #[arg(long)]
+    keep_outliers: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -318,6 +324,8 @@ struct FitReport<'a> {
     stored_as: &'static str,
     blob_bytes: usize,
     points: usize,
+    /// Points left out: off their neighbours' planes, or isolated.
+    outliers: usize,
     embedded: bool,
     embedding_seconds: f64,
     fitting_seconds: f64,
@@ -335,34 +343,38 @@ fn fit(args: &FitArgs) -> Result<()> {
     // What the core holds, checked before any embedding or fitting.
     let options = args.network.options(args.seed)?;
     let points = read_points(&args.points)?;
-    let start = Instant::now();
-    let parameters = match &args.parameters {
-        Some(path) => read_parameters(path, 2)?
-            .into_iter()
-            .map(|p| [p[0], p[1]])
-            .collect(),
-        None => {
-            embed_points(&points, &args.embedding.options())
-                .with_context(|| format!("cannot embed {}", args.points.display()))?
-                .parameters
-        }
+    let given = match &args.parameters {
+        Some(path) => Some(
+            read_parameters(path, 2)?
+                .into_iter()
+                .map(|p| [p[0], p[1]])
+                .collect::<Vec<_>>(),
+        ),
+        None => None,
     };
-    let embedding_seconds = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let fit = fit_network(&points, &parameters, &options)
-        .with_context(|| format!("cannot fit a network to {}", args.points.display()))?;
-    let fitting_seconds = start.elapsed().as_secs_f64();
-    let summary = NetworkSummary::of(&fit, points.len(), embedding_seconds + fitting_seconds);
+    let outliers = (!args.keep_outliers).then(OutlierOptions::default);
+    let robust = fit_robustly(
+        &points,
+        given.as_deref(),
+        &args.embedding.options(),
+        &options,
+        outliers.as_ref(),
+    )
+    .with_context(|| format!("cannot fit a network to {}", args.points.display()))?;
+    let fit = &robust.fit;
+    let (embedding_seconds, fitting_seconds) = (robust.embedding_seconds, robust.fitting_seconds);
+    let summary = NetworkSummary::of(fit, robust.kept.len(), embedding_seconds + fitting_seconds);
     let bytes = network_to_blob(&fit.network, Some(&summary), scalar)?;
     neurosurf_trainer::blob::write_checked(&args.out, &bytes)?;
     if let Some(path) = &args.parameters_out {
-        write_atomic(path, rows(&parameters).as_bytes())?;
+        write_atomic(path, rows(&robust.parameters).as_bytes())?;
     }
     let report = FitReport {
         out: &args.out,
         stored_as: scalar.name(),
         blob_bytes: bytes.len(),
         points: points.len(),
+        outliers: robust.off_surface.len(),
         embedded: args.parameters.is_none(),
         embedding_seconds,
         fitting_seconds,
@@ -377,9 +389,13 @@ fn fit(args: &FitArgs) -> Result<()> {
         return output::json(&report);
     }
     println!(
-        "{} points{}: hidden layers {:?} ({}, {} parameters) after {} configurations, RMS \
+        "{} points{}{}: hidden layers {:?} ({}, {} parameters) after {} configurations, RMS \
          error {:.3e} ({:.2e} of the diagonal); {:.3} s embedding, {:.3} s fitting",
         report.points,
+        match report.outliers {
+            0 => String::new(),
+            n => format!(" less {n} off the surface (--keep-outliers fits them)"),
+        },
         if report.embedded { " embedded" } else { "" },
         report.hidden_layers,
         report.activation,

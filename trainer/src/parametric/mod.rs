@@ -59,12 +59,14 @@ mod laplacian;
 mod neighbors;
 mod network;
 mod normal;
+mod outliers;
 mod packed;
 mod patch_compare;
 mod picture;
 mod pipeline;
 mod planar;
 mod quality;
+mod robust;
 mod samples;
 mod sparse;
 mod split;
@@ -103,6 +105,7 @@ pub use hole::{HoleFill, HoleOptions, fill_hole, point_triangle_distance, punch_
 pub use laplacian::cotangent_laplacian;
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
 pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};
+pub use outliers::{OutlierOptions, Outliers, PLANES_ASKED, find_outliers};
 pub use packed::{LaneRecord, PackedNetwork};
 pub use patch_compare::{PatchCompareOptions, PatchComparison, PatchMethodRow, compare_patch};
 pub use picture::wireframe;
@@ -111,6 +114,7 @@ pub use planar::{
     PlanarMesh, delaunay, distance_to_polygon, inside_polygon, signed_area, triangulate_polygon,
 };
 pub use quality::{align_affine, distance_correlation, neighborhood_preservation, pearson};
+pub use robust::{RobustFit, fit_robustly};
 pub use samples::{SampleSurface, SurfaceSample, sample_surface};
 pub use sparse::{Cholesky, CompressedMatrix, SymmetricMatrix};
 pub use split::{Split, stratified_split};

@@ -34,6 +34,7 @@ use super::coons::{coons_boundary, coons_grid};
 use super::embedding::{LleOptions, embed_points};
 use super::fit::fit_network;
 use super::neighbors::nearest_neighbors;
+use super::outliers::Plane;
 use super::planar::{PlanarMesh, delaunay};
 use super::synthesis::synthesize;
 use super::thin_plate::{Centers, ThinPlate};
@@ -356,7 +357,7 @@ impl Reference {
                         let mut near: Vec<[f64; 3]> = list.iter().map(|&j| points[j]).collect();
                         let reach = near.iter().fold(0.0_f64, |m, &q| m.max(distance(*p, q)));
                         near.push(*p);
-                        (plane_normal(&near), reach)
+                        (Plane::fit(&near).normal, reach)
                     })
                     .unzip();
                 Reference::Planes {
@@ -397,26 +398,6 @@ impl Reference {
             Reference::Planes { .. } => "local planes of the input points",
         }
     }
-}
-
-/// The unit normal of the least-squares plane through `points` (the covariance's eigenvector of
-/// the smallest eigenvalue); (0, 0, 1) for fewer than 3 points.
-fn plane_normal(points: &[[f64; 3]]) -> [f64; 3] {
-    if points.len() < 3 {
-        return [0.0, 0.0, 1.0];
-    }
-    let n = points.len() as f64;
-    let mean = [0, 1, 2].map(|k| points.iter().map(|p| p[k]).sum::<f64>() / n);
-    let covariance = nalgebra::Matrix3::from_fn(|r, c| {
-        points
-            .iter()
-            .map(|p| (p[r] - mean[r]) * (p[c] - mean[c]))
-            .sum::<f64>()
-    });
-    let eigen = covariance.symmetric_eigen();
-    let smallest = eigen.eigenvalues.imin();
-    let v = eigen.eigenvectors.column(smallest);
-    [v[0], v[1], v[2]]
 }
 
 #[cfg(test)]
