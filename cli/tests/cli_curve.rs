@@ -612,10 +612,10 @@ fn tolerance_is_an_option() {
     }
 }
 
-/// Two circles far apart are reported as two groups, and a far point as a stray one; one
-/// circle is one group.
+/// Two circles far apart are two groups and get a curve each, in two blobs, with a far
+/// point left out; `--join-groups` fits one curve and warns. One circle is one group.
 #[test]
-fn separate_groups_and_stray_points_are_reported() {
+fn separate_groups_get_a_curve_each_and_stray_points_are_left_out() {
     let dir = tempfile::tempdir().unwrap();
     let circle = |cx: f64, n: usize| -> String {
         (0..n)
@@ -628,7 +628,7 @@ fn separate_groups_and_stray_points_are_reported() {
     let (one, two) = (dir.path().join("one.txt"), dir.path().join("two.txt"));
     fs::write(&one, circle(0.0, 150)).unwrap();
     fs::write(&two, circle(0.0, 150) + &circle(3.0, 100) + "9 9\n").unwrap();
-    let out = dir.path().join("c.nsb");
+    let (out, second) = (dir.path().join("c.nsb"), dir.path().join("c-2.nsb"));
     let fit = |points: &Path| {
         json(&ok(&[
             "curve",
@@ -643,12 +643,45 @@ fn separate_groups_and_stray_points_are_reported() {
     let report = fit(&one);
     assert_eq!(report["groups"], serde_json::json!([150]), "{report}");
     assert_eq!(report["stray_points"], 0);
+    assert_eq!(report["more_curves"], serde_json::json!([]));
+    assert!(!second.exists());
     let report = fit(&two);
     assert_eq!(report["groups"], serde_json::json!([150, 100]), "{report}");
     assert_eq!(report["stray_points"], 1);
+    assert_eq!(report["points"], 150, "{report}");
+    assert_eq!(report["more_curves"][0]["points"], 100, "{report}");
+    assert_eq!(report["more_curves"][0]["out"], s(&second), "{report}");
+    // Each curve stays on its own circle: no bridge, nothing pulled to the stray point.
+    for (blob, cx) in [(&out, 0.0), (&second, 3.0)] {
+        let queries = dir.path().join("t.txt");
+        let t: String = (0..=200)
+            .map(|i| format!("{}\n", f64::from(i) / 200.0))
+            .collect();
+        fs::write(&queries, t).unwrap();
+        let csv = ok(&["eval", s(blob), "--points", s(&queries)]);
+        for line in csv.lines().filter(|l| !l.starts_with('t')) {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let r = (v[1] - cx).hypot(v[2]);
+            assert!((r - 1.0).abs() < 0.02, "{blob:?}: {line}");
+        }
+    }
     let text = ok(&["curve", "fit", s(&two), "--closed", "--out", s(&out)]);
     assert!(
-        text.contains("2 separate groups") && text.contains("1 stray point"),
+        text.contains("group 2: 100 points")
+            && text.contains("1 stray point far from the others left out"),
         "{text}"
+    );
+    let joined = ok(&[
+        "curve",
+        "fit",
+        s(&two),
+        "--closed",
+        "--join-groups",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        joined.contains("2 separate groups") && joined.contains("one curve bridges them"),
+        "{joined}"
     );
 }

@@ -8,9 +8,9 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use neurosurf_trainer::curve::{
-    BSplineCurve, BandReport, CurveOptions, CurvePoints, FitSummary, LongSteps, MIN_POINTS,
-    PlotLayers, PlotOptions, Topology, TrainingReport, curve_to_blob, interpolation_parameter,
-    point_groups, reconstruct_curve, write_plot,
+    BSplineCurve, BandReport, CurveOptions, CurvePoints, CurveReconstruction, FitSummary,
+    LongSteps, MIN_POINTS, PlotLayers, PlotOptions, Topology, TrainingReport, curve_to_blob,
+    interpolation_parameter, point_groups, reconstruct_curve, write_plot,
 };
 use neurosurf_trainer::io::{read_scattered_points, write_atomic};
 
@@ -65,12 +65,18 @@ pub struct FitArgs {
     #[arg(long, value_name = "FILE")]
     polyline: Option<PathBuf>,
     /// Also write the recovered order: text, one 0-based point index per line (points counted
-    /// in file order, comments skipped), in order along the curve.
+    /// in file order, comments skipped), in order along the curve; with separate groups, one
+    /// block per curve, separated by an empty line (and so for `--polyline`).
     #[arg(long, value_name = "FILE")]
     order: Option<PathBuf>,
     /// Size of the plot in pixels, `WIDTH,HEIGHT`.
     #[arg(long, value_parser = comma_list::<u32, 2>, default_value = "800,800")]
     plot_size: [u32; 2],
+    /// Fit one curve through every point even when they form separate groups (it bridges
+    /// them). Without it, each group gets its own curve: the largest in `--out`, the others
+    /// in `--out` numbered (`ring.nsb`, `ring-2.nsb`, …), and stray points are left out.
+    #[arg(long)]
+    join_groups: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -81,6 +87,8 @@ struct FitReport<'a> {
     out: &'a Path,
     stored_as: &'static str,
     blob_bytes: usize,
+    /// The curves of the other separate groups, largest first.
+    more_curves: Vec<MoreCurve>,
     dimension: usize,
     closed: bool,
     control_points: usize,
@@ -145,42 +153,63 @@ pub fn run(args: &FitArgs) -> Result<()> {
         options.refine = None;
     }
     let significant = (points.len() / 100).max(MIN_POINTS);
-    let (groups, strays): (Vec<Vec<usize>>, Vec<Vec<usize>>) = point_groups(points.points())
+    let (group_members, strays): (Vec<Vec<usize>>, Vec<Vec<usize>>) = point_groups(points.points())
         .into_iter()
         .partition(|g| g.len() >= significant);
-    let groups: Vec<usize> = groups.iter().map(Vec::len).collect();
+    let groups: Vec<usize> = group_members.iter().map(Vec::len).collect();
     let stray_points: usize = strays.iter().map(Vec::len).sum();
-    let start = Instant::now();
-    let result = reconstruct_curve(&points, &options)?;
-    let seconds = start.elapsed().as_secs_f64();
-    let ordered = result.ordering.ordered_points(&points);
-    let (curve, method, rms, max) = if args.interpolate {
-        let (rms, max) = interpolation_residual(&result.interpolation, &ordered);
-        (&result.interpolation, "interpolation", rms, max)
+    // Separate groups get a curve each (the largest in --out, the others numbered beside
+    // it); stray points are then left out. --join-groups fits one curve through everything.
+    let separate = group_members.len() > 1 && !args.join_groups;
+    let members: Vec<Vec<usize>> = if separate {
+        group_members
     } else {
-        let a = &result.approximation;
-        (&a.curve, "approximation", a.rms_residual, a.max_residual)
+        vec![(0..points.len()).collect()]
     };
-    let summary = FitSummary {
-        method: method.into(),
-        points: points.len(),
-        neurons: result.training.neurons,
-        seed: args.blob.seed,
-        rms_residual: rms,
-        max_residual: max,
-        seconds,
-    };
-    let blob = curve_to_blob(curve, Some(&summary), scalar)?;
+    let more_outs: Vec<PathBuf> = (2..=members.len())
+        .map(|k| numbered(&args.blob.out, k))
+        .collect();
+    for path in &more_outs {
+        neurosurf_trainer::io::check_output(path)?;
+    }
     if let Some(path) = &args.plot {
         check_picture_path(path)?;
     }
-    neurosurf_trainer::blob::write_checked(&args.blob.out, &blob)?;
+    let fits = members
+        .into_iter()
+        .map(|m| fit_group(&points, m, &options, args.interpolate))
+        .collect::<Result<Vec<GroupFit>>>()
+        .with_context(|| format!("cannot fit a curve to {}", args.points.display()))?;
+    let blobs = fits
+        .iter()
+        .map(|g| curve_to_blob(&g.curve, Some(&g.summary(args.blob.seed)), scalar))
+        .collect::<neurosurf_trainer::Result<Vec<Vec<u8>>>>()?;
+    let main = &fits[0];
+    let (result, curve, method, rms, max, seconds) = (
+        &main.result,
+        &main.curve,
+        main.method,
+        main.rms,
+        main.max,
+        main.seconds,
+    );
+    let group_points = &main.points;
+    let ordered = result.ordering.ordered_points(group_points);
+    let summary = main.summary(args.blob.seed);
+    let blob = &blobs[0];
+    neurosurf_trainer::blob::write_checked(&args.blob.out, blob)?;
+    for (path, bytes) in more_outs.iter().zip(&blobs[1..]) {
+        neurosurf_trainer::blob::write_checked(path, bytes)?;
+    }
     if let Some(path) = &args.plot {
+        let order: Vec<usize> = main.in_file_order(&result.ordering.order);
+        let more: Vec<BSplineCurve> = fits[1..].iter().map(|g| g.curve.clone()).collect();
         let layers = PlotLayers {
             points: points.points(),
-            order: Some(&result.ordering.order),
+            order: Some(&order),
             closed: result.ordering.closed,
             curve: Some(curve),
+            more_curves: &more,
             ..PlotLayers::default()
         };
         let options = PlotOptions {
@@ -191,22 +220,43 @@ pub fn run(args: &FitArgs) -> Result<()> {
         write_plot(path, &layers, &options)?;
     }
     if let Some(path) = &args.polyline {
-        let vertices = curve.polyline(curve.segments().max(1) * 16);
-        write_atomic(path, rows_text(&vertices, dimension).as_bytes())?;
+        let text: Vec<String> = fits
+            .iter()
+            .map(|g| rows_text(&g.curve.polyline(g.curve.segments().max(1) * 16), dimension))
+            .collect();
+        write_atomic(path, text.join("\n").as_bytes())?;
     }
     if let Some(path) = &args.order {
-        let text: String = result
-            .ordering
-            .order
+        let text: Vec<String> = fits
             .iter()
-            .map(|i| format!("{i}\n"))
+            .map(|g| {
+                g.in_file_order(&g.result.ordering.order)
+                    .iter()
+                    .map(|i| format!("{i}\n"))
+                    .collect()
+            })
             .collect();
-        write_atomic(path, text.as_bytes())?;
+        write_atomic(path, text.join("\n").as_bytes())?;
     }
+    let more_curves: Vec<MoreCurve> = fits[1..]
+        .iter()
+        .zip(&more_outs)
+        .zip(&blobs[1..])
+        .map(|((g, out), bytes)| MoreCurve {
+            out: out.clone(),
+            blob_bytes: bytes.len(),
+            points: g.points.len(),
+            closed: g.curve.closed,
+            control_points: g.curve.control.len(),
+            rms_residual: g.rms,
+            max_residual: g.max,
+        })
+        .collect();
     let report = FitReport {
         out: &args.blob.out,
         stored_as: scalar.name(),
         blob_bytes: blob.len(),
+        more_curves,
         dimension,
         closed: curve.closed,
         control_points: curve.control.len(),
@@ -214,7 +264,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
         chain_iterations: result.training.iterations,
         chain_trained_points: result.training.trained_points,
         chain_converged: result.training.convergence.converged(),
-        order_long_steps: result.ordering.long_steps(&points, LONG_STEP),
+        order_long_steps: result.ordering.long_steps(group_points, LONG_STEP),
         band: result.band.clone(),
         corners: if args.interpolate {
             Vec::new()
@@ -265,10 +315,10 @@ pub fn run(args: &FitArgs) -> Result<()> {
             report.control_points
         );
     }
-    if report.groups.len() > 1 {
+    if report.groups.len() > 1 && args.join_groups {
         println!(
-            "warning: the points form {} separate groups ({} points): one curve bridges them; \
-             fit each group on its own",
+            "warning: the points form {} separate groups ({} points): one curve bridges them \
+             (without --join-groups, each gets its own curve)",
             report.groups.len(),
             report
                 .groups
@@ -278,7 +328,13 @@ pub fn run(args: &FitArgs) -> Result<()> {
                 .join(", ")
         );
     }
-    if report.stray_points > 0 {
+    if report.stray_points > 0 && separate {
+        println!(
+            "{} stray point{} far from the others left out",
+            report.stray_points,
+            if report.stray_points == 1 { "" } else { "s" }
+        );
+    } else if report.stray_points > 0 {
         println!(
             "warning: {} stray point{} far from the others: the curve reaches out to {}; \
              remove {} if noise",
@@ -312,10 +368,120 @@ pub fn run(args: &FitArgs) -> Result<()> {
         blob.len(),
         scalar.name()
     );
+    for (k, more) in report.more_curves.iter().enumerate() {
+        println!(
+            "group {}: {} points → {} curve of {} control points, residual RMS {:.3e}, max \
+             {:.3e}; wrote {} ({} bytes)",
+            k + 2,
+            more.points,
+            if more.closed { "closed" } else { "open" },
+            more.control_points,
+            more.rms_residual,
+            more.max_residual,
+            more.out.display(),
+            more.blob_bytes
+        );
+    }
     if let Some(path) = &args.plot {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// The curve of one separate group.
+#[derive(Serialize)]
+struct MoreCurve {
+    out: PathBuf,
+    blob_bytes: usize,
+    points: usize,
+    closed: bool,
+    control_points: usize,
+    rms_residual: f64,
+    max_residual: f64,
+}
+
+/// One group's ordering and fit.
+struct GroupFit {
+    /// The group's points' indices in the file.
+    members: Vec<usize>,
+    points: CurvePoints,
+    result: CurveReconstruction,
+    /// The curve written: the approximation or the interpolation.
+    curve: BSplineCurve,
+    method: &'static str,
+    rms: f64,
+    max: f64,
+    seconds: f64,
+}
+
+impl GroupFit {
+    fn summary(&self, seed: u64) -> FitSummary {
+        FitSummary {
+            method: self.method.into(),
+            points: self.points.len(),
+            neurons: self.result.training.neurons,
+            seed,
+            rms_residual: self.rms,
+            max_residual: self.max,
+            seconds: self.seconds,
+        }
+    }
+
+    /// Indices into the group as indices into the file.
+    fn in_file_order(&self, order: &[usize]) -> Vec<usize> {
+        order.iter().map(|&i| self.members[i]).collect()
+    }
+}
+
+/// Orders and fits the points of `all` at `members`.
+fn fit_group(
+    all: &CurvePoints,
+    members: Vec<usize>,
+    options: &CurveOptions,
+    interpolate: bool,
+) -> Result<GroupFit> {
+    let points = CurvePoints::new(
+        all.dimension(),
+        members.iter().map(|&i| all.points()[i]).collect(),
+    )?;
+    let start = Instant::now();
+    let result = reconstruct_curve(&points, options)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let (curve, method, rms, max) = if interpolate {
+        let ordered = result.ordering.ordered_points(&points);
+        let (rms, max) = interpolation_residual(&result.interpolation, &ordered);
+        (result.interpolation.clone(), "interpolation", rms, max)
+    } else {
+        let a = &result.approximation;
+        (
+            a.curve.clone(),
+            "approximation",
+            a.rms_residual,
+            a.max_residual,
+        )
+    };
+    Ok(GroupFit {
+        members,
+        points,
+        result,
+        curve,
+        method,
+        rms,
+        max,
+        seconds,
+    })
+}
+
+/// `out` with `-k` before its extension: `ring.nsb` → `ring-2.nsb`.
+fn numbered(out: &Path, k: usize) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    let name = match out.extension() {
+        Some(e) => format!("{stem}-{k}.{}", e.to_string_lossy()),
+        None => format!("{stem}-{k}"),
+    };
+    out.with_file_name(name)
 }
 
 /// Refuses a picture path the plot writer cannot write, before anything else is written.

@@ -71,6 +71,8 @@ pub struct PlotLayers<'a> {
     pub chain: Option<&'a KohonenChain>,
     /// The fitted spline.
     pub curve: Option<&'a BSplineCurve>,
+    /// More fitted splines (of other groups of the points), drawn alike.
+    pub more_curves: &'a [BSplineCurve],
     /// Also draw the spline's control polygon.
     pub control_polygon: bool,
     /// The true curve as a polyline.
@@ -100,9 +102,10 @@ pub fn plot_scene(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<Scen
             layers.points.len()
         )));
     }
-    let spline = layers
-        .curve
-        .map(|c| c.polyline(c.segments().max(1) * options.samples_per_segment.max(1)));
+    let polyline =
+        |c: &BSplineCurve| c.polyline(c.segments().max(1) * options.samples_per_segment.max(1));
+    let spline = layers.curve.map(polyline);
+    let more: Vec<[f64; 3]> = layers.more_curves.iter().flat_map(&polyline).collect();
     // Everything drawn is framed: points, truth, spline, and the control polygon and chain
     // when they are drawn (an approximating spline's control points often lie outside it).
     let control = layers
@@ -114,6 +117,7 @@ pub fn plot_scene(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<Scen
         Some(layers.points),
         layers.truth,
         spline.as_deref(),
+        Some(&more),
         control,
         chain,
     ]
@@ -167,6 +171,11 @@ pub fn plot_scene(layers: &PlotLayers<'_>, options: &PlotOptions) -> Result<Scen
         scene
             .strokes
             .push(line(&mut spline.iter(), Rgb(0x22, 0x55, 0xcc), 2.0));
+    }
+    for curve in layers.more_curves {
+        let mut stroke = line(&mut polyline(curve).iter(), Rgb(0x22, 0x55, 0xcc), 2.0);
+        stroke.closed = curve.closed;
+        scene.strokes.push(stroke);
     }
     for p in layers.points {
         scene.dots.push(Dot {

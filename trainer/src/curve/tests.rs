@@ -491,6 +491,7 @@ fn svg_plots_are_written_atomically() {
         curve: Some(&result.approximation.curve),
         control_polygon: true,
         truth: Some(&sample.truth),
+        ..PlotLayers::default()
     };
     let options = PlotOptions {
         title: Some("trefoil <3-D>".into()),
