@@ -253,6 +253,30 @@ impl CaoEnNetwork {
         (length > 1e-300).then(|| n.map(|c| c / length))
     }
 
+    /// Where the blending is flat at a key point (power blending maps the key's whole
+    /// neighbourhood to first order onto its target, so ∂y/∂x vanishes there), the normal as
+    /// the mean of the normals a step of [`LIMIT_STEP`] away, in every diagonal direction
+    /// (each source coordinate moved, with every combination of signs, by different amounts:
+    /// a coordinate left at 0 can keep the Jacobian singular), back on the domain.
+    fn limit_normal(&self, x: &[f64]) -> Option<[f64; 3]> {
+        let mut sum = [0.0; 3];
+        for signs in 0..1_u32 << x.len() {
+            let near: Vec<f64> = x
+                .iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    let sign = if signs >> k & 1 == 1 { -1.0 } else { 1.0 };
+                    c + sign * LIMIT_STEP * (1.0 + 0.37 * k as f64)
+                })
+                .collect();
+            if let Some(n) = self.normal(&on_domain(self.domain, &near)) {
+                sum = [0, 1, 2].map(|c| sum[c] + n[c]);
+            }
+        }
+        let length = inner(&sum, &sum).sqrt();
+        (length > 1e-12).then(|| sum.map(|c| c / length))
+    }
+
     /// The paper's approximate-normal network (§7): the same key points and blending, with
     /// each target replaced by the exact unit normal at its key point (x = wᵢ normalized).
     ///
@@ -266,8 +290,16 @@ impl CaoEnNetwork {
             .map(|(i, w)| {
                 let x = on_domain(self.domain, w);
                 self.normal(&x)
+                    .or_else(|| self.limit_normal(&x))
                     .map(|n| n.to_vec())
-                    .ok_or_else(|| Error::invalid(format!("no normal at key point {i}")))
+                    .ok_or_else(|| {
+                        Error::invalid(format!(
+                            "the surface has no normal at key point {i} nor around it: the \
+                             network maps the neighbourhood of the key to one point; refit it \
+                             (more keys, or another --blending or --power) before deriving \
+                             the normal network"
+                        ))
+                    })
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(CaoEnNetwork {
@@ -276,6 +308,10 @@ impl CaoEnNetwork {
         })
     }
 }
+
+/// How far from a key point [`CaoEnNetwork::normal_network`] looks for the normal where the
+/// blending is flat at the key.
+pub const LIMIT_STEP: f64 = 1e-4;
 
 /// A point brought back onto the unit sphere, or onto the torus (each circle normalized).
 pub fn on_domain(domain: u8, x: &[f64]) -> Vec<f64> {

@@ -421,3 +421,18 @@ fn position_alone_equals_the_full_evaluation_bit_for_bit() {
         assert_eq!(torus.position(&x), torus.evaluate(&x).position);
     }
 }
+
+/// The paper's six-foot cube (power blending, q = 4, targets = keys, unfitted) is flat at its
+/// keys: ∂y/∂x vanishes there and on the coordinate planes. The normal network takes the
+/// limit normal around each key instead of refusing: the face normal ±eₖ.
+#[test]
+fn normal_network_takes_the_limit_normal_where_the_blending_is_flat() {
+    let keys = support::axes();
+    let cube = from_key_points(Domain::Sphere, Blending::Power, false, &keys, &keys, 4.0).unwrap();
+    assert!(cube.normal(&keys[0]).is_none());
+    let normals = cube.normal_network().unwrap();
+    for (key, target) in keys.iter().zip(&normals.targets) {
+        let cos: f64 = (0..3).map(|k| key[k] * target[k]).sum();
+        assert!(cos > 1.0 - 1e-9, "{key:?}: {target:?}");
+    }
+}
