@@ -671,6 +671,21 @@ fn separate_groups_get_a_curve_each_and_stray_points_are_left_out() {
             && text.contains("1 stray point far from the others left out"),
         "{text}"
     );
+    assert!(!text.contains("warning: group"), "{text}");
+    // An open arc beside a circle, both fitted --closed: the arc's ring is told.
+    let mixed = dir.path().join("mixed.txt");
+    let arc: String = (0..80)
+        .map(|i| {
+            let x = -1.0 + f64::from(i) / 40.0;
+            format!("{x} {}\n", 4.0 + 0.3 * (2.0 * x).sin())
+        })
+        .collect();
+    fs::write(&mixed, circle(0.0, 150) + &arc).unwrap();
+    let text = ok(&["curve", "fit", s(&mixed), "--closed", "--out", s(&out)]);
+    assert!(
+        text.contains("warning: group 2: a step of the ring") && text.contains("without --closed"),
+        "{text}"
+    );
     let joined = ok(&[
         "curve",
         "fit",

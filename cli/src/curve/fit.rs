@@ -246,6 +246,10 @@ pub fn run(args: &FitArgs) -> Result<()> {
             out: out.clone(),
             blob_bytes: bytes.len(),
             points: g.points.len(),
+            topology_warning: topology_warning(
+                g.result.ordering.long_steps(&g.points, LONG_STEP),
+                g.curve.closed,
+            ),
             closed: g.curve.closed,
             control_points: g.curve.control.len(),
             rms_residual: g.rms,
@@ -381,6 +385,9 @@ pub fn run(args: &FitArgs) -> Result<()> {
             more.out.display(),
             more.blob_bytes
         );
+        if let Some(warning) = &more.topology_warning {
+            println!("warning: group {}: {warning}", k + 2);
+        }
     }
     if let Some(path) = &args.plot {
         println!("wrote {}", path.display());
@@ -394,6 +401,8 @@ struct MoreCurve {
     out: PathBuf,
     blob_bytes: usize,
     points: usize,
+    /// Whether its order says it is closed though fitted open, or the reverse.
+    topology_warning: Option<String>,
     closed: bool,
     control_points: usize,
     rms_residual: f64,
@@ -556,22 +565,29 @@ fn convergence_text(training: &TrainingReport, jumps: LongSteps, closed: bool) -
             jumps.count, jumps.longest_ratio
         )
     };
-    // An open order whose ends are a step or so apart went round a closed curve; a closed
-    // order with one step far longer than all others bridges the ends of an open one.
-    let topology = if !closed && jumps.ends_ratio <= LONG_STEP {
-        format!(
-            "\nwarning: the order's ends are {:.1} median steps apart: the curve looks closed; \
-             fit it with --closed",
-            jumps.ends_ratio
-        )
-    } else if closed && jumps.count == 1 && jumps.longest_ratio > 2.0 * LONG_STEP {
-        format!(
-            "\nwarning: one step of the ring is {:.1}× the median, all others under {LONG_STEP}×: \
-             it bridges the ends of an open curve; fit it without --closed",
-            jumps.longest_ratio
-        )
-    } else {
-        String::new()
-    };
+    let topology =
+        topology_warning(jumps, closed).map_or_else(String::new, |w| format!("\nwarning: {w}"));
     format!("{chain}\n{order}{topology}")
+}
+
+/// Whether the order says the curve's topology is the other one: an open order whose ends are
+/// a step or so apart went round a closed curve; a closed order with one or two steps far
+/// longer than all others bridges the ends of an open one (the ring's neurons cross the gap
+/// once or twice).
+fn topology_warning(jumps: LongSteps, closed: bool) -> Option<String> {
+    if !closed && jumps.ends_ratio <= LONG_STEP {
+        Some(format!(
+            "the order's ends are {:.1} median steps apart: the curve looks closed; fit it with \
+             --closed",
+            jumps.ends_ratio
+        ))
+    } else if closed && jumps.count <= 2 && jumps.longest_ratio > 2.0 * LONG_STEP {
+        Some(format!(
+            "a step of the ring is {:.1}× the median, all but one other under {LONG_STEP}×: it \
+             bridges the ends of an open curve; fit it without --closed",
+            jumps.longest_ratio
+        ))
+    } else {
+        None
+    }
 }
