@@ -32,7 +32,8 @@ pub struct CompareArgs {
     /// Centres per side of the low-density RBF.
     #[arg(long, default_value_t = PatchCompareOptions::default().rbf_grid)]
     rbf_grid: usize,
-    /// Most centres of the high-density RBF (one per point up to this; a dense solve).
+    /// Most centres of the high-density RBF: one per point up to this, then an even subsample
+    /// of this many (a dense solve).
     #[arg(long, default_value_t = PatchCompareOptions::default().rbf_max_centers)]
     rbf_centers: usize,
     /// Seed of the held-out points and the network's weights.

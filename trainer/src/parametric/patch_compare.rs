@@ -19,7 +19,8 @@
 //! - `network`: the §5.2 topology search, tessellated as a Coons grid of the parameter region;
 //! - `rbf-low`: a g × g grid of thin-plate centres over the parameter box, least squares, x, y
 //!   and z each a spline of (u, v), on the network's Coons grid;
-//! - `rbf-high`: one centre per point (interpolating) up to a cap, on the same grid;
+//! - `rbf-high`: one centre per point (interpolating), or past a cap an interpolated even
+//!   subsample, on the same grid;
 //! - `delaunay`: the Delaunay triangulation of the training points' parameters.
 
 use std::time::Instant;

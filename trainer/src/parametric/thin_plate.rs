@@ -2,8 +2,9 @@
 //! f(x) = Σⱼ wⱼ φ(|x − cⱼ|) + a + b·x₀ + c·x₁ with φ(r) = r² ln r, one set of weights per output.
 //!
 //! With one centre per input point the spline interpolates: the augmented system
-//! [Φ P; Pᵀ 0] is solved directly (a 10⁻¹⁰ relative ridge on Φ keeps it regular). With fewer
-//! centres it is a least-squares fit with a 10⁻⁸ relative ridge.
+//! [Φ P; Pᵀ 0] is solved directly (a 10⁻¹⁰ relative ridge on Φ keeps it regular); past a
+//! size it interpolates an even subsample. With grid centres it is a least-squares fit with a
+//! 10⁻⁸ relative ridge.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -22,8 +23,8 @@ pub(crate) struct ThinPlate<const D: usize> {
 pub(crate) enum Centers {
     /// g × g over the inputs' bounding box (a least-squares fit).
     Grid(usize),
-    /// At most this many input points, evenly spread over the input order; all of them (an
-    /// interpolating spline) when there are no more inputs than that.
+    /// One centre per input point, interpolating; beyond this many inputs, an even subsample
+    /// of them (every ⌈n / most⌉-th in input order), interpolated.
     Points(usize),
 }
 
@@ -49,20 +50,22 @@ impl<const D: usize> ThinPlate<D> {
                 outputs.len()
             )));
         }
-        let (centers, interpolating) = match centers {
-            Centers::Grid(g) => (grid_centers(inputs, g), false),
-            Centers::Points(most) if inputs.len() <= most => (inputs.to_vec(), true),
-            Centers::Points(most) => {
-                let step = inputs.len().div_ceil(most.max(1));
-                (inputs.iter().step_by(step).copied().collect(), false)
+        match centers {
+            Centers::Grid(g) => {
+                let centers = grid_centers(inputs, g);
+                let weights = Self::least_squares(inputs, outputs, &centers)?;
+                Ok(ThinPlate { centers, weights })
             }
-        };
-        let weights = if interpolating {
-            Self::interpolate(inputs, outputs)?
-        } else {
-            Self::least_squares(inputs, outputs, &centers)?
-        };
-        Ok(ThinPlate { centers, weights })
+            Centers::Points(most) => {
+                // Beyond `most` inputs, the spline interpolates an even subsample: a dense
+                // least-squares system over every input would grow with inputs × centres.
+                let step = inputs.len().div_ceil(most.max(1)).max(1);
+                let centers: Vec<[f64; 2]> = inputs.iter().step_by(step).copied().collect();
+                let values: Vec<[f64; D]> = outputs.iter().step_by(step).copied().collect();
+                let weights = Self::interpolate(&centers, &values)?;
+                Ok(ThinPlate { centers, weights })
+            }
+        }
     }
 
     /// Basis j at x: the radial terms, then 1, x₀, x₁.
