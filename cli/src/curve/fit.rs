@@ -100,7 +100,8 @@ struct FitReport<'a> {
     order_long_steps: LongSteps,
     /// How a band of noise wider than the spacing was parametrized, if it was.
     band: Option<BandReport>,
-    /// The points kept as sharp corners of the approximation, in order along it.
+    /// The sharp corners of the approximation (where the arms on either side meet), in
+    /// order along it.
     corners: Vec<Vec<f64>>,
     /// Sizes of the separate groups the points form (largest first; one entry when they
     /// form one curve), counting groups of at least 1 % of the points.
@@ -194,7 +195,6 @@ pub fn run(args: &FitArgs) -> Result<()> {
         main.seconds,
     );
     let group_points = &main.points;
-    let ordered = result.ordering.ordered_points(group_points);
     let summary = main.summary(args.blob.seed);
     let blob = &blobs[0];
     neurosurf_trainer::blob::write_checked(&args.blob.out, blob)?;
@@ -275,9 +275,9 @@ pub fn run(args: &FitArgs) -> Result<()> {
         } else {
             result
                 .approximation
-                .corners
+                .corner_points
                 .iter()
-                .map(|&i| ordered[i][..dimension].to_vec())
+                .map(|p| p[..dimension].to_vec())
                 .collect()
         },
         groups,

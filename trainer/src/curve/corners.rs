@@ -36,9 +36,11 @@ const MAX_ARM: usize = 30;
 const ARM_SHARE: usize = 40;
 
 /// A line fitted to points: its unit direction (oriented from the first point to the last),
-/// its length and the root-mean-square distance of the points from it.
+/// a point on it (the points' mean), its length and the root-mean-square distance of the
+/// points from it.
 struct Arm {
     direction: Vector3<f64>,
+    centre: Vector3<f64>,
     length: f64,
     residual: f64,
     /// Whether the points advance along the line in order, to within twice the residual (a
@@ -81,6 +83,7 @@ fn arm(points: &[[f64; 3]]) -> Option<Arm> {
     let advancing = along_line.windows(2).all(|w| w[1] - w[0] > -2.0 * residual);
     (length > 0.0 && direction.iter().all(|c| c.is_finite())).then_some(Arm {
         direction,
+        centre: mean,
         length,
         residual,
         advancing,
@@ -99,9 +102,11 @@ fn turn(ordered: &[[f64; 3]], closed: bool, i: usize, w: usize) -> Option<(f64, 
             (0..n as isize).contains(&j).then(|| ordered[j as usize])
         }
     };
+    // The point at `i` belongs to neither arm: where the corner falls between two samples,
+    // the nearer one lies on one arm and up to a spacing off the other's line.
     let w = w as isize;
-    let before: Option<Vec<[f64; 3]>> = (-w..=0).map(pick).collect();
-    let after: Option<Vec<[f64; 3]>> = (0..=w).map(pick).collect();
+    let before: Option<Vec<[f64; 3]>> = (-w..0).map(pick).collect();
+    let after: Option<Vec<[f64; 3]>> = (1..=w).map(pick).collect();
     let (a, b) = (arm(&before?)?, arm(&after?)?);
     let straight = |arm: &Arm| arm.advancing && arm.residual <= ARM_STRAIGHTNESS * arm.length;
     Some((
@@ -115,9 +120,22 @@ fn arm_points(n: usize) -> usize {
     (n / ARM_SHARE).clamp(MIN_ARM, MAX_ARM)
 }
 
-/// The points of `ordered` where it turns by a corner, in order, each with its turn in
-/// radians. Needs at least 17 points (four arms' worth); fewer give none.
-pub fn find_corners(ordered: &[[f64; 3]], closed: bool) -> Vec<(usize, f64)> {
+/// A corner of ordered points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Corner {
+    /// The ordered point where the turn peaks.
+    pub index: usize,
+    /// The turn between the arms, in radians.
+    pub turn: f64,
+    /// Where the arms' lines meet: the corner itself, which no point need sample (the point
+    /// at [`Self::index`] is the nearest sample, up to a spacing away along an arm). `None`
+    /// where they do not meet near that point.
+    pub tip: Option<[f64; 3]>,
+}
+
+/// The points of `ordered` where it turns by a corner, in order. Needs at least 17 points
+/// (four arms' worth); fewer give none.
+pub fn find_corners(ordered: &[[f64; 3]], closed: bool) -> Vec<Corner> {
     let n = ordered.len();
     if n < 4 * MIN_ARM + 1 {
         return Vec::new();
@@ -160,42 +178,103 @@ pub fn find_corners(ordered: &[[f64; 3]], closed: bool) -> Vec<(usize, f64)> {
                         && neighbour(i, d, false).is_none_or(|j| turns[j] <= turns[i])
                 })
         })
-        .map(|i| (i, turns[i]))
+        .map(|i| Corner {
+            index: i,
+            turn: turns[i],
+            tip: tip(ordered, closed, i, w),
+        })
         .collect()
+}
+
+/// Where the lines of the `w` points before `i` and the `w` after it meet (the midpoint of
+/// their common perpendicular in 3-D), the point `i` itself left out: it may lie on either
+/// arm. `None` where an arm is missing or the arms are nearly parallel, where the lines do
+/// not meet ahead of the arm before and behind the arm after (each arm's middle), or farther
+/// from point `i` than the longer arm's length and the longer step from `i` to a neighbour.
+fn tip(ordered: &[[f64; 3]], closed: bool, i: usize, w: usize) -> Option<[f64; 3]> {
+    let n = ordered.len() as isize;
+    let pick = |offset: isize| -> Option<[f64; 3]> {
+        let j = i as isize + offset;
+        if closed {
+            Some(ordered[j.rem_euclid(n) as usize])
+        } else {
+            (0..n).contains(&j).then(|| ordered[j as usize])
+        }
+    };
+    let w = w as isize;
+    let before: Option<Vec<[f64; 3]>> = (-w..0).map(pick).collect();
+    let after: Option<Vec<[f64; 3]>> = (1..=w).map(pick).collect();
+    let (a, b) = (arm(&before?)?, arm(&after?)?);
+    let cos = a.direction.dot(&b.direction);
+    let sin2 = 1.0 - cos * cos;
+    if sin2 < 1e-6 {
+        return None;
+    }
+    // The nearest points a.centre + s·a.direction and b.centre + t·b.direction.
+    let gap = a.centre - b.centre;
+    let (d, e) = (a.direction.dot(&gap), b.direction.dot(&gap));
+    let s = (cos * e - d) / sin2;
+    let t = (e - cos * d) / sin2;
+    let meet = (a.centre + s * a.direction + b.centre + t * b.direction) / 2.0;
+    let sample = Vector3::from(ordered[i]);
+    // Ahead of the arm before, behind the arm after, and near the sampled turn.
+    let between =
+        (meet - a.centre).dot(&a.direction) >= 0.0 && (meet - b.centre).dot(&b.direction) <= 0.0;
+    let step = |offset: isize| pick(offset).map_or(0.0, |p| (Vector3::from(p) - sample).norm());
+    let reach = a.length.max(b.length) + step(-1).max(step(1));
+    (between && (meet - sample).norm() <= reach).then(|| meet.into())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// `per_side` points along each side of a regular polygon with `sides` sides, radius 1.
-    fn polygon(sides: usize, per_side: usize) -> Vec<[f64; 3]> {
-        let vertex = |k: usize| {
-            let a = std::f64::consts::TAU * k as f64 / sides as f64;
-            [a.cos(), a.sin(), 0.0]
-        };
-        (0..sides)
-            .flat_map(|k| {
-                let (a, b) = (vertex(k), vertex(k + 1));
-                (0..per_side).map(move |j| {
-                    let u = j as f64 / per_side as f64;
-                    [0, 1, 2].map(|c| a[c] + u * (b[c] - a[c]))
-                })
-            })
-            .collect()
+    /// Vertex `k` of a regular polygon with `sides` sides, radius 1.
+    fn vertex(sides: usize, k: usize) -> [f64; 3] {
+        let a = std::f64::consts::TAU * k as f64 / sides as f64;
+        [a.cos(), a.sin(), 0.0]
     }
 
     #[test]
     fn a_polygon_has_a_corner_at_each_vertex() {
         for (sides, per_side) in [(4, 50), (3, 30), (6, 12), (5, 200)] {
-            let points = polygon(sides, per_side);
-            let corners = find_corners(&points, true);
-            let at: Vec<usize> = corners.iter().map(|c| c.0).collect();
-            let expected: Vec<usize> = (0..sides).map(|k| k * per_side).collect();
-            assert_eq!(at, expected, "{sides} sides");
-            let turn = std::f64::consts::TAU / sides as f64;
-            assert!(corners.iter().all(|c| (c.1 - turn).abs() < 1e-6));
+            for offset in [0.0, 0.3, 0.7] {
+                let points = polygon(sides, per_side, offset);
+                let corners = find_corners(&points, true);
+                assert_eq!(corners.len(), sides, "{sides} sides");
+                let turn = std::f64::consts::TAU / sides as f64;
+                let n = sides * per_side;
+                let mut found: Vec<usize> = Vec::new();
+                for c in &corners {
+                    // The turn peaks at a sample next to a vertex.
+                    let k = (c.index + per_side / 2) / per_side % sides;
+                    let apart = c.index.abs_diff(k * per_side);
+                    assert!(apart.min(n - apart) <= 2, "{c:?}");
+                    assert!((c.turn - turn).abs() < 1e-6, "{c:?}");
+                    // The tip is the vertex itself, sampled or not.
+                    let (tip, v) = (c.tip.expect("the arms meet"), vertex(sides, k));
+                    assert!((0..3).all(|a| (tip[a] - v[a]).abs() < 1e-9), "{c:?} {v:?}");
+                    found.push(k);
+                }
+                found.sort_unstable();
+                found.dedup();
+                assert_eq!(found.len(), sides, "{sides} sides, offset {offset}");
+            }
         }
+    }
+
+    /// `per_side` points along each side of a regular polygon with `sides` sides, radius 1,
+    /// starting `offset` of a spacing after each vertex (0: the vertices are samples).
+    fn polygon(sides: usize, per_side: usize, offset: f64) -> Vec<[f64; 3]> {
+        (0..sides)
+            .flat_map(|k| {
+                let (a, b) = (vertex(sides, k), vertex(sides, k + 1));
+                (0..per_side).map(move |j| {
+                    let u = (j as f64 + offset) / per_side as f64;
+                    [0, 1, 2].map(|c| a[c] + u * (b[c] - a[c]))
+                })
+            })
+            .collect()
     }
 
     #[test]

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 use super::basis::{cubic_basis, locate};
-use super::corners::find_corners;
+use super::corners::{Corner, find_corners};
 use neurosurf_core::curve::DEFAULT_CURVE_POINTS;
 
 use super::least_squares::{Affine, NormalEquations};
@@ -69,6 +69,10 @@ pub struct Approximation {
     /// The ordered points kept as sharp corners (indices, in order).
     #[serde(default)]
     pub corners: Vec<usize>,
+    /// Where the curve has each of [`Self::corners`]: the arms' intersection, or where the
+    /// fit placed it.
+    #[serde(default)]
+    pub corner_points: Vec<[f64; 3]>,
 }
 
 /// Chord-length parameters: t₀ = 0, tⱼ = Σ_{i<j} |Q_{i+1} − Q_i| / L with L the polygon's
@@ -261,8 +265,8 @@ pub(crate) fn approximate_at(
     )
 }
 
-/// The corners of `ordered` (index, turn) when `options` keeps corners, else none.
-fn detect(ordered: &[[f64; 3]], closed: bool, options: &ApproximationOptions) -> Vec<(usize, f64)> {
+/// The corners of `ordered` when `options` keeps corners, else none.
+fn detect(ordered: &[[f64; 3]], closed: bool, options: &ApproximationOptions) -> Vec<Corner> {
     if options.corners {
         find_corners(ordered, closed)
     } else {
@@ -277,10 +281,10 @@ fn fit_with_corners(
     (dimension, closed): (usize, bool),
     k: usize,
     options: &ApproximationOptions,
-    detected: &[(usize, f64)],
+    detected: &[Corner],
 ) -> Result<Approximation> {
     let segments = if closed { k } else { k - 3 };
-    let fit = |corners: &[(usize, usize)], corrections: usize| {
+    let fit = |corners: &[KnotCorner], corrections: usize| {
         let shape = (dimension, closed, k);
         fit_at(
             ordered,
@@ -308,22 +312,33 @@ fn fit_with_corners(
 /// times.
 const WORSE_WITH_CORNERS: f64 = 1.5;
 
+/// A corner kept at a knot.
+#[derive(Clone, Copy, Debug)]
+struct KnotCorner {
+    /// The ordered point at the corner.
+    index: usize,
+    /// The knot the curve has its corner at.
+    knot: usize,
+    /// Where the corner is, when its arms say so; else the fit places it.
+    tip: Option<[f64; 3]>,
+}
+
 /// The fit of `ordered` at `parameters` with `shape` = (dimension, closed, K), the control
-/// points at each of `corners` (index, knot) tied, and `corrections` rounds of moving every
-/// parameter near a corner to its foot on the curve and solving again.
+/// points at each of `corners` tied (at the corner's tip where it has one), and `corrections`
+/// rounds of moving every parameter near a corner to its foot on the curve and solving again.
 fn fit_at(
     ordered: &[[f64; 3]],
     parameters: Vec<f64>,
     (dimension, closed, k): (usize, bool, usize),
     options: &ApproximationOptions,
-    corners: &[(usize, usize)],
+    corners: &[KnotCorner],
     corrections: usize,
 ) -> Result<Approximation> {
     let n = ordered.len();
     let segments = if closed { k } else { k - 3 };
     let mut parameters = move_to_knots(parameters, corners, segments, closed);
-    let knots: Vec<usize> = corners.iter().map(|c| c.1).collect();
-    let (controls, unknowns) = tie_corners(control_layout(k, closed, ordered), &knots);
+    let knots: Vec<usize> = corners.iter().map(|c| c.knot).collect();
+    let (controls, unknowns) = tie_corners(control_layout(k, closed, ordered), corners);
     let solve = |parameters: &[f64]| -> Result<BSplineCurve> {
         let mut equations = NormalEquations::new(unknowns);
         for (&t, &q) in parameters.iter().zip(ordered) {
@@ -364,8 +379,8 @@ fn fit_at(
     // and moving them lets the fit follow the noise.
     let reach = CORRECTED_SEGMENTS / segments as f64;
     let near_corner = |t: f64| {
-        corners.iter().any(|&(_, knot)| {
-            let d = (t - knot as f64 / segments as f64).abs();
+        corners.iter().any(|c| {
+            let d = (t - c.knot as f64 / segments as f64).abs();
             (if closed { d.min(1.0 - d) } else { d }) < reach
         })
     };
@@ -384,12 +399,14 @@ fn fit_at(
         .collect();
     let rms_residual = (residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
     let max_residual = residuals.iter().copied().fold(0.0, f64::max);
+    let corner_points = corners.iter().map(|c| curve.control[c.knot % k]).collect();
     Ok(Approximation {
         curve,
         parameters,
         rms_residual,
         max_residual,
-        corners: corners.iter().map(|c| c.0).collect(),
+        corners: corners.iter().map(|c| c.index).collect(),
+        corner_points,
     })
 }
 
@@ -402,11 +419,24 @@ const CORRECTED_SEGMENTS: f64 = 4.0;
 /// Times the parameters of a fit with corners move to their feet on the curve.
 const PARAMETER_CORRECTIONS: usize = 4;
 
-/// The parameter of the point of `curve` nearest `q`, from `t` by Gauss–Newton steps of at
-/// most half a segment each (a closed curve's parameter wraps).
+/// The parameter of the point of `curve` nearest `q`: the nearest of samples an eighth of a
+/// segment apart within a segment of `t` (the curve stops at a corner's tip, where a step
+/// from the tip alone would not move), then Gauss–Newton steps of at most half a segment
+/// each (a closed curve's parameter wraps).
 fn foot_parameter(curve: &BSplineCurve, q: [f64; 3], t: f64) -> f64 {
     let most = 0.5 / curve.segments() as f64;
-    let mut t = t;
+    let wrap = |t: f64| {
+        if curve.closed {
+            t.rem_euclid(1.0)
+        } else {
+            t.clamp(0.0, 1.0)
+        }
+    };
+    let step = most / 4.0;
+    let mut t = (-8..=8)
+        .map(|j| wrap(t + j as f64 * step))
+        .min_by(|&a, &b| distance(curve.point(a), q).total_cmp(&distance(curve.point(b), q)))
+        .unwrap_or(t);
     for _ in 0..4 {
         let (c, d) = (curve.point(t), curve.tangent(t));
         let speed = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
@@ -414,47 +444,45 @@ fn foot_parameter(curve: &BSplineCurve, q: [f64; 3], t: f64) -> f64 {
             break;
         }
         let along = (0..3).map(|a| (q[a] - c[a]) * d[a]).sum::<f64>() / speed;
-        t += along.clamp(-most, most);
-        t = if curve.closed {
-            t.rem_euclid(1.0)
-        } else {
-            t.clamp(0.0, 1.0)
-        };
+        t = wrap(t + along.clamp(-most, most));
     }
     t
 }
 
-/// The knot each corner of `corners` (index, turn) is kept at, as (index, knot) in order: the
-/// knot nearest its parameter, sharpest corners first, each at least [`MIN_KNOTS_APART`]
+/// The knot each of `corners` is kept at, in order: the knot nearest its parameter, sharpest corners first, each at least [`MIN_KNOTS_APART`]
 /// knots from the others (its three control points are its own, and at least one free one
 /// lies between two corners) and, open, off the pinned ends (knots 2 ..=
 /// segments − 2).
 fn corner_knots(
-    corners: &[(usize, f64)],
+    corners: &[Corner],
     parameters: &[f64],
     segments: usize,
     closed: bool,
-) -> Vec<(usize, usize)> {
-    let mut sharpest: Vec<(usize, f64)> = corners.to_vec();
-    sharpest.sort_by(|a, b| b.1.total_cmp(&a.1));
+) -> Vec<KnotCorner> {
+    let mut sharpest: Vec<Corner> = corners.to_vec();
+    sharpest.sort_by(|a, b| b.turn.total_cmp(&a.turn));
     let apart = |a: usize, b: usize| {
         let d = a.abs_diff(b);
         if closed { d.min(segments - d) } else { d }
     };
-    let mut kept: Vec<(usize, usize)> = Vec::new();
-    for (index, _) in sharpest {
-        let nearest = (parameters[index] * segments as f64).round() as usize;
+    let mut kept: Vec<KnotCorner> = Vec::new();
+    for corner in sharpest {
+        let nearest = (parameters[corner.index] * segments as f64).round() as usize;
         let knot = if closed { nearest % segments } else { nearest };
         let allowed = closed || (2..=segments.saturating_sub(2)).contains(&knot);
         if allowed
             && kept
                 .iter()
-                .all(|&(_, other)| apart(knot, other) >= MIN_KNOTS_APART)
+                .all(|other| apart(knot, other.knot) >= MIN_KNOTS_APART)
         {
-            kept.push((index, knot));
+            kept.push(KnotCorner {
+                index: corner.index,
+                knot,
+                tip: corner.tip,
+            });
         }
     }
-    kept.sort_by_key(|&(_, knot)| knot);
+    kept.sort_by_key(|c| c.knot);
     kept
 }
 
@@ -462,18 +490,23 @@ fn corner_knots(
 /// (knot / `segments`); order is kept, and an open curve's ends stay at 0 and 1.
 fn move_to_knots(
     parameters: Vec<f64>,
-    corners: &[(usize, usize)],
+    corners: &[KnotCorner],
     segments: usize,
     closed: bool,
 ) -> Vec<f64> {
     if corners.is_empty() {
         return parameters;
     }
-    // Anchors (from, to), increasing in both.
+    // Anchors (from, to), increasing in both. Closed, a knot is taken a turn up or down to
+    // lie within half a turn of its point (knot 0 for a point at 0.999 is 1).
     let mut anchors: Vec<(f64, f64)> = corners
         .iter()
-        .map(|&(i, knot)| (parameters[i], knot as f64 / segments as f64))
+        .map(|c| {
+            let (from, to) = (parameters[c.index], c.knot as f64 / segments as f64);
+            (from, if closed { to + (from - to).round() } else { to })
+        })
         .collect();
+    anchors.sort_by(|a, b| a.0.total_cmp(&b.0));
     if closed {
         // Wrap around: the last anchor before 0 and the first after 1.
         let (first, last) = (anchors[0], anchors[anchors.len() - 1]);
@@ -505,13 +538,18 @@ fn move_to_knots(
         .collect()
 }
 
-/// `controls` with the three control points at each corner knot i (P_i, P_{i+1}, P_{i+2},
-/// cyclically) made one, and the unknowns still in use numbered densely; returns them and
-/// their count.
-fn tie_corners(mut controls: Vec<Affine>, knots: &[usize]) -> (Vec<Affine>, usize) {
+/// `controls` with the three control points at each corner's knot i (P_i, P_{i+1}, P_{i+2},
+/// cyclically) made one, fixed at the corner's tip where it has one, and the unknowns still
+/// in use numbered densely; returns them and their count.
+fn tie_corners(mut controls: Vec<Affine>, corners: &[KnotCorner]) -> (Vec<Affine>, usize) {
     let k = controls.len();
-    for &i in knots {
-        let tip = controls[i % k].clone();
+    for corner in corners {
+        let i = corner.knot;
+        let tip = match corner.tip {
+            Some(at) => Affine::fixed(at),
+            None => controls[i % k].clone(),
+        };
+        controls[i % k] = tip.clone();
         controls[(i + 1) % k] = tip.clone();
         controls[(i + 2) % k] = tip;
     }
