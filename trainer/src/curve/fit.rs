@@ -139,8 +139,68 @@ pub fn check_curve_capacity(
     Ok(())
 }
 
+/// Points on either side of a step whose mean step length [`density_parameters`] divides it
+/// by.
+pub const DENSITY_WINDOW: usize = 16;
+
+/// Parameters that follow the data's density: chord length measured in local spacings. Each
+/// step |Q_{j+1} − Q_j| counts divided by the mean step over the [`DENSITY_WINDOW`] steps on
+/// either side, so that evenly spaced points get chord-length parameters and every stretch
+/// gets parameter range (and with uniform knots, control points) in proportion to its points:
+/// a stretch sampled ten times more sparsely than the rest gets a tenth of the knots per unit
+/// length instead of segments with one point or none, where a uniform spline swings freely.
+///
+/// # Errors
+/// [`Error::InvalidInput`] where the polygon has no length.
+pub fn density_parameters(ordered: &[[f64; 3]], closed: bool) -> Result<Vec<f64>> {
+    let n = ordered.len();
+    let steps: Vec<f64> = (0..if closed { n } else { n.saturating_sub(1) })
+        .map(|j| distance(ordered[j], ordered[(j + 1) % n]))
+        .collect();
+    let m = steps.len();
+    let total: f64 = steps.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return Err(Error::invalid(format!(
+            "the ordered points' polygon has length {total}: no parameters"
+        )));
+    }
+    // Running sums give each window's mean in O(1).
+    let mut prefix = vec![0.0; m + 1];
+    for (j, &s) in steps.iter().enumerate() {
+        prefix[j + 1] = prefix[j] + s;
+    }
+    let w = DENSITY_WINDOW.min(m.saturating_sub(1) / 2);
+    let floor = 1e-9 * total / m as f64;
+    let local = |j: usize| -> f64 {
+        let sum = if closed {
+            let (lo, hi) = (j as isize - w as isize, j + w + 1);
+            let wrapped = |a: isize| -> f64 {
+                let turns = a.div_euclid(m as isize) as f64;
+                turns * total + prefix[a.rem_euclid(m as isize) as usize]
+            };
+            wrapped(hi as isize) - wrapped(lo)
+        } else {
+            let (lo, hi) = (j.saturating_sub(w), (j + w + 1).min(m));
+            (prefix[hi] - prefix[lo]) * (2 * w + 1) as f64 / (hi - lo) as f64
+        };
+        (sum / (2 * w + 1) as f64).max(floor)
+    };
+    let increments: Vec<f64> = (0..m).map(|j| steps[j] / local(j)).collect();
+    let length: f64 = increments.iter().sum();
+    let mut t = Vec::with_capacity(n);
+    let mut at = 0.0;
+    for j in 0..n {
+        t.push(at / length);
+        if j < m {
+            at += increments[j];
+        }
+    }
+    Ok(t)
+}
+
 /// Least-squares approximation of `ordered` (dimension 2 or 3) by a uniform cubic B-spline
-/// with K control points, at chord-length parameters ([`chord_length_parameters`]).
+/// with K control points, at parameters that follow the data's density
+/// ([`density_parameters`]).
 /// Open: the ends are interpolated exactly (phantoms, see the module docs), the remaining
 /// K − 4 control points minimize Σ |C(tⱼ) − Qⱼ|² + penalty. Closed: all K are free.
 /// Cost O(n + K³).
@@ -173,7 +233,7 @@ pub fn approximate(
             options.smoothing
         )));
     }
-    let parameters = chord_length_parameters(ordered, closed)?;
+    let parameters = density_parameters(ordered, closed)?;
     match (options.control_points, options.tolerance) {
         (None, Some(tolerance)) => {
             approximate_within(ordered, parameters, dimension, closed, tolerance, options)
@@ -302,10 +362,54 @@ fn fit_with_corners(
     }
     // A safety net, not the test: corners that leave the fit far worse than the smooth one
     // (or singular) were not corners the control points can hold.
-    match fit(&corners, PARAMETER_CORRECTIONS) {
+    let sharp = match fit(&corners, PARAMETER_CORRECTIONS) {
+        Ok(sharp) if sharp.rms_residual <= WORSE_WITH_CORNERS * smooth.rms_residual => sharp,
+        _ => return Ok(smooth),
+    };
+    // A corner fits its own points better than a rounded one does; one that fits them worse
+    // cuts across a bend that sparse points made look like two straight arms.
+    let reach = (CORRECTED_SEGMENTS * ordered.len() as f64 / segments as f64).ceil() as usize;
+    let near = |a: &Approximation, c: &KnotCorner| local_rms(a, ordered, c.index, reach, closed);
+    let kept: Vec<KnotCorner> = corners
+        .iter()
+        .copied()
+        .filter(|c| near(&sharp, c) <= near(&smooth, c))
+        .collect();
+    if kept.len() == corners.len() {
+        return Ok(sharp);
+    }
+    if kept.is_empty() {
+        return Ok(smooth);
+    }
+    match fit(&kept, PARAMETER_CORRECTIONS) {
         Ok(sharp) if sharp.rms_residual <= WORSE_WITH_CORNERS * smooth.rms_residual => Ok(sharp),
         _ => Ok(smooth),
     }
+}
+
+/// The root-mean-square distance of the points within `reach` places of `centre` in the order
+/// from `fit`'s curve at their parameters.
+fn local_rms(
+    fit: &Approximation,
+    ordered: &[[f64; 3]],
+    centre: usize,
+    reach: usize,
+    closed: bool,
+) -> f64 {
+    let n = ordered.len();
+    let reach = reach.min((n - 1) / 2);
+    let indices: Vec<usize> = if closed {
+        (0..=2 * reach)
+            .map(|d| (centre + n - reach + d) % n)
+            .collect()
+    } else {
+        (centre.saturating_sub(reach)..(centre + reach + 1).min(n)).collect()
+    };
+    let sum: f64 = indices
+        .iter()
+        .map(|&j| distance(fit.curve.point(fit.parameters[j]), ordered[j]).powi(2))
+        .sum();
+    (sum / indices.len().max(1) as f64).sqrt()
 }
 
 /// A fit with corners is dropped when its RMS residual exceeds the smooth fit's this many

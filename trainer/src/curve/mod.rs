@@ -77,8 +77,9 @@ pub use export::{
     export_surface,
 };
 pub use fit::{
-    Approximation, ApproximationOptions, approximate, check_curve_capacity,
-    chord_length_parameters, default_control_points, interpolate, interpolation_parameter,
+    Approximation, ApproximationOptions, DENSITY_WINDOW, approximate, check_curve_capacity,
+    chord_length_parameters, default_control_points, density_parameters, interpolate,
+    interpolation_parameter,
 };
 pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
 pub use groups::{GROUP_NEIGHBOURS, GROUP_REACH, point_groups};

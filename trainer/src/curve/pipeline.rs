@@ -7,7 +7,7 @@ use crate::error::Result;
 
 use super::fit::{
     Approximation, ApproximationOptions, approximate, approximate_at, approximate_within,
-    chord_length_parameters, interpolate,
+    density_parameters, interpolate,
 };
 use super::kohonen::{KohonenChain, KohonenOptions, Topology, TrainingReport, train_chain};
 use super::noise::{BandReport, band_parameters};
@@ -109,7 +109,7 @@ pub fn reconstruct_curve(
     };
     let approximation = match (&band, tolerance) {
         (Some(band), Some(tolerance)) => within(band.parameters.clone(), tolerance)?,
-        (None, Some(tolerance)) => within(chord_length_parameters(&ordered, closed)?, tolerance)?,
+        (None, Some(tolerance)) => within(density_parameters(&ordered, closed)?, tolerance)?,
         (band, None) => match band {
             Some(band) => {
                 let k = options
