@@ -64,3 +64,16 @@ fn seeded_mutations_read_or_name_the_file() {
     println!("{rounds} mutations: {failed} refused with a named error");
     assert!(failed > rounds / 10, "{failed}");
 }
+
+/// Inputs a pinned campaign once hung on (`fuzz/regressions-readers/`, the first byte picking
+/// the reader as in the campaign), each kept with its fix: every one reads or names the file.
+#[test]
+fn every_found_hang_stays_fixed() {
+    let inputs = neurosurf_fuzz::corpus("regressions-readers");
+    assert!(!inputs.is_empty());
+    for (name, bytes) in inputs {
+        // Reads, or fails with an error that names the file (`read` checks), promptly.
+        eprintln!("{name}");
+        let _ = read(&bytes);
+    }
+}

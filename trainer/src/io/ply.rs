@@ -158,6 +158,7 @@ fn read_ply(
         .map_err(|e| header_error(path, &bytes, &e))?;
     // The reader now stands on the first payload line.
     check_unique_names(path, &bytes, reader.line().saturating_sub(1))?;
+    check_counts(path, &bytes, &header)?;
     check(&header)?;
     let mut data = PlyData {
         vertices: Vec::new(),
@@ -185,6 +186,55 @@ fn read_ply(
         }
     }
     Ok(data)
+}
+
+/// Rejects an element that declares more rows than the file can hold: in binary each row
+/// takes at least its scalars and list counts, in ASCII a line. Without it a header such as
+/// `element junk 5555555555555550` with no properties makes the payload reader loop for ages
+/// over rows of nothing.
+fn check_counts(path: &Path, bytes: &[u8], header: &Header) -> Result<()> {
+    let lines = bytes.iter().filter(|&&b| b == b'\n').count() + 1;
+    for (name, element) in &header.elements {
+        let row_bytes: usize = element
+            .properties
+            .values()
+            .map(|p| match &p.data_type {
+                PropertyType::Scalar(t) | PropertyType::List(t, _) => scalar_bytes(t),
+            })
+            .sum();
+        let fits = match header.encoding {
+            Encoding::Ascii => element.count <= lines,
+            _ => {
+                row_bytes > 0
+                    && element
+                        .count
+                        .checked_mul(row_bytes)
+                        .is_some_and(|b| b <= bytes.len())
+            }
+        };
+        if element.count > 0 && !fits {
+            return Err(Error::format(
+                path,
+                format!(
+                    "element '{name}' declares {} rows, more than the file's {} bytes can hold; \
+                     correct the count in its header",
+                    element.count,
+                    bytes.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Bytes of one binary `ty`.
+fn scalar_bytes(ty: &ScalarType) -> usize {
+    match ty {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    }
 }
 
 /// Rejects an element, or a property within one element, declared twice: ply-rs-bw keys its
@@ -1002,6 +1052,18 @@ mod tests {
                 &["line 4", "'this is not a header'"],
             ),
             ("not PLY", b"OFF\n3 1 0\n".to_vec(), &["line 1", "magic", "'OFF'"]),
+            (
+                "more rows than bytes",
+                b"ply\nformat binary_little_endian 1.0\nelement junk 5555555555555550\n\
+                  element vertex 0\nproperty float x\nend_header\n"
+                    .to_vec(),
+                &["element 'junk'", "5555555555555550 rows", "correct the count"],
+            ),
+            (
+                "more rows than lines",
+                (ascii_header(1_000_000, ORIENTED) + "0 0 0 0 0 1\n").into_bytes(),
+                &["element 'vertex'", "1000000 rows"],
+            ),
             ("empty", Vec::new(), &["end of file", "magic"]),
             (
                 "no end_header",
