@@ -139,8 +139,8 @@ pub fn check_curve_capacity(
     Ok(())
 }
 
-/// Points on either side of a step whose mean step length [`density_parameters`] divides it
-/// by.
+/// Steps on either side of a step that [`density_parameters`] averages into the local
+/// spacing it divides that step by.
 pub const DENSITY_WINDOW: usize = 16;
 
 /// Parameters that follow the data's density: chord length measured in local spacings. Each
