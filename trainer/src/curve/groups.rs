@@ -34,30 +34,7 @@ pub fn point_groups(points: &[[f64; 3]]) -> Vec<Vec<usize>> {
     };
     let count = NonZeroUsize::new(GROUP_NEIGHBOURS + 1).unwrap_or(NonZeroUsize::MIN);
     let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    fn join(parent: &mut [usize], i: usize, j: usize) {
-        let (a, b) = (root(parent, i), root(parent, j));
-        if a != b {
-            parent[a.max(b)] = a.min(b);
-        }
-    }
-    let neighbours: Vec<Vec<(usize, f64)>> = points
-        .iter()
-        .map(|p| {
-            tree.query(p)
-                .nearest_n::<SquaredEuclidean<f64>>(count)
-                .execute()
-                .iter()
-                .map(|f| (f.item as usize, f.distance.sqrt()))
-                .collect()
-        })
-        .collect();
+    let neighbours = nearest(&tree, points, count);
     // A point's reach: the distance to the farthest of its nearest points.
     let reach: Vec<f64> = neighbours
         .iter()
@@ -101,6 +78,42 @@ pub fn point_groups(points: &[[f64; 3]]) -> Vec<Vec<usize>> {
     }
     groups.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
     groups
+}
+
+/// For each of `points`, its `count` nearest in `tree` (itself first) with their distances.
+pub(crate) fn nearest(
+    tree: &ImmutableKdTree<f64, 3>,
+    points: &[[f64; 3]],
+    count: NonZeroUsize,
+) -> Vec<Vec<(usize, f64)>> {
+    points
+        .iter()
+        .map(|p| {
+            tree.query(p)
+                .nearest_n::<SquaredEuclidean<f64>>(count)
+                .execute()
+                .iter()
+                .map(|f| (f.item as usize, f.distance.sqrt()))
+                .collect()
+        })
+        .collect()
+}
+
+/// The representative of `i`'s set in the union–find forest `parent` (paths halved).
+pub(crate) fn root(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+/// Merges the sets of `i` and `j` in `parent`, the lower representative kept.
+pub(crate) fn join(parent: &mut [usize], i: usize, j: usize) {
+    let (a, b) = (root(parent, i), root(parent, j));
+    if a != b {
+        parent[a.max(b)] = a.min(b);
+    }
 }
 
 #[cfg(test)]

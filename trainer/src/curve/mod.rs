@@ -58,6 +58,7 @@ mod schedule;
 mod som;
 mod spline;
 mod surface;
+mod surface_boundary;
 mod surface_fit;
 mod surface_mesh;
 mod tour;
@@ -98,6 +99,7 @@ pub use refine::{RefineOptions, RefineReport, refine_order};
 pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sample_curve};
 pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS};
 pub use surface::{SurfaceFit, SurfaceOptions, control_grid_surface, fit_surface, map_parameters};
+pub use surface_boundary::{BOUNDARY_GAP, BOUNDARY_NEIGHBOURS, CLOSED_BELOW, largest_boundary};
 pub use surface_fit::{MAX_SURFACE_CONTROL_POINTS, fit_surface_to_parameters};
 pub use surface_mesh::{MAX_MESH_VERTICES, SurfaceMesh, surface_mesh};
 

@@ -15,6 +15,7 @@ use super::grid::NeuronGrid;
 use super::grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
 use super::points::CurvePoints;
 use super::spline::BSplineSurface;
+use super::surface_boundary::{BOUNDARY_NEIGHBOURS, CLOSED_BELOW, largest_boundary};
 use super::surface_fit::fit_surface_to_parameters;
 use crate::geometry::vector::{distance, dot, sub};
 
@@ -63,12 +64,31 @@ pub struct SurfaceFit {
     pub max_residual: f64,
 }
 
+/// Refuses points that form a closed surface (no boundary, [`largest_boundary`]): one open
+/// patch would fold over it.
+fn check_open(points: &[[f64; 3]]) -> Result<()> {
+    let n = points.len();
+    if n < 4 * BOUNDARY_NEIGHBOURS {
+        return Ok(());
+    }
+    let boundary = largest_boundary(points);
+    if (boundary as f64) < CLOSED_BELOW * (n as f64).sqrt() {
+        return Err(Error::invalid(format!(
+            "the {n} points form a closed surface (no boundary: at most {boundary} points lie \
+             on an edge together); a spline surface is one open patch and would fold over it. \
+             Cut the shape open, or fit it as an implicit or Cao En surface \
+             (`neurosurf implicit fit`, `neurosurf caoen fit-mesh`)"
+        )));
+    }
+    Ok(())
+}
+
 /// Trains a map on `points`, parametrizes them with [`map_parameters`], fits the surface,
 /// and refines the parameters by projection (`parameter_corrections` times).
 ///
 /// # Errors
 /// As [`train_map`] and the least-squares fit (bad control counts or smoothing, a singular
-/// system).
+/// system), and for points that form a closed surface.
 pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<SurfaceFit> {
     let (u, v) = (options.control_u, options.control_v);
     let limit = neurosurf_core::curve::DEFAULT_SURFACE_POINTS;
@@ -79,6 +99,7 @@ pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<Sur
             u.saturating_mul(v)
         )));
     }
+    check_open(points.points())?;
     let (map, map_report) = train_map(points, &options.map)?;
     let mut parameters = map_parameters(points, &map)?;
     let fit = |parameters: &[[f64; 2]]| {
