@@ -182,7 +182,8 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     options.control_u = args.control[0];
     options.control_v = args.control[1];
     let start = Instant::now();
-    let fit = fit_surface(&points, &options)?;
+    let fit = fit_surface(&points, &options)
+        .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
     let seconds = start.elapsed().as_secs_f64();
     let summary = FitSummary {
         method: "surface".into(),
