@@ -188,6 +188,9 @@ fn a_fitted_surface_evaluates_identically_on_the_host_and_the_target() {
         "16",
         "--json",
     ]));
+    // A square patch: a square map and control grid.
+    let aspect = fit["aspect"].as_f64().unwrap();
+    assert!((1.0..1.3).contains(&aspect), "{fit}");
     assert_eq!(fit["control"], serde_json::json!([8, 8]));
     assert!(fit["rms_residual"].as_f64().unwrap() < 0.01, "{fit}");
     let obj = fs::read_to_string(&mesh).unwrap();

@@ -11,7 +11,8 @@ use serde::Serialize;
 use neurosurf_trainer::curve::{
     BENCHMARK_SIZES, CurveOptions, CurvePoints, FitSummary, PlotLayers, PlotOptions, SampleCurve,
     SampleOptions, SurfaceOptions, benchmark, curve_svg, curves_dxf, export_curve, export_surface,
-    fit_surface, sample_curve, surface_mesh, surface_to_blob, write_plot,
+    fit_surface, patch_aspect, sample_curve, shaped_grid, surface_mesh, surface_to_blob,
+    write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
@@ -132,12 +133,14 @@ fn sample(args: &SampleArgs) -> Result<()> {
 pub struct SurfaceArgs {
     /// Scattered 3-D points: text with `x y z` per line, or PLY.
     points: PathBuf,
-    /// Map neurons along u and v, `COLUMNS,ROWS`.
-    #[arg(long, value_parser = comma_list::<usize, 2>, default_value = "12,12")]
-    map: [usize; 2],
-    /// Control points of the surface along u and v, `U,V`.
-    #[arg(long, value_parser = comma_list::<usize, 2>, default_value = "8,8")]
-    control: [usize; 2],
+    /// Map neurons along u and v, `COLUMNS,ROWS` [default: about 144, in the ratio of the
+    /// patch's length to its width measured along it]
+    #[arg(long, value_parser = comma_list::<usize, 2>)]
+    map: Option<[usize; 2]>,
+    /// Control points of the surface along u and v, `U,V` [default: about 64, in the ratio
+    /// of the map's sides]
+    #[arg(long, value_parser = comma_list::<usize, 2>)]
+    control: Option<[usize; 2]>,
     #[command(flatten)]
     blob: BlobArgs,
     /// Also write a triangle mesh of the surface (`.obj`, `.ply` or `.stl`).
@@ -157,6 +160,8 @@ struct SurfaceReport<'a> {
     stored_as: &'static str,
     blob_bytes: usize,
     control: [usize; 2],
+    /// The patch's length over its width, measured along it, when the map was shaped by it.
+    aspect: Option<f64>,
     map_iterations: usize,
     mesh: Option<&'a Path>,
     #[serde(flatten)]
@@ -175,12 +180,27 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     }
     let points = CurvePoints::new(3, raw)
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
-    let mut options = SurfaceOptions::default();
-    options.map.columns = args.map[0];
-    options.map.rows = args.map[1];
+    let aspect = match args.map {
+        Some(_) => None,
+        None => patch_aspect(points.points()),
+    };
+    let mut options = SurfaceOptions::shaped(aspect.unwrap_or(1.0));
+    if let Some([columns, rows]) = args.map {
+        options.map.columns = columns;
+        options.map.rows = rows;
+        let ratio = columns.max(rows) as f64 / columns.min(rows).max(1) as f64;
+        let [short, long] = shaped_grid(ratio, options.control_u * options.control_v);
+        [options.control_u, options.control_v] = if columns <= rows {
+            [short, long]
+        } else {
+            [long, short]
+        };
+    }
+    if let Some([u, v]) = args.control {
+        options.control_u = u;
+        options.control_v = v;
+    }
     options.map.seed = args.blob.seed;
-    options.control_u = args.control[0];
-    options.control_v = args.control[1];
     let start = Instant::now();
     let fit = fit_surface(&points, &options)
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
@@ -206,6 +226,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         stored_as: scalar.name(),
         blob_bytes: blob.len(),
         control: [fit.surface.count_u, fit.surface.count_v],
+        aspect,
         map_iterations: fit.map_report.iterations,
         mesh: args.mesh.as_deref(),
         fit: summary,
@@ -213,9 +234,13 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     if args.json {
         return output::json(&report);
     }
+    let shape = match aspect {
+        Some(aspect) => format!(" ({aspect:.1} times as long as wide along the patch)"),
+        None => String::new(),
+    };
     println!(
-        "{} points → {} × {} map ({} iterations) → {} × {} control points; residual RMS {:.3e}, \
-         max {:.3e}; {:.3} s",
+        "{} points{shape} → {} × {} map ({} iterations) → {} × {} control points; residual \
+         RMS {:.3e}, max {:.3e}; {:.3} s",
         report.fit.points,
         fit.map.columns,
         fit.map.rows,

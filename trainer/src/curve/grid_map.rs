@@ -93,6 +93,19 @@ pub fn train_map(
     points: &CurvePoints,
     options: &KohonenMapOptions,
 ) -> Result<(KohonenMap, MapReport)> {
+    train_map_from(points, options, None)
+}
+
+/// [`train_map`] from the weights `initial` (`columns × rows` of them, row by row) instead
+/// of random ones.
+///
+/// # Errors
+/// As [`train_map`].
+pub fn train_map_from(
+    points: &CurvePoints,
+    options: &KohonenMapOptions,
+    initial: Option<&[[f64; 3]]>,
+) -> Result<(KohonenMap, MapReport)> {
     let (columns, rows) = (options.columns, options.rows);
     if columns < 2 || rows < 2 || columns.saturating_mul(rows) > MAX_NEURONS {
         return Err(Error::invalid(format!(
@@ -126,6 +139,7 @@ pub fn train_map(
         columns * rows,
         &schedule,
         options.seed,
+        initial,
         "map",
         &mut Grid { columns, rows },
     )?;

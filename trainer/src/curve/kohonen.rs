@@ -219,7 +219,15 @@ pub fn train_chain(
         tolerance,
         convergence: None,
     };
-    let som = som::train(points, m, &schedule, options.seed, "chain", &mut chain)?;
+    let som = som::train(
+        points,
+        m,
+        &schedule,
+        options.seed,
+        None,
+        "chain",
+        &mut chain,
+    )?;
     let t = som.presented;
     let convergence = match chain.convergence {
         Some(c) => c,

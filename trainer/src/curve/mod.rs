@@ -59,6 +59,7 @@ mod som;
 mod spline;
 mod surface;
 mod surface_boundary;
+mod surface_extent;
 mod surface_fit;
 mod surface_mesh;
 mod tour;
@@ -82,7 +83,7 @@ pub use fit::{
     chord_length_parameters, default_control_points, density_parameters, interpolate,
     interpolation_parameter,
 };
-pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map};
+pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map, train_map_from};
 pub use groups::{GROUP_NEIGHBOURS, GROUP_REACH, point_groups};
 pub use kohonen::{
     KohonenChain, KohonenOptions, MAX_NEURONS, Topology, TrainingReport, train_chain,
@@ -98,8 +99,14 @@ pub use points::{CurvePoints, DUPLICATE_TOLERANCE, MAX_POINTS, MIN_POINTS};
 pub use refine::{RefineOptions, RefineReport, refine_order};
 pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sample_curve};
 pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS};
-pub use surface::{SurfaceFit, SurfaceOptions, control_grid_surface, fit_surface, map_parameters};
+pub use surface::{
+    SETTLING_RADIUS, SETTLING_RATE, SurfaceFit, SurfaceOptions, control_grid_surface, fit_surface,
+    map_parameters, shaped_grid,
+};
 pub use surface_boundary::{BOUNDARY_GAP, BOUNDARY_NEIGHBOURS, CLOSED_BELOW, largest_boundary};
+pub use surface_extent::{
+    EXTENT_LANDMARKS, EXTENT_NEIGHBOURS, EXTENT_SAMPLE, Unrolled, patch_aspect, unroll,
+};
 pub use surface_fit::{MAX_SURFACE_CONTROL_POINTS, fit_surface_to_parameters};
 pub use surface_mesh::{MAX_MESH_VERTICES, SurfaceMesh, surface_mesh};
 

@@ -37,7 +37,8 @@ pub(crate) trait Neighbourhood {
 }
 
 /// Trains `count` neurons on `points` for `schedule.total` presentations (fewer when
-/// `shape` says it converged), seeded by `seed`. `what` names the map in errors.
+/// `shape` says it converged), seeded by `seed`, from the weights `initial` (`count` of them)
+/// or random ones. `what` names the map in errors.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] when a winner cannot be found (weights became non-finite).
@@ -46,14 +47,18 @@ pub(crate) fn train(
     count: usize,
     schedule: &Schedule,
     seed: u64,
+    initial: Option<&[[f64; 3]]>,
     what: &str,
     shape: &mut impl Neighbourhood,
 ) -> Result<Som> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (lower, upper) = points.bounds();
-    let neurons: Vec<[f64; 3]> = (0..count)
-        .map(|_| [0, 1, 2].map(|k| lower[k] + rng.random::<f64>() * (upper[k] - lower[k])))
-        .collect();
+    let neurons: Vec<[f64; 3]> = match initial {
+        Some(initial) if initial.len() == count => initial.to_vec(),
+        _ => (0..count)
+            .map(|_| [0, 1, 2].map(|k| lower[k] + rng.random::<f64>() * (upper[k] - lower[k])))
+            .collect(),
+    };
     let grid = NeuronGrid::new(lower, upper, &neurons);
     let mut som = Som {
         neurons,

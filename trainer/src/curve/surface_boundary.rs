@@ -97,12 +97,13 @@ fn angular_gap(points: &[[f64; 3]], i: usize, neighbours: &[usize]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    fn random(n: usize, seed: u64, at: impl Fn(f64, f64) -> [f64; 3]) -> Vec<[f64; 3]> {
+    /// `n` points at random (u, v) ∈ [0, 1)² mapped by `at`.
+    pub(crate) fn random(n: usize, seed: u64, at: impl Fn(f64, f64) -> [f64; 3]) -> Vec<[f64; 3]> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         (0..n)
             .map(|_| at(rng.random::<f64>(), rng.random::<f64>()))
