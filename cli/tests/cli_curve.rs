@@ -171,6 +171,49 @@ fn interpolation_passes_through_the_points_and_plots_without_them() {
 }
 
 #[test]
+fn a_tube_is_fitted_closed_around_and_evaluates_identically_on_the_target() {
+    let dir = tempfile::tempdir().unwrap();
+    // 1 500 points on an open cylinder of radius 1 and height 3, scattered by a golden-ratio
+    // sequence.
+    let mut text = String::new();
+    for k in 0..1_500 {
+        let angle = std::f64::consts::TAU * (k as f64 * 0.618_033_988_749_895).fract();
+        let height = 3.0 * (k as f64 * 0.754_877_666_246_693).fract();
+        text.push_str(&format!("{} {} {height}\n", angle.cos(), angle.sin()));
+    }
+    let points = dir.path().join("tube.txt");
+    fs::write(&points, text).unwrap();
+    let model = dir.path().join("tube.nsb");
+    let fit = json(&ok(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--tube",
+        "--out",
+        s(&model),
+        "--json",
+    ]));
+    assert_eq!(fit["tube"], true, "{fit}");
+    assert!(fit["rms_residual"].as_f64().unwrap() < 0.01, "{fit}");
+    let info = ok(&["info", s(&model)]);
+    assert!(info.contains("closed"), "{info}");
+    let uv = dir.path().join("uv.txt");
+    fs::write(&uv, "0 0\n0.5 0.5\n1 1\n0.999 0.25\n").unwrap();
+    for scalar in ["q16.16", "f32"] {
+        let common = [s(&model), "--points", s(&uv), "--scalar", scalar];
+        let host = ok(&[&["eval"], &common[..]].concat());
+        let target = ok(&[&["sim"], &common[..]].concat());
+        assert!(host == target, "{scalar}\n{host}\n---\n{target}");
+    }
+    // A sheet has no two edges: named, and no blob written.
+    let sheet = sheet_file(dir.path());
+    let out = dir.path().join("sheet.nsb");
+    let error = fails(&["curve", "surface", s(&sheet), "--tube", "--out", s(&out)]);
+    assert!(error.contains("not a tube"), "{error}");
+    assert!(!out.exists());
+}
+
+#[test]
 fn a_fitted_surface_evaluates_identically_on_the_host_and_the_target() {
     let dir = tempfile::tempdir().unwrap();
     let points = sheet_file(dir.path());

@@ -141,6 +141,10 @@ pub struct SurfaceArgs {
     /// of the map's sides]
     #[arg(long, value_parser = comma_list::<usize, 2>)]
     control: Option<[usize; 2]>,
+    /// The points are a tube (an open cylinder, a pipe): fit a surface closed around u, with
+    /// parameters from the two edges instead of a map
+    #[arg(long, conflicts_with = "map")]
+    tube: bool,
     #[command(flatten)]
     blob: BlobArgs,
     /// Also write a triangle mesh of the surface (`.obj`, `.ply` or `.stl`).
@@ -163,6 +167,8 @@ struct SurfaceReport<'a> {
     /// The patch's length over its width, measured along it, when the map was shaped by it.
     aspect: Option<f64>,
     map_iterations: usize,
+    /// Whether the points were fitted as a tube, closed around u.
+    tube: bool,
     mesh: Option<&'a Path>,
     #[serde(flatten)]
     fit: FitSummary,
@@ -182,6 +188,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
     let aspect = match args.map {
         Some(_) => None,
+        None if args.tube => None,
         None => patch_aspect(points.points()),
     };
     let mut options = SurfaceOptions::shaped(aspect.unwrap_or(1.0));
@@ -201,6 +208,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         options.control_v = v;
     }
     options.map.seed = args.blob.seed;
+    options.tube = args.tube;
     let start = Instant::now();
     let fit = fit_surface(&points, &options)
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
@@ -208,7 +216,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     let summary = FitSummary {
         method: "surface".into(),
         points: points.len(),
-        neurons: fit.map.columns * fit.map.rows,
+        neurons: fit.map.as_ref().map_or(0, |map| map.columns * map.rows),
         seed: args.blob.seed,
         rms_residual: fit.rms_residual,
         max_residual: fit.max_residual,
@@ -227,24 +235,33 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         blob_bytes: blob.len(),
         control: [fit.surface.count_u, fit.surface.count_v],
         aspect,
-        map_iterations: fit.map_report.iterations,
+        map_iterations: fit
+            .map_report
+            .as_ref()
+            .map_or(0, |report| report.iterations),
+        tube: fit.surface.closed_u,
         mesh: args.mesh.as_deref(),
         fit: summary,
     };
     if args.json {
         return output::json(&report);
     }
-    let shape = match aspect {
-        Some(aspect) => format!(" ({aspect:.1} times as long as wide along the patch)"),
-        None => String::new(),
+    let ordering = match &fit.map {
+        Some(map) => {
+            let shape = match aspect {
+                Some(aspect) => format!(" ({aspect:.1} times as long as wide along the patch)"),
+                None => String::new(),
+            };
+            format!(
+                "{shape} → {} × {} map ({} iterations)",
+                map.columns, map.rows, report.map_iterations
+            )
+        }
+        None => " → a tube, closed around u".to_string(),
     };
     println!(
-        "{} points{shape} → {} × {} map ({} iterations) → {} × {} control points; residual \
-         RMS {:.3e}, max {:.3e}; {:.3} s",
+        "{} points{ordering} → {} × {} control points; residual RMS {:.3e}, max {:.3e}; {:.3} s",
         report.fit.points,
-        fit.map.columns,
-        fit.map.rows,
-        report.map_iterations,
         report.control[0],
         report.control[1],
         fit.rms_residual,

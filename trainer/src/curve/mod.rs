@@ -49,6 +49,7 @@ mod least_squares;
 mod metrics;
 mod noise;
 mod ordering;
+mod path_graph;
 mod pipeline;
 mod plot;
 mod points;
@@ -62,6 +63,7 @@ mod surface_boundary;
 mod surface_extent;
 mod surface_fit;
 mod surface_mesh;
+mod surface_tube;
 mod tour;
 mod tridiagonal;
 
@@ -103,12 +105,15 @@ pub use surface::{
     SETTLING_RADIUS, SETTLING_RATE, SurfaceFit, SurfaceOptions, control_grid_surface, fit_surface,
     map_parameters, shaped_grid,
 };
-pub use surface_boundary::{BOUNDARY_GAP, BOUNDARY_NEIGHBOURS, CLOSED_BELOW, largest_boundary};
+pub use surface_boundary::{
+    BOUNDARY_GAP, BOUNDARY_NEIGHBOURS, CLOSED_BELOW, boundaries, largest_boundary,
+};
 pub use surface_extent::{
     EXTENT_LANDMARKS, EXTENT_NEIGHBOURS, EXTENT_SAMPLE, Unrolled, patch_aspect, unroll,
 };
 pub use surface_fit::{MAX_SURFACE_CONTROL_POINTS, fit_surface_to_parameters};
 pub use surface_mesh::{MAX_MESH_VERTICES, SurfaceMesh, surface_mesh};
+pub use surface_tube::{TUBE_GAP, TUBE_NEIGHBOURS, TUBE_SLICES, tube_parameters};
 
 #[cfg(test)]
 mod tests;

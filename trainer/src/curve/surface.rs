@@ -27,6 +27,7 @@ use super::spline::BSplineSurface;
 use super::surface_boundary::{BOUNDARY_NEIGHBOURS, CLOSED_BELOW, largest_boundary};
 use super::surface_extent::{patch_aspect, unroll};
 use super::surface_fit::fit_surface_to_parameters;
+use super::surface_tube::tube_parameters;
 use crate::geometry::vector::{distance, dot, sub};
 
 /// Neighbourhood radius, in neurons, at the start of training from an unrolled map: the
@@ -52,6 +53,9 @@ pub struct SurfaceOptions {
     /// Parameter corrections: after a fit, move every (uⱼ, vⱼ) to the nearest surface
     /// point (Gauss–Newton, clamped to [0, 1]²) and fit again; this many times (3).
     pub parameter_corrections: usize,
+    /// Fit the points as a tube, closed around u, with parameters from its two edges
+    /// ([`tube_parameters`]) instead of a map (false).
+    pub tube: bool,
     /// Start the map from the patch unrolled into the plane ([`unroll`]) instead of random
     /// weights (true).
     pub unroll: bool,
@@ -65,6 +69,7 @@ impl Default for SurfaceOptions {
             control_v: 8,
             smoothing: 1e-4,
             parameter_corrections: 3,
+            tube: false,
             unroll: true,
         }
     }
@@ -116,13 +121,15 @@ pub fn shaped_grid(aspect: f64, budget: usize) -> [usize; 2] {
 /// What [`fit_surface`] computed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceFit {
-    /// The trained map.
-    pub map: KohonenMap,
+    /// The trained map; `None` for a tube, whose parameters come from its edges
+    /// ([`tube_parameters`]).
+    pub map: Option<KohonenMap>,
     /// How its training went.
-    pub map_report: MapReport,
-    /// The fitted surface (open in u and v).
+    pub map_report: Option<MapReport>,
+    /// The fitted surface: open in v; in u open, or closed around a tube.
     pub surface: BSplineSurface,
-    /// Each point's (u, v) ∈ [0, 1]²: from the map, then corrected by projection.
+    /// Each point's (u, v) ∈ [0, 1]²: from the map or the tube's edges, then corrected by
+    /// projection.
     pub parameters: Vec<[f64; 2]>,
     /// √(mean |S(uⱼ, vⱼ) − Qⱼ|²).
     pub rms_residual: f64,
@@ -150,11 +157,14 @@ fn check_open(points: &[[f64; 3]]) -> Result<()> {
 }
 
 /// Trains a map on `points`, parametrizes them with [`map_parameters`], fits the surface,
-/// and refines the parameters by projection (`parameter_corrections` times).
+/// and refines the parameters by projection (`parameter_corrections` times). With
+/// `options.tube`, the points have two separate edges ([`tube_parameters`]): the map is
+/// skipped, their parameters come from the edges, and the surface closes around u.
 ///
 /// # Errors
 /// As [`train_map`] and the least-squares fit (bad control counts or smoothing, a singular
-/// system), and for points that form a closed surface.
+/// system), for points that form a closed surface, and with `options.tube` for points that
+/// are not a tube.
 pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<SurfaceFit> {
     let (u, v) = (options.control_u, options.control_v);
     let limit = neurosurf_core::curve::DEFAULT_SURFACE_POINTS;
@@ -165,33 +175,30 @@ pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<Sur
             u.saturating_mul(v)
         )));
     }
-    check_open(points.points())?;
-    let unrolled = if options.unroll {
-        unroll(points.points())
+    let (map, mut parameters) = if options.tube {
+        let parameters = tube_parameters(points.points()).ok_or_else(|| {
+            Error::invalid(format!(
+                "the {} points are not a tube: they have no two separate edges, or a third \
+                 one (a tube is an open cylinder or a pipe); fit them without --tube as one \
+                 patch",
+                points.len()
+            ))
+        })?;
+        (None, parameters)
     } else {
-        None
+        check_open(points.points())?;
+        let (map, report) = train_surface_map(points, options)?;
+        let parameters = map_parameters(points, &map)?;
+        (Some((map, report)), parameters)
     };
-    let initial = unrolled
-        .as_ref()
-        .and_then(|u| u.initial_map(options.map.columns, options.map.rows));
-    let (map, map_report) = match &initial {
-        Some(initial) => {
-            let settling = KohonenMapOptions {
-                initial_radius: SETTLING_RADIUS / options.map.columns.max(options.map.rows) as f64,
-                initial_rate: SETTLING_RATE,
-                ..options.map.clone()
-            };
-            train_map_from(points, &settling, Some(initial))?
-        }
-        None => train_map(points, &options.map)?,
-    };
-    let mut parameters = map_parameters(points, &map)?;
+    let closed_u = map.is_none();
     let fit = |parameters: &[[f64; 2]]| {
         fit_surface_to_parameters(
             points.points(),
             parameters,
             options.control_u,
             options.control_v,
+            closed_u,
             options.smoothing,
         )
     };
@@ -211,6 +218,7 @@ pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<Sur
     let rms_residual =
         (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt();
     let max_residual = residuals.iter().copied().fold(0.0, f64::max);
+    let (map, map_report) = map.unzip();
     Ok(SurfaceFit {
         map,
         map_report,
@@ -221,8 +229,36 @@ pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<Sur
     })
 }
 
+/// The map of [`fit_surface`]: from the patch unrolled when it can be, else from random
+/// weights.
+fn train_surface_map(
+    points: &CurvePoints,
+    options: &SurfaceOptions,
+) -> Result<(KohonenMap, MapReport)> {
+    let unrolled = if options.unroll {
+        unroll(points.points())
+    } else {
+        None
+    };
+    let initial = unrolled
+        .as_ref()
+        .and_then(|u| u.initial_map(options.map.columns, options.map.rows));
+    match &initial {
+        Some(initial) => {
+            let settling = KohonenMapOptions {
+                initial_radius: SETTLING_RADIUS / options.map.columns.max(options.map.rows) as f64,
+                initial_rate: SETTLING_RATE,
+                ..options.map.clone()
+            };
+            train_map_from(points, &settling, Some(initial))
+        }
+        None => train_map(points, &options.map),
+    }
+}
+
 /// The parameters of the surface point nearest to `q`, starting from `start`: up to 8
-/// Gauss–Newton steps on |S(u, v) − q|², clamped to [0, 1]².
+/// Gauss–Newton steps on |S(u, v) − q|², clamped to [0, 1]² (wrapped around along a closed
+/// direction).
 pub(crate) fn project(surface: &BSplineSurface, q: [f64; 3], start: [f64; 2]) -> [f64; 2] {
     let mut p = start;
     for _ in 0..8 {
@@ -236,9 +272,16 @@ pub(crate) fn project(surface: &BSplineSurface, q: [f64; 3], start: [f64; 2]) ->
         let (x, y) = (dot(r, su), dot(r, sv));
         let step = [(e * x - b * y) / determinant, (a * y - b * x) / determinant];
         let next = [
-            (p[0] + step[0]).clamp(0.0, 1.0),
-            (p[1] + step[1]).clamp(0.0, 1.0),
-        ];
+            (p[0] + step[0], surface.closed_u),
+            (p[1] + step[1], surface.closed_v),
+        ]
+        .map(|(t, closed)| {
+            if closed {
+                t.rem_euclid(1.0)
+            } else {
+                t.clamp(0.0, 1.0)
+            }
+        });
         let moved = (next[0] - p[0]).abs() + (next[1] - p[1]).abs();
         p = next;
         if moved < 1e-12 {

@@ -32,12 +32,19 @@ pub const CLOSED_BELOW: f64 = 0.5;
 /// The size of the largest boundary of `points`: the most boundary points that join through
 /// each other's neighbours. 0 for too few points to tell (fewer than 4 neighbourhoods).
 pub fn largest_boundary(points: &[[f64; 3]]) -> usize {
+    boundaries(points).first().map_or(0, Vec::len)
+}
+
+/// The boundaries of `points`, largest first: each the indices of boundary points that join
+/// through each other's neighbours. None for too few points to tell (fewer than 4
+/// neighbourhoods).
+pub fn boundaries(points: &[[f64; 3]]) -> Vec<Vec<usize>> {
     let n = points.len();
     if n < 4 * BOUNDARY_NEIGHBOURS {
-        return 0;
+        return Vec::new();
     }
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(points) else {
-        return 0;
+        return Vec::new();
     };
     let count = NonZeroUsize::new(BOUNDARY_NEIGHBOURS + 1).unwrap_or(NonZeroUsize::MIN);
     let neighbours: Vec<Vec<usize>> = nearest(&tree, points, count)
@@ -54,23 +61,32 @@ pub fn largest_boundary(points: &[[f64; 3]]) -> usize {
             join(&mut parent, i, j);
         }
     }
-    let mut sizes = vec![0usize; n];
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
     for i in (0..n).filter(|&i| on_boundary[i]) {
         let r = root(&mut parent, i);
-        sizes[r] += 1;
+        members[r].push(i);
     }
-    sizes.into_iter().max().unwrap_or(0)
+    let mut found: Vec<Vec<usize>> = members.into_iter().filter(|m| !m.is_empty()).collect();
+    found.sort_by_key(|m| std::cmp::Reverse(m.len()));
+    found
 }
 
 /// The largest angle around point `i` between consecutive `neighbours` (itself among them or
 /// not), in the plane that fits them best; 0 where they span no plane.
 fn angular_gap(points: &[[f64; 3]], i: usize, neighbours: &[usize]) -> f64 {
-    let centre = Vector3::from(points[i]);
-    let others: Vec<Vector3<f64>> = neighbours
+    let others: Vec<[f64; 3]> = neighbours
         .iter()
         .filter(|&&j| j != i)
-        .map(|&j| Vector3::from(points[j]) - centre)
+        .map(|&j| points[j])
         .collect();
+    gap_around(points[i], &others)
+}
+
+/// The largest angle around `centre` between consecutive `others`, in the plane through
+/// `centre` that fits them best; 0 where they span no plane.
+fn gap_around(centre: [f64; 3], others: &[[f64; 3]]) -> f64 {
+    let centre = Vector3::from(centre);
+    let others: Vec<Vector3<f64>> = others.iter().map(|&p| Vector3::from(p) - centre).collect();
     let mut scatter = Matrix3::zeros();
     for d in &others {
         scatter += d * d.transpose();

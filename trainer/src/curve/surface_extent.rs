@@ -14,8 +14,6 @@
 //! through 540°), 4.1–4.4; a saddle 1.01–1.05. Paths through neighbours cut across bends a
 //! little, so bent patches measure somewhat short.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 use std::num::NonZeroUsize;
 
 use kiddo::ImmutableKdTree;
@@ -23,7 +21,7 @@ use nalgebra::{DMatrix, Matrix2, SymmetricEigen};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::groups::nearest;
+use super::path_graph::{neighbour_graph, shortest_paths};
 
 /// Nearest points joined in the path graph.
 pub const EXTENT_NEIGHBOURS: usize = 8;
@@ -65,11 +63,11 @@ pub fn unroll(points: &[[f64; 3]]) -> Option<Unrolled> {
     } else {
         points.to_vec()
     };
-    let graph = neighbour_graph(&sample)?;
+    let graph = neighbour_graph(&sample, EXTENT_NEIGHBOURS)?;
     let n = sample.len();
     // Farthest-first landmarks: each new one is the point farthest along the patch from
     // those chosen. The first is the farthest from point 0, an end of the patch.
-    let from_zero = shortest_paths(&graph, 0);
+    let from_zero = shortest_paths(&graph, &[0]);
     if from_zero.iter().any(|d| !d.is_finite()) {
         return None;
     }
@@ -77,7 +75,7 @@ pub fn unroll(points: &[[f64; 3]]) -> Option<Unrolled> {
     let mut next = farthest(&from_zero);
     let mut paths: Vec<Vec<f64>> = Vec::with_capacity(EXTENT_LANDMARKS);
     for _ in 0..EXTENT_LANDMARKS.min(n) {
-        let distances = shortest_paths(&graph, next);
+        let distances = shortest_paths(&graph, &[next]);
         for (m, &d) in nearest_landmark.iter_mut().zip(&distances) {
             *m = m.min(d);
         }
@@ -143,46 +141,6 @@ impl Unrolled {
         }
         Some(neurons)
     }
-}
-
-/// Each point's neighbours with their distances, both ways; `None` when the points can't be
-/// put in a tree.
-fn neighbour_graph(points: &[[f64; 3]]) -> Option<Vec<Vec<(usize, f64)>>> {
-    let tree = ImmutableKdTree::<f64, 3>::new_from_slice(points).ok()?;
-    let count = NonZeroUsize::new(EXTENT_NEIGHBOURS + 1)?;
-    let mut graph = nearest(&tree, points, count);
-    for i in 0..graph.len() {
-        for k in 0..graph[i].len() {
-            let (j, d) = graph[i][k];
-            if j != i && !graph[j].iter().any(|&(m, _)| m == i) {
-                graph[j].push((i, d));
-            }
-        }
-    }
-    Some(graph)
-}
-
-/// Path lengths from `start` to every point (Dijkstra); ∞ where no path leads.
-fn shortest_paths(graph: &[Vec<(usize, f64)>], start: usize) -> Vec<f64> {
-    let mut distance = vec![f64::INFINITY; graph.len()];
-    let mut heap = BinaryHeap::new();
-    distance[start] = 0.0;
-    // Non-negative floats order like their bits.
-    heap.push(Reverse((0.0_f64.to_bits(), start)));
-    while let Some(Reverse((bits, i))) = heap.pop() {
-        let d = f64::from_bits(bits);
-        if d > distance[i] {
-            continue;
-        }
-        for &(j, step) in &graph[i] {
-            let through = d + step;
-            if through < distance[j] {
-                distance[j] = through;
-                heap.push(Reverse((through.to_bits(), j)));
-            }
-        }
-    }
-    distance
 }
 
 /// The index of the largest of `values`.

@@ -1,4 +1,5 @@
-//! Least-squares fit of an open uniform cubic B-spline surface to parametrized points.
+//! Least-squares fit of a uniform cubic B-spline surface, open or closed along u, to
+//! parametrized points.
 
 use crate::error::{Error, Result};
 
@@ -10,9 +11,10 @@ use super::spline::{BSplineSurface, MIN_CONTROL_POINTS};
 /// F³/3 work).
 pub const MAX_SURFACE_CONTROL_POINTS: usize = 4_096;
 
-/// Fits `count_u × count_v` control points (open in both directions) so that
-/// S(uⱼ, vⱼ) ≈ Qⱼ in least squares, plus λ · Σ (second differences of the control grid
-/// along u and along v)², λ = `smoothing` × the mean diagonal of the data term.
+/// Fits `count_u × count_v` control points (open along v; along u closed, wrapping around,
+/// when `closed_u`) so that S(uⱼ, vⱼ) ≈ Qⱼ in least squares, plus λ · Σ (second differences
+/// of the control grid along u and along v)², λ = `smoothing` × the mean diagonal of the data
+/// term.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for counts below [`MIN_CONTROL_POINTS`] or a grid above
@@ -23,6 +25,7 @@ pub fn fit_surface_to_parameters(
     parameters: &[[f64; 2]],
     count_u: usize,
     count_v: usize,
+    closed_u: bool,
     smoothing: f64,
 ) -> Result<BSplineSurface> {
     if count_u < MIN_CONTROL_POINTS
@@ -57,7 +60,8 @@ pub fn fit_surface_to_parameters(
     }
     let controls: Vec<Affine> = (0..count_u * count_v).map(Affine::unknown).collect();
     let mut equations = NormalEquations::new(controls.len());
-    let (segments_u, segments_v) = (count_u - 3, count_v - 3);
+    let segments_u = if closed_u { count_u } else { count_u - 3 };
+    let segments_v = count_v - 3;
     let mut row: Vec<(f64, &Affine)> = Vec::with_capacity(16);
     for (q, p) in points.iter().zip(parameters) {
         let (i, lu) = locate(p[0], segments_u);
@@ -66,7 +70,10 @@ pub fn fit_surface_to_parameters(
         row.clear();
         for b in 0..4 {
             for a in 0..4 {
-                row.push((bu[a] * bv[b], &controls[(j + b) * count_u + i + a]));
+                row.push((
+                    bu[a] * bv[b],
+                    &controls[(j + b) * count_u + (i + a) % count_u],
+                ));
             }
         }
         equations.add_row(&row, *q, 1.0);
@@ -75,7 +82,11 @@ pub fn fit_surface_to_parameters(
     for j in 0..count_v {
         for i in 0..count_u {
             let at = |i: usize, j: usize| &controls[j * count_u + i];
-            if i > 0 && i + 1 < count_u {
+            if closed_u {
+                let (before, after) = ((i + count_u - 1) % count_u, (i + 1) % count_u);
+                let r = [(1.0, at(before, j)), (-2.0, at(i, j)), (1.0, at(after, j))];
+                equations.add_row(&r, [0.0; 3], weight);
+            } else if i > 0 && i + 1 < count_u {
                 let r = [(1.0, at(i - 1, j)), (-2.0, at(i, j)), (1.0, at(i + 1, j))];
                 equations.add_row(&r, [0.0; 3], weight);
             }
@@ -93,7 +104,7 @@ pub fn fit_surface_to_parameters(
         ))
     })?;
     Ok(BSplineSurface {
-        closed_u: false,
+        closed_u,
         closed_v: false,
         count_u,
         count_v,
