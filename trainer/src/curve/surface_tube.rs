@@ -18,6 +18,10 @@
 //!   [`TUBE_SLICES`] slices of equal v, from one reference direction made square to the
 //!   axis at each slice.
 //!
+//! Edges are found in pieces where the surface bends or thins out. The two largest pieces must
+//! each have 0.5·√n points, which long tubes miss: a cylinder of radius 1 and height 6–15 is
+//! refused on 6 of 18 point sets (500–8 000 points).
+//!
 //! The angle needs an axis that each slice surrounds and that never turns square to the
 //! reference direction: a pipe bent through less than a quarter turn works; a tube folded
 //! back on itself does not.
