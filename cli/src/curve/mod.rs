@@ -11,7 +11,7 @@ use serde::Serialize;
 use neurosurf_trainer::curve::{
     BENCHMARK_SIZES, CurveOptions, CurvePoints, FitSummary, PlotLayers, PlotOptions, SampleCurve,
     SampleOptions, SurfaceOptions, benchmark, curve_svg, curves_dxf, export_curve, export_surface,
-    fit_surface, patch_aspect, sample_curve, shaped_grid, surface_mesh, surface_to_blob,
+    fit_unrolled_surface, sample_curve, shaped_grid, surface_mesh, surface_to_blob, unroll,
     write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
@@ -186,11 +186,13 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     }
     let points = CurvePoints::new(3, raw)
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
-    let aspect = match args.map {
+    // Unrolled once: for the map's shape here and its start in the fit.
+    let unrolled = match args.map {
         Some(_) => None,
         None if args.tube => None,
-        None => patch_aspect(points.points()),
+        None => unroll(points.points()),
     };
+    let aspect = unrolled.as_ref().map(|u| u.aspect);
     let mut options = SurfaceOptions::shaped(aspect.unwrap_or(1.0));
     if let Some([columns, rows]) = args.map {
         options.map.columns = columns;
@@ -210,7 +212,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     options.map.seed = args.blob.seed;
     options.tube = args.tube;
     let start = Instant::now();
-    let fit = fit_surface(&points, &options)
+    let fit = fit_unrolled_surface(&points, &options, unrolled.as_ref())
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
     let seconds = start.elapsed().as_secs_f64();
     let summary = FitSummary {

@@ -103,7 +103,7 @@ pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sampl
 pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS};
 pub use surface::{
     SETTLING_RADIUS, SETTLING_RATE, SurfaceFit, SurfaceOptions, control_grid_surface, fit_surface,
-    map_parameters, shaped_grid,
+    fit_unrolled_surface, map_parameters, shaped_grid,
 };
 pub use surface_boundary::{
     BOUNDARY_GAP, BOUNDARY_NEIGHBOURS, CLOSED_BELOW, boundaries, largest_boundary,

@@ -25,7 +25,7 @@ use super::grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map, train
 use super::points::CurvePoints;
 use super::spline::BSplineSurface;
 use super::surface_boundary::{BOUNDARY_NEIGHBOURS, CLOSED_BELOW, largest_boundary};
-use super::surface_extent::{patch_aspect, unroll};
+use super::surface_extent::{Unrolled, patch_aspect, unroll};
 use super::surface_fit::fit_surface_to_parameters;
 use super::surface_tube::tube_parameters;
 use crate::geometry::vector::{distance, dot, sub};
@@ -166,6 +166,20 @@ fn check_open(points: &[[f64; 3]]) -> Result<()> {
 /// system), for points that form a closed surface, and with `options.tube` for points that
 /// are not a tube.
 pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<SurfaceFit> {
+    fit_unrolled_surface(points, options, None)
+}
+
+/// [`fit_surface`] with the patch already unrolled ([`unroll`], for instance to measure its
+/// aspect first), so that it is not unrolled twice; `None` unrolls it here when
+/// `options.unroll`.
+///
+/// # Errors
+/// As [`fit_surface`].
+pub fn fit_unrolled_surface(
+    points: &CurvePoints,
+    options: &SurfaceOptions,
+    unrolled: Option<&Unrolled>,
+) -> Result<SurfaceFit> {
     let (u, v) = (options.control_u, options.control_v);
     let limit = neurosurf_core::curve::DEFAULT_SURFACE_POINTS;
     if u.saturating_mul(v) > limit {
@@ -187,7 +201,7 @@ pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<Sur
         (None, parameters)
     } else {
         check_open(points.points())?;
-        let (map, report) = train_surface_map(points, options)?;
+        let (map, report) = train_surface_map(points, options, unrolled)?;
         let parameters = map_parameters(points, &map)?;
         (Some((map, report)), parameters)
     };
@@ -234,15 +248,18 @@ pub fn fit_surface(points: &CurvePoints, options: &SurfaceOptions) -> Result<Sur
 fn train_surface_map(
     points: &CurvePoints,
     options: &SurfaceOptions,
+    unrolled: Option<&Unrolled>,
 ) -> Result<(KohonenMap, MapReport)> {
-    let unrolled = if options.unroll {
-        unroll(points.points())
-    } else {
-        None
+    let here;
+    let unrolled = match unrolled {
+        Some(unrolled) => Some(unrolled),
+        None if options.unroll => {
+            here = unroll(points.points());
+            here.as_ref()
+        }
+        None => None,
     };
-    let initial = unrolled
-        .as_ref()
-        .and_then(|u| u.initial_map(options.map.columns, options.map.rows));
+    let initial = unrolled.and_then(|u| u.initial_map(options.map.columns, options.map.rows));
     match &initial {
         Some(initial) => {
             let settling = KohonenMapOptions {
