@@ -7,14 +7,14 @@ use clap::ValueEnum;
 use serde::Serialize;
 
 use neurosurf_trainer::io::{PlyEncoding, read_mesh, write_points_ply};
-use neurosurf_trainer::sample::{Shape, sample_mesh, sample_shape};
+use neurosurf_trainer::sample::{MAX_EVEN_POINTS, Shape, Spread, sample_mesh, sample_shape};
 
 use super::output::{self, comma_list};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// `sphere`, `ellipsoid`, `torus`, `head` (3 features: head, nose, mouth), or a mesh file
-    /// (`.obj`, `.ply`) sampled area-uniformly with its face normals.
+    /// (`.obj`, `.ply`) sampled area-uniformly with its face normals (see `--spread`).
     shape: String,
     /// Number of points.
     #[arg(long = "points", short = 'n')]
@@ -34,6 +34,11 @@ pub struct Args {
     /// Torus minor radius r (tube).
     #[arg(long, default_value_t = 0.4)]
     minor: f64,
+    /// How points are placed on a mesh: `even` keeps a near-constant distance between them
+    /// (the best coverage for a point budget; up to 1 000 000 points, more are drawn at
+    /// random), `random` draws each independently (clumps and gaps).
+    #[arg(long, value_enum, default_value_t = SpreadArg::Even)]
+    spread: SpreadArg,
     /// PLY encoding of the output.
     #[arg(long, value_enum, default_value_t = Encoding::Ascii)]
     encoding: Encoding,
@@ -43,6 +48,12 @@ pub struct Args {
     /// Print a JSON summary instead of text.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(Copy, Clone, Debug, ValueEnum)]
+enum SpreadArg {
+    Even,
+    Random,
 }
 
 #[derive(Copy, Clone, Debug, ValueEnum)]
@@ -57,10 +68,15 @@ struct Summary<'a> {
     points: usize,
     features: usize,
     seed: u64,
+    /// `even` or `random` for a mesh, absent for a built-in shape.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    spread: Option<&'static str>,
     out: &'a Path,
 }
 
 pub fn run(args: &Args) -> Result<()> {
+    // How the points were placed on a mesh (built-in shapes draw at random).
+    let mut spread = None;
     let points = match args.shape.as_str() {
         "sphere" => sample_shape(
             &Shape::Sphere {
@@ -81,7 +97,16 @@ pub fn run(args: &Args) -> Result<()> {
         "head" => sample_shape(&Shape::Head, args.count, args.seed)?,
         file if file.ends_with(".obj") || file.ends_with(".ply") => {
             let mesh = read_mesh(Path::new(file))?;
-            sample_mesh(&mesh, args.count, args.seed).with_context(|| format!("sampling {file}"))?
+            let chosen = match args.spread {
+                SpreadArg::Even if args.count <= MAX_EVEN_POINTS => Spread::Even,
+                _ => Spread::Random,
+            };
+            spread = Some(match chosen {
+                Spread::Even => "even",
+                Spread::Random => "random",
+            });
+            sample_mesh(&mesh, args.count, args.seed, chosen)
+                .with_context(|| format!("sampling {file}"))?
         }
         other => bail!(
             "unknown shape {other:?}: expected sphere, ellipsoid, torus, head, or an .obj/.ply mesh"
@@ -101,13 +126,14 @@ pub fn run(args: &Args) -> Result<()> {
         points: points.len(),
         features,
         seed: args.seed,
+        spread,
         out: &args.out,
     };
     if args.json {
         output::json(&summary)
     } else {
         println!(
-            "wrote {} points{} of {} to {}",
+            "wrote {} points{} of {}{} to {}",
             summary.points,
             if features > 0 {
                 format!(" ({features} features)")
@@ -115,6 +141,7 @@ pub fn run(args: &Args) -> Result<()> {
                 String::new()
             },
             args.shape,
+            spread.map_or(String::new(), |s| format!(" (spread {s})")),
             args.out.display()
         );
         Ok(())

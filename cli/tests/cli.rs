@@ -181,6 +181,63 @@ fn head_trains_with_its_three_features_and_warm_starts() {
 }
 
 #[test]
+fn a_mesh_is_sampled_evenly_unless_random_is_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = neurosurf_trainer::io::data_file("stanford-bunny.obj").unwrap();
+    // The closest pair among the points of an ascii PLY file (x y z first on each line).
+    let closest = |ply: &std::path::Path| {
+        let text = fs::read_to_string(ply).unwrap();
+        let points: Vec<[f64; 3]> = text
+            .lines()
+            .skip_while(|l| *l != "end_header")
+            .skip(1)
+            .map(|l| {
+                let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect();
+        assert_eq!(points.len(), 600);
+        let mut best = f64::INFINITY;
+        for (i, p) in points.iter().enumerate() {
+            for q in &points[i + 1..] {
+                best = best.min((0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt());
+            }
+        }
+        best
+    };
+    let mut gaps = Vec::new();
+    for spread in ["even", "random"] {
+        let points = path(dir.path(), &format!("{spread}.ply"));
+        let out = ok(&[
+            "sample",
+            bunny.to_str().unwrap(),
+            "--points",
+            "600",
+            "--spread",
+            spread,
+            "--out",
+            s(&points),
+            "--json",
+        ]);
+        let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(json["spread"], spread, "{json}");
+        gaps.push(closest(&points));
+    }
+    // Even points keep their distance; independent draws clump.
+    assert!(gaps[0] > 4.0 * gaps[1], "closest pairs {gaps:?}");
+    let built_in = ok(&[
+        "sample",
+        "torus",
+        "-n",
+        "50",
+        "--out",
+        s(&path(dir.path(), "t.ply")),
+        "--json",
+    ]);
+    assert!(!built_in.contains("spread"), "{built_in}");
+}
+
+#[test]
 fn automatic_features_split_an_unlabelled_shape() {
     let dir = tempfile::tempdir().unwrap();
     let points = path(dir.path(), "e.ply");

@@ -19,7 +19,7 @@ use neurosurf_trainer::demo::TABLE5_TORUS;
 use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions, Outcome};
 use neurosurf_trainer::io::{data_file, read_mesh};
 use neurosurf_trainer::quality::Truth;
-use neurosurf_trainer::sample::{sample_mesh, sample_shape};
+use neurosurf_trainer::sample::{Spread, sample_mesh, sample_shape};
 use shapes::{double_torus, measure_core, table5_torus};
 
 /// One row: a shape, how it is sampled, and over how many seeds.
@@ -45,14 +45,18 @@ fn rows() -> Vec<Row> {
         Row {
             name: "double torus, 400 points, `--features 4`",
             truth: Truth::from_mesh(&double).expect("double torus"),
-            sample: Box::new(move |seed| sample_mesh(&double, 400, seed).expect("sample")),
+            sample: Box::new(move |seed| {
+                sample_mesh(&double, 400, seed, Spread::Even).expect("sample")
+            }),
             features: Some(4),
             seeds: 20,
         },
         Row {
             name: "shared bunny, 400 points, `--features 8`",
             truth: Truth::from_mesh(&bunny).expect("bunny"),
-            sample: Box::new(move |seed| sample_mesh(&bunny, 400, seed).expect("sample")),
+            sample: Box::new(move |seed| {
+                sample_mesh(&bunny, 400, seed, Spread::Even).expect("sample")
+            }),
             features: Some(8),
             seeds: 20,
         },

@@ -10,7 +10,8 @@
 //! change a training option, `--save DIR` for the blobs, `--slices DIR` for pictures of three
 //! slices (red: model inside where the points say outside, blue the reverse), `--body 50` for
 //! the demo's body and its animation frame by frame instead, `--units` for each case scaled
-//! ×0.01 and ×100 and moved by (1000, −1000, 500) instead.
+//! ×0.01 and ×100 and moved by (1000, −1000, 500) instead, `--spread random` for points drawn
+//! independently instead of spread evenly.
 
 mod shapes;
 
@@ -24,7 +25,7 @@ use neurosurf_trainer::quality::{
 };
 use neurosurf_trainer::rbf::{self, RbfOptions};
 use neurosurf_trainer::render::{DEFAULT_RBF_INFLATE, RbfField};
-use neurosurf_trainer::sample::sample_mesh;
+use neurosurf_trainer::sample::{Spread, sample_mesh};
 use shapes::{double_torus, measure_core, rounded_cube};
 
 struct Case {
@@ -201,7 +202,7 @@ fn main() {
             "| case | units | time | truth → model median, f32 | truth → model median, Q16.16 | model → truth median | normal median | stray sign changes, f32 | stray sign changes, Q16.16 | mesh pieces | far vertices | truth → model ÷ as given |",
         );
         emit("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-        units(&filter);
+        units(&filter, spread(&value));
     } else {
         emit(
             "| case | time | truth → model median | model → truth median | model → truth p90 | normal median | stray sign changes | mesh pieces | far vertices | time ÷ RBF | truth → model ÷ RBF |",
@@ -248,7 +249,7 @@ fn main() {
 
 /// Every case of `filter` in other units: scaled ×0.01 and ×100 and moved by
 /// (1000, −1000, 500), beside the data as given; measured in f32 and Q16.16.
-fn units(filter: &[String]) {
+fn units(filter: &[String], spread: Spread) {
     use neurosurf_trainer::render::{DEFAULT_BOX_SIZE, DEFAULT_INFLATE, Q16Field, Region};
     let transforms: [(&str, f64, [f64; 3]); 4] = [
         ("as given", 1.0, [0.0; 3]),
@@ -264,7 +265,7 @@ fn units(filter: &[String]) {
                 *p = [0, 1, 2].map(|k| p[k] * scale + offset[k]);
             }
             let truth = Truth::from_mesh(&mesh).expect("truth");
-            let mut points = sample_mesh(&mesh, case.points, 1).expect("sample");
+            let mut points = sample_mesh(&mesh, case.points, 1, spread).expect("sample");
             // Decomposed here, as `implicit::fit` would: with the seam band it then turns on.
             let options = ImplicitOptions {
                 seam_band: true,
@@ -331,6 +332,16 @@ fn emit(line: &str) {
     table.push('\n');
 }
 
+/// How the points are placed on each mesh: `--spread random` or, by default, evenly (as
+/// `neurosurf sample` does).
+fn spread(value: &dyn Fn(&str) -> Option<String>) -> Spread {
+    match value("--spread").as_deref() {
+        None | Some("even") => Spread::Even,
+        Some("random") => Spread::Random,
+        Some(other) => panic!("--spread {other}: expected even or random"),
+    }
+}
+
 /// Every case of `filter` (all when empty) for every seed.
 fn shapes(
     filter: &[String],
@@ -339,6 +350,7 @@ fn shapes(
     to_diagonal: Option<f64>,
     value: &dyn Fn(&str) -> Option<String>,
 ) {
+    let spread = spread(value);
     for mut case in cases(filter) {
         if let Some(target) = to_diagonal {
             let d = neurosurf_trainer::caoen::bounding_diagonal(&case.mesh);
@@ -348,7 +360,7 @@ fn shapes(
         }
         let truth = Truth::from_mesh(&case.mesh).expect("truth");
         for &seed in seeds {
-            let points = sample_mesh(&case.mesh, case.points, seed).expect("sample");
+            let points = sample_mesh(&case.mesh, case.points, seed, spread).expect("sample");
             // The built-in RBF on the same points, first, so the network's row can give ratios.
             let rbf_row = rbf.then(|| {
                 let start = Instant::now();

@@ -23,7 +23,7 @@ use crate::io::{Mesh, data_file, read_mesh};
 use crate::points::PointSet;
 use crate::quality::{MEASURE_RESOLUTION, STRAY_RESOLUTION, Truth, TwoSided, two_sided};
 use crate::render::{DEFAULT_BOX_SIZE, DEFAULT_INFLATE, NetworkField};
-use crate::sample::{BODY_FEATURES, sample_mesh};
+use crate::sample::{BODY_FEATURES, Spread, sample_mesh};
 
 /// Height of the cookie, as the synthetic body's.
 const HEIGHT: f64 = 14.0;
@@ -147,7 +147,7 @@ pub fn woody(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(WoodyDemo, Trained, PointSet)> {
     let mesh = woody_mesh()?;
-    let points = sample_mesh(&mesh, WOODY_POINTS, seed)?;
+    let points = sample_mesh(&mesh, WOODY_POINTS, seed, Spread::Random)?;
     let labels = implicit::decompose(&points.positions, BODY_FEATURES.len(), 4)?;
     let points = PointSet {
         features: Some(labels),
@@ -159,7 +159,12 @@ pub fn woody(
     };
     options.lm.max_iterations = WOODY_ITERATIONS;
     let trained = implicit::fit(points.clone(), &FitRequest::default(), &options, progress)?;
-    let held_out = sample_mesh(&mesh, super::HELD_OUT, seed.wrapping_add(1_000_003))?;
+    let held_out = sample_mesh(
+        &mesh,
+        super::HELD_OUT,
+        seed.wrapping_add(1_000_003),
+        Spread::Random,
+    )?;
     let fidelity = Fidelity::measure(&held_out, diameter(&held_out.positions), |p| {
         trained.network.eval(p)
     })

@@ -236,7 +236,8 @@ mod tests {
         let mesh = read_mesh(&data_file("stanford-bunny.obj").unwrap()).unwrap();
         let truth = Truth::from_mesh(&mesh).unwrap();
         let diagonal = truth.diagonal();
-        let points = crate::sample::sample_mesh(&mesh, 400, 2).unwrap();
+        let points =
+            crate::sample::sample_mesh(&mesh, 400, 2, crate::sample::Spread::Random).unwrap();
         let oracle = Oracle::new(&points.positions, &points.normals).unwrap();
         // The same oracle with every disk at gap/2.
         let flat = Oracle {

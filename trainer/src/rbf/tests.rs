@@ -692,7 +692,7 @@ fn scaled_and_moved_points_give_the_same_surface() {
 fn bunny(n: usize, seed: u64) -> PointSet {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/stanford-bunny.obj");
     let mesh = crate::io::read_mesh(&path).expect("the bunny ships in data/");
-    crate::sample::sample_mesh(&mesh, n, seed).unwrap()
+    crate::sample::sample_mesh(&mesh, n, seed, crate::sample::Spread::Random).unwrap()
 }
 
 #[test]

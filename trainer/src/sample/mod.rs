@@ -1,16 +1,18 @@
 //! Point samplers: analytic shapes, the posed human body and meshes.
 //!
-//! Every sampler draws points area-uniformly on the surface with exact outward unit normals,
-//! from a [`ChaCha8Rng`](rand_chacha::ChaCha8Rng) seeded with the caller's seed, so the same
+//! Every sampler draws points area-uniformly on the surface with exact outward unit normals
+//! (on meshes, by default, spread evenly: see [`Spread`]), from a [`ChaCha8Rng`](rand_chacha::ChaCha8Rng) seeded with the caller's seed, so the same
 //! seed always gives the same points on every platform.
 
 mod body;
 mod mesh;
 mod shape;
+mod spread;
 
 pub use body::{BODY_FEATURES, BODY_POINTS, BODY_TREE, Body, Pose, scaled_counts};
 pub use mesh::sample_mesh;
 pub use shape::{HEAD_FEATURES, Shape, sample_shape};
+pub use spread::{CANDIDATES_PER_POINT, MAX_EVEN_POINTS, Spread};
 
 use crate::error::{Error, Result};
 
