@@ -4,7 +4,8 @@
 //! The mesh is planar (every z is 0), so it has no inside: it is extruded into a slab (top and
 //! bottom copies, a wall on every boundary edge), a closed surface an implicit model can learn,
 //! stood upright (its y becomes z) and scaled to the synthetic body's height. Control points
-//! are area-uniform on the slab with its face normals.
+//! are spread evenly on the slab ([`Spread::Even`]) with its face normals; the held-out points
+//! that measure it are independent draws.
 //!
 //! Features come from [`decompose`](crate::implicit::decompose): recursive principal-axis
 //! bisection into equal groups, then capacity-constrained k-means — spatially compact groups
@@ -147,7 +148,7 @@ pub fn woody(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(WoodyDemo, Trained, PointSet)> {
     let mesh = woody_mesh()?;
-    let points = sample_mesh(&mesh, WOODY_POINTS, seed, Spread::Random)?;
+    let points = sample_mesh(&mesh, WOODY_POINTS, seed, Spread::Even)?;
     let labels = implicit::decompose(&points.positions, BODY_FEATURES.len(), 4)?;
     let points = PointSet {
         features: Some(labels),
