@@ -35,7 +35,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0.4)]
     minor: f64,
     /// How points are placed on a mesh: `even` keeps a near-constant distance between them
-    /// (the best coverage for a point budget; up to 1 000 000 points, more are drawn at
+    /// (the best coverage for a point budget; up to 200 000 points, more are drawn at
     /// random), `random` draws each independently (clumps and gaps).
     #[arg(long, value_enum, default_value_t = SpreadArg::Even)]
     spread: SpreadArg,

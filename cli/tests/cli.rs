@@ -225,6 +225,20 @@ fn a_mesh_is_sampled_evenly_unless_random_is_asked_for() {
     }
     // Even points keep their distance; independent draws clump.
     assert!(gaps[0] > 4.0 * gaps[1], "closest pairs {gaps:?}");
+    // Past the limit of even spreading, points are drawn at random, and the report says so.
+    let many = ok(&[
+        "sample",
+        bunny.to_str().unwrap(),
+        "--points",
+        "200001",
+        "--encoding",
+        "binary",
+        "--out",
+        s(&path(dir.path(), "many.ply")),
+        "--json",
+    ]);
+    let json: serde_json::Value = serde_json::from_str(&many).unwrap();
+    assert_eq!(json["spread"], "random", "{json}");
     let built_in = ok(&[
         "sample",
         "torus",
