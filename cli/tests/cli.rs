@@ -513,7 +513,7 @@ fn info_counts_the_nodes_normalization_and_position_inputs() {
     fs::write(&old_model, &old).unwrap();
     let err = fails(&["info", s(&old_model)]);
     assert!(
-        err.contains("blob format version 1 is not supported (this core reads 3)"),
+        err.contains("blob format version 1 is not supported (this core reads versions 3..=4)"),
         "{err}"
     );
 }

@@ -427,19 +427,7 @@ fn the_fit_reports_the_order_and_a_wrong_topology() {
 
 /// de Boor's algorithm for a cubic B-spline at t in its domain.
 fn de_boor(knots: &[f64], control: &[Vec<f64>], t: f64) -> Vec<f64> {
-    let m = control.len();
-    let k = (3..m).rev().find(|&k| knots[k] <= t).unwrap_or(3);
-    let mut p: Vec<Vec<f64>> = (0..4).map(|j| control[k - 3 + j].clone()).collect();
-    for r in 1..4 {
-        for j in (r..4).rev() {
-            let i = k - 3 + j;
-            let a = (t - knots[i]) / (knots[i + 4 - r] - knots[i]);
-            p[j] = (0..p[j].len())
-                .map(|c| (1.0 - a) * p[j - 1][c] + a * p[j][c])
-                .collect();
-        }
-    }
-    p[3].clone()
+    any_degree_de_boor(knots, control, 3, t)
 }
 
 /// The knots and control points of the one `SPLINE` entity of an ASCII DXF file, read from
@@ -745,4 +733,137 @@ fn separate_groups_get_a_curve_each_and_stray_points_are_left_out() {
         joined.contains("2 separate groups") && joined.contains("one curve bridges them"),
         "{joined}"
     );
+}
+
+/// `curve fit --degree`: quadratic and quintic curves run through the same blob, `eval` and
+/// the simulated target print the same rows in both scalars, the exports carry the degree
+/// (DXF clamped with p + 1 equal end knots, reproducing `eval`), an SVG path exists for the
+/// quadratic and is refused for the quintic, and bad degrees are refused before anything is
+/// written.
+#[test]
+fn curves_of_degree_two_to_five_run_on_the_host_and_the_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("peanut.txt");
+    ok(&[
+        "curve",
+        "sample",
+        "peanut",
+        "-n",
+        "150",
+        "--seed",
+        "9",
+        "--out",
+        s(&points),
+    ]);
+    let t_path = t_file(dir.path());
+    for degree in ["2", "5"] {
+        let blob = dir.path().join(format!("p{degree}.nsb"));
+        let fit = json(&ok(&[
+            "curve",
+            "fit",
+            s(&points),
+            "--closed",
+            "--degree",
+            degree,
+            "--out",
+            s(&blob),
+            "--json",
+        ]));
+        assert_eq!(fit["degree"].to_string(), degree, "{fit}");
+        assert!(fit["rms_residual"].as_f64().unwrap() < 0.01, "{fit}");
+        let info = ok(&["info", s(&blob)]);
+        assert!(info.contains(&format!("degree {degree}")), "{info}");
+        for scalar in ["q16.16", "f32"] {
+            let common = [s(&blob), "--points", s(&t_path), "--scalar", scalar];
+            let host = ok(&[&["eval"], &common[..]].concat());
+            for mode in ["batch", "single"] {
+                let target = ok(&[&["sim"], &common[..], &["--mode", mode]].concat());
+                assert!(host == target, "degree {degree} {scalar} {mode}");
+            }
+        }
+        let (json_path, dxf_path) = (dir.path().join("e.json"), dir.path().join("e.dxf"));
+        ok(&[
+            "curve",
+            "export",
+            s(&blob),
+            "--json",
+            s(&json_path),
+            "--dxf",
+            s(&dxf_path),
+        ]);
+        let exported = json(&fs::read_to_string(&json_path).unwrap());
+        assert_eq!(exported["degree"].to_string(), degree);
+        let p: usize = degree.parse().unwrap();
+        let (knots, control) = dxf_spline(&fs::read_to_string(&dxf_path).unwrap());
+        assert_eq!(knots.len(), control.len() + p + 1);
+        assert!(knots[..=p].iter().all(|&k| k == 0.0), "clamped: {knots:?}");
+        let csv = ok(&["eval", s(&blob), "--points", s(&t_path), "--scalar", "f64"]);
+        for row in csv.lines().skip(1) {
+            let row: Vec<f64> = row.split(',').map(|v| v.parse().unwrap()).collect();
+            let at = any_degree_de_boor(&knots, &control, p, row[0].clamp(0.0, 1.0));
+            assert!(
+                (at[0] - row[1]).abs() < 1e-6 && (at[1] - row[2]).abs() < 1e-6,
+                "{row:?}"
+            );
+        }
+        let svg = dir.path().join(format!("e{degree}.svg"));
+        if p == 2 {
+            ok(&["curve", "export", s(&blob), "--svg", s(&svg)]);
+        } else {
+            let error = fails(&["curve", "export", s(&blob), "--svg", s(&svg)]);
+            assert!(
+                error.contains("degree 5") && error.contains("--dxf"),
+                "{error}"
+            );
+            assert!(!svg.exists());
+        }
+    }
+    let blob = dir.path().join("bad.nsb");
+    let error = fails(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--degree",
+        "6",
+        "--out",
+        s(&blob),
+    ]);
+    assert!(
+        error.contains("degree 6") && error.contains("--degree 2..=5"),
+        "{error}"
+    );
+    let error = fails(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--degree",
+        "2",
+        "--interpolate",
+        "--out",
+        s(&blob),
+    ]);
+    assert!(
+        error.contains("--interpolate") && error.contains("cubic"),
+        "{error}"
+    );
+    assert!(!blob.exists());
+}
+
+/// De Boor's algorithm for degree `p` (the span found by search over the domain).
+fn any_degree_de_boor(knots: &[f64], control: &[Vec<f64>], p: usize, t: f64) -> Vec<f64> {
+    let last = control.len() - 1;
+    let k = (p..=last).rev().find(|&k| knots[k] <= t).unwrap_or(p);
+    let mut d: Vec<Vec<f64>> = (0..=p).map(|j| control[j + k - p].clone()).collect();
+    for r in 1..=p {
+        for j in (r..=p).rev() {
+            let i = j + k - p;
+            let alpha = (t - knots[i]) / (knots[i + p + 1 - r] - knots[i]);
+            d[j] = d[j - 1]
+                .iter()
+                .zip(&d[j])
+                .map(|(a, b)| (1.0 - alpha) * a + alpha * b)
+                .collect();
+        }
+    }
+    d[p].clone()
 }

@@ -254,10 +254,10 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
     let out = ok(&["sim-bench", s(&model), "--json"]);
     let bench: serde_json::Value = serde_json::from_str(&out).unwrap();
     let rows = bench["rows"].as_array().unwrap();
-    // (torus, head, the head with its sign guards, spiral curve, wavy surface network, four
-    // Cao En networks, the extra blob) × (f32, q16.16) × (value, value+derivative) × (single,
-    // batch)
-    assert_eq!(rows.len(), 80, "{out}");
+    // (torus, head, the head with its sign guards, cubic and quintic spiral curves, wavy
+    // surface network, four Cao En networks, the extra blob) × (f32, q16.16) × (value,
+    // value+derivative) × (single, batch)
+    assert_eq!(rows.len(), 88, "{out}");
     for r in rows {
         let instructions = r["instructions_per_eval"].as_f64().unwrap();
         let macs = r["macs"].as_u64().unwrap() as f64;
@@ -281,7 +281,7 @@ fn sim_bench_costs_at_least_one_instruction_per_mac() {
         .find(|r| r["model"].as_str().unwrap().starts_with("spiral curve"))
         .unwrap();
     assert_eq!(curve["op"], "position", "{curve}");
-    assert_eq!(bench["ratios"].as_array().unwrap().len(), 40, "{out}");
+    assert_eq!(bench["ratios"].as_array().unwrap().len(), 44, "{out}");
     // Local support: with 104 keys, compact blending skips the groups out of reach and costs
     // well under half of exponential blending, which touches every key (the normalized compact
     // network even has n more MACs).

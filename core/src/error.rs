@@ -42,6 +42,9 @@ pub enum Quantity {
     Activation,
     /// Sign guards of an implicit model.
     Guards,
+    /// Polynomial degree of a spline along one parametric direction (2 to 5; the nearest
+    /// valid degree is reported as expected).
+    Degree,
 }
 
 impl fmt::Display for Quantity {
@@ -62,6 +65,7 @@ impl fmt::Display for Quantity {
             Quantity::Layers => "hidden layer count",
             Quantity::Activation => "activation code",
             Quantity::Guards => "sign guard count",
+            Quantity::Degree => "spline degree",
         })
     }
 }
@@ -88,7 +92,8 @@ pub enum BlobError {
     UnsupportedVersion {
         /// Version in the blob.
         found: u16,
-        /// Version this core reads.
+        /// The newest version this core reads (it reads back to
+        /// [`crate::blob::OLDEST_READABLE_VERSION`]).
         supported: u16,
     },
     /// More bytes follow the CRC than the header declares.
@@ -190,7 +195,8 @@ impl fmt::Display for BlobError {
             BlobError::UnsupportedVersion { found, supported } => {
                 write!(
                     f,
-                    "blob format version {found} is not supported (this core reads {supported})"
+                    "blob format version {found} is not supported (this core reads versions {}..={supported})",
+                    crate::blob::OLDEST_READABLE_VERSION
                 )
             }
             BlobError::TrailingBytes { count } => {

@@ -322,10 +322,11 @@ fn bad_magic() {
 
 #[test]
 fn unsupported_version() {
-    // Version 3: the payload carries the model's frame.
-    assert_eq!(FORMAT_VERSION, 3);
+    // Version 4: curves and surfaces carry their degree; version 3 is still read.
+    assert_eq!(FORMAT_VERSION, 4);
+    assert_eq!(neurosurf_core::blob::OLDEST_READABLE_VERSION, 3);
     let blob = Sample::new(1, 3, PAIR).blob(ScalarKind::F32);
-    for version in [0_u16, 1, 2, 4, u16::MAX] {
+    for version in [0_u16, 1, 2, 5, u16::MAX] {
         let mut bad = blob.clone();
         bad[4..6].copy_from_slice(&version.to_le_bytes());
         // Checked before the CRC: with or without a consistent checksum.
@@ -381,7 +382,7 @@ fn version_1_blobs_are_rejected_by_their_version() {
         });
         assert_eq!(
             e.to_string(),
-            "blob format version 1 is not supported (this core reads 3)"
+            "blob format version 1 is not supported (this core reads versions 3..=4)"
         );
         assert_eq!(ImplicitPayload::from_blob(bytes).unwrap_err(), e);
     }

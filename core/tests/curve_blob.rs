@@ -39,9 +39,22 @@ fn identity_frame(out: &mut Vec<u8>) {
     out.push(0);
 }
 
-/// Postcard's encoding of a `CurvePayload`, by hand (with the identity frame).
+/// Postcard's encoding of a cubic `CurvePayload`, by hand (with the identity frame).
 fn curve_postcard(dimension: u8, closed: u8, control: &[u8], metadata: &[u8]) -> Vec<u8> {
+    curve_postcard_of_degree(dimension, closed, Some(3), control, metadata)
+}
+
+/// Postcard's encoding of a `CurvePayload` of `degree` (`None`: the version 3 layout, which
+/// has no degree), by hand (with the identity frame).
+fn curve_postcard_of_degree(
+    dimension: u8,
+    closed: u8,
+    degree: Option<u8>,
+    control: &[u8],
+    metadata: &[u8],
+) -> Vec<u8> {
     let mut out = vec![dimension, closed];
+    out.extend(degree);
     identity_frame(&mut out);
     for bytes in [control, metadata] {
         varint(&mut out, bytes.len());
@@ -53,7 +66,19 @@ fn curve_postcard(dimension: u8, closed: u8, control: &[u8], metadata: &[u8]) ->
 /// Postcard's encoding of a `SurfacePayload`, by hand (u16 counts are varints; the identity
 /// frame).
 fn surface_postcard(closed: [u8; 2], counts: [u16; 2], control: &[u8], metadata: &[u8]) -> Vec<u8> {
+    surface_postcard_of_degrees(closed, Some([3, 3]), counts, control, metadata)
+}
+
+/// [`surface_postcard`] with `degrees` (`None`: the version 3 layout).
+fn surface_postcard_of_degrees(
+    closed: [u8; 2],
+    degrees: Option<[u8; 2]>,
+    counts: [u16; 2],
+    control: &[u8],
+    metadata: &[u8],
+) -> Vec<u8> {
     let mut out = closed.to_vec();
+    out.extend(degrees.into_iter().flatten());
     for count in counts {
         varint(&mut out, usize::from(count));
     }
@@ -111,6 +136,7 @@ fn curve_round_trip() {
                 CurvePayload {
                     dimension,
                     closed,
+                    degree: 3,
                     frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
                     control: &control,
                     metadata: b"test curve"
@@ -180,6 +206,8 @@ fn surface_round_trip() {
                 SurfacePayload {
                     closed_u: closed[0],
                     closed_v: closed[1],
+                    degree_u: 3,
+                    degree_v: 3,
                     count_u: counts[0],
                     count_v: counts[1],
                     frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
@@ -221,6 +249,7 @@ fn metadata_is_opaque() {
         let payload = CurvePayload {
             dimension: 3,
             closed: true,
+            degree: 3,
             frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
             control: &control,
             metadata,
@@ -280,6 +309,7 @@ fn load_in_place_and_failures_leave_the_model_empty() {
     let payload = CurvePayload {
         dimension: 3,
         closed: true,
+        degree: 3,
         frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         control: &control,
         metadata: &[],
@@ -731,6 +761,7 @@ fn buffer_too_small() {
     let payload = CurvePayload {
         dimension: 3,
         closed: false,
+        degree: 3,
         frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         control: &control,
         metadata: b"m",

@@ -9,6 +9,9 @@
 //! - `curve_q16_params.bin`: the parameters t, one i32 (Q16.16 bits) each;
 //! - `curve_q16_expected.bin`: C(t) and dC/dt per parameter, 6 × i32 (Q16.16 bits);
 //! - `curve_f32_expected.bin`: the same blob in `f32` at the same parameters, 6 × f32;
+//! - `curve_q16_degree2.nsb`, `curve_q16_degree5.nsb`: the same control points as a
+//!   quadratic and a quintic curve, and `curve_q16_degree{2,5}_expected.bin` their outputs
+//!   at the same parameters (6 × i32), from the any-degree recurrence;
 //! - `curve_surface_q16.nsb`: a 6 × 5 net closed in u, open in v, coordinates in [−2, 2];
 //! - `curve_surface_q16_params.bin`: [u, v] per point, 2 × i32;
 //! - `curve_surface_q16_expected.bin`: S, ∂S/∂u, ∂S/∂v and the unit normal per point,
@@ -26,7 +29,10 @@
 mod curve_support;
 mod golden_support;
 
-use curve_support::{CurveDraws, LSB, RefCurve, RefSurface, Rng, angle, curve_blob, surface_blob};
+use curve_support::{
+    CurveDraws, LSB, RefCurve, RefSurface, Rng, angle, curve_blob, curve_blob_of_degree,
+    encode_points, surface_blob,
+};
 use golden_support::{assert_bits, assert_ulps, f32_words, golden_dir, q16_words, read, to_bytes};
 use neurosurf_core::curve::{BSplineCurve, BSplineSurface};
 use neurosurf_core::scalar::{Q16, Scalar, ScalarKind};
@@ -125,6 +131,16 @@ fn bless() {
         &to_bytes(f.iter().map(|v| v.to_le_bytes())),
     );
 
+    for degree in OTHER_DEGREES {
+        let blob = degree_blob(degree);
+        write(&format!("curve_q16_degree{degree}.nsb"), &blob);
+        let q = evaluate_curve(&blob, &t);
+        write(
+            &format!("curve_q16_degree{degree}_expected.bin"),
+            &to_bytes(q.iter().map(|v| v.to_le_bytes())),
+        );
+    }
+
     let blob = surface_blob(ScalarKind::Q16_16, &golden_surface());
     let uv = surface_parameters();
     write("curve_surface_q16.nsb", &blob);
@@ -149,6 +165,34 @@ fn bless() {
         uv.len(),
         dir.display()
     );
+}
+
+/// The degrees with golden files of their own besides the cubic.
+const OTHER_DEGREES: [u8; 2] = [2, 5];
+
+/// The golden curve's control points as an open 3-D curve of `degree`, stored as Q16.16.
+fn degree_blob(degree: u8) -> Vec<u8> {
+    let control = encode_points(&golden_curve().points, ScalarKind::Q16_16);
+    curve_blob_of_degree(ScalarKind::Q16_16, 3, false, degree, &control)
+}
+
+/// The quadratic and quintic curves give their committed outputs bit for bit, and their
+/// committed blobs are what the generator writes today.
+#[test]
+fn q16_curves_of_other_degrees_match_bit_for_bit() {
+    bless_if_asked();
+    let (_, t) = curve_golden();
+    for degree in OTHER_DEGREES {
+        let blob = read(&format!("curve_q16_degree{degree}.nsb"));
+        assert_eq!(blob, degree_blob(degree));
+        let expected = q16_words(&read(&format!("curve_q16_degree{degree}_expected.bin")));
+        assert_bits(
+            &format!("degree {degree} curve"),
+            6,
+            &evaluate_curve(&blob, &t),
+            &expected,
+        );
+    }
 }
 
 fn curve_golden() -> (Vec<u8>, Vec<Q16>) {

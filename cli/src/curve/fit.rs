@@ -56,6 +56,9 @@ pub struct FitArgs {
     /// straight arms become sharp corners of the approximation.
     #[arg(long)]
     no_corners: bool,
+    /// Polynomial degree of the spline, 2 to 5 (`--interpolate` is cubic only).
+    #[arg(long, default_value_t = 3)]
+    degree: usize,
     #[command(flatten)]
     blob: BlobArgs,
     /// Also draw the points, their order and the curve (`.svg` or `.png`).
@@ -91,6 +94,8 @@ struct FitReport<'a> {
     more_curves: Vec<MoreCurve>,
     dimension: usize,
     closed: bool,
+    /// The spline's polynomial degree.
+    degree: usize,
     control_points: usize,
     segments: usize,
     chain_iterations: usize,
@@ -117,6 +122,13 @@ struct FitReport<'a> {
 pub fn run(args: &FitArgs) -> Result<()> {
     let scalar = blob_scalar(args.blob.scalar)?;
     neurosurf_trainer::io::check_output(&args.blob.out)?;
+    neurosurf_trainer::curve::check_degree(args.degree)?;
+    if args.interpolate && args.degree != 3 {
+        anyhow::bail!(
+            "--interpolate fits a cubic through every point; drop --degree {} or --interpolate",
+            args.degree
+        );
+    }
     let (dimension, raw) = read_scattered_points(&args.points)?;
     let points = CurvePoints::new(dimension, raw)
         .with_context(|| format!("cannot fit a curve to {}", args.points.display()))?;
@@ -144,6 +156,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
     }
     options.approximation.smoothing = args.smoothing;
     options.approximation.corners = !args.no_corners;
+    options.approximation.degree = args.degree;
     if let Some(tolerance) = args.tolerance {
         if !(tolerance.is_finite() && tolerance > 0.0) {
             anyhow::bail!("--tolerance {tolerance}: give a positive distance in the points' units");
@@ -263,6 +276,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
         more_curves,
         dimension,
         closed: curve.closed,
+        degree: curve.degree,
         control_points: curve.control.len(),
         segments: curve.segments(),
         chain_iterations: result.training.iterations,
@@ -295,7 +309,8 @@ pub fn run(args: &FitArgs) -> Result<()> {
         String::new()
     };
     println!(
-        "{} {}-D points → {} chain of {} neurons{} ({} iterations) → {} of {} control points",
+        "{} {}-D points → {} chain of {} neurons{} ({} iterations) → {} of {} control points, \
+         degree {}",
         report.fit.points,
         dimension,
         if report.closed { "closed" } else { "open" },
@@ -303,7 +318,8 @@ pub fn run(args: &FitArgs) -> Result<()> {
         sample,
         report.chain_iterations,
         method,
-        report.control_points
+        report.control_points,
+        report.degree
     );
     println!(
         "{}",

@@ -1,5 +1,6 @@
 //! The built-in subjects, trained: a torus leaf, the 3-feature head (alone and with its sign
-//! guards), a spiral curve, a wavy surface network and four Cao En spheres, each with fixed
+//! guards), a spiral curve of degree 3 and of degree 5, a wavy surface network and four Cao En
+//! spheres, each with fixed
 //! seeds and stored in both scalars.
 //!
 //! Training calls the host's `libm`, whose last bits depend on the CPU (glibc picks FMA or
@@ -83,7 +84,8 @@ pub(super) fn train() -> Result<Vec<Subject>> {
             });
         }
     }
-    subjects.push(spiral_curve()?);
+    subjects.push(spiral_curve(3)?);
+    subjects.push(spiral_curve(5)?);
     subjects.push(wavy_network()?);
     for (keys, blending) in [
         (26, Blending::Exponential),
@@ -157,9 +159,9 @@ fn cao_en_sphere(n: usize, blending: Blending) -> Result<Subject> {
     })
 }
 
-/// The approximating spline of 200 noisy points on a two-turn spiral (fixed seed), in both
-/// scalars, at [`POINTS`] parameters spread over [0, 1].
-fn spiral_curve() -> Result<Subject> {
+/// The approximating spline of `degree` (3 or 5) of 200 noisy points on a two-turn spiral
+/// (fixed seed), in both scalars, at [`POINTS`] parameters spread over [0, 1].
+fn spiral_curve(degree: usize) -> Result<Subject> {
     let sample = sample_curve(
         SampleCurve::Spiral,
         &SampleOptions {
@@ -168,16 +170,22 @@ fn spiral_curve() -> Result<Subject> {
             ..SampleOptions::default()
         },
     )?;
-    let fit = reconstruct_curve(
-        &sample.curve_points()?,
-        &CurveOptions::new(SampleCurve::Spiral.topology(), 3),
-    )?;
+    let mut options = CurveOptions::new(SampleCurve::Spiral.topology(), 3);
+    options.approximation.degree = degree;
+    let fit = reconstruct_curve(&sample.curve_points()?, &options)?;
     let curve = &fit.approximation.curve;
     let blobs = [ScalarKind::F32, ScalarKind::Q16_16]
         .into_iter()
         .map(|scalar| Ok((scalar, curve_to_blob(curve, None, scalar)?)))
         .collect::<Result<Vec<_>>>()?;
-    let name = format!("spiral curve ({} control points)", curve.control.len());
+    let name = if degree == 3 {
+        format!("spiral curve ({} control points)", curve.control.len())
+    } else {
+        format!(
+            "spiral curve of degree {degree} ({} control points)",
+            curve.control.len()
+        )
+    };
     Ok(Subject {
         path: PathBuf::from(format!("<built-in {name}>")),
         name,

@@ -30,7 +30,8 @@ const POINTS: usize = 64;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Extra model blobs to measure after the built-in ones (a torus, one leaf of width 9; the
-    /// 3-feature head with tree ((0,1),2); a curve, a surface network and four Cao En spheres,
+    /// 3-feature head with tree ((0,1),2); a cubic and a quintic curve, a surface network and
+    /// four Cao En spheres,
     /// stored in `cli/src/sim_bench/subjects.json`). Each is run as it is stored, in both
     /// scalars.
     models: Vec<PathBuf>,

@@ -1,11 +1,11 @@
 //! The blob: a self-checking container for one trained model.
 //!
-//! # Format (version 3)
+//! # Format (version 4)
 //!
 //! | offset | size | field |
 //! |---:|---:|---|
 //! | 0 | 4 | magic `NSRF` |
-//! | 4 | 2 | format version, `u16` little endian (currently 3) |
+//! | 4 | 2 | format version, `u16` little endian (currently 4) |
 //! | 6 | 1 | model kind ([`ModelKind::code`]) |
 //! | 7 | 1 | scalar kind of the stored parameters ([`ScalarKind::code`]) |
 //! | 8 | 4 | payload length *n*, `u32` little endian |
@@ -23,9 +23,13 @@
 //!
 //! # Versions
 //!
-//! The core reads exactly one version, [`FORMAT_VERSION`]; any other gets
+//! The core writes [`FORMAT_VERSION`] and reads it and the versions back to
+//! [`OLDEST_READABLE_VERSION`], each by its own layout; any other gets
 //! [`BlobError::UnsupportedVersion`] (checked before the CRC), never a reinterpretation.
 //!
+//! - **4**: curve and spline-surface payloads carry their degree (curves: `degree`; surfaces:
+//!   `degree_u`, `degree_v`), 2 to 5. Version 3 curves and surfaces read as cubic. The other
+//!   kinds' payloads are unchanged.
 //! - **3**: implicit, curve, spline-surface and surface-network payloads carry a
 //!   [frame](crate::frame) (origin and power-of-two scale): implicit modules and guards, and
 //!   curve and surface control points, are stored in the frame's coordinates, and a surface
@@ -65,8 +69,11 @@ use crate::scalar::ScalarKind;
 
 /// The four bytes every blob starts with.
 pub const MAGIC: [u8; 4] = *b"NSRF";
-/// The format version this core reads and writes (see the module docs' version history).
-pub const FORMAT_VERSION: u16 = 3;
+/// The format version this core writes (see the module docs' version history).
+pub const FORMAT_VERSION: u16 = 4;
+/// The oldest format version this core still reads: version 3 blobs load unchanged, their
+/// curves and surfaces as cubic.
+pub const OLDEST_READABLE_VERSION: u16 = 3;
 /// Bytes before the payload.
 pub const HEADER_LEN: usize = 12;
 /// Bytes after the payload (the CRC).
@@ -137,7 +144,7 @@ impl ModelKind {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BlobHeader {
-    /// Format version (always [`FORMAT_VERSION`] once parsed).
+    /// Format version, [`OLDEST_READABLE_VERSION`] ..= [`FORMAT_VERSION`] once parsed.
     pub version: u16,
     /// Model kind.
     pub model: ModelKind,
@@ -161,7 +168,7 @@ pub fn parse(bytes: &[u8]) -> Result<(BlobHeader, &[u8]), BlobError> {
     let fixed: [u8; HEADER_LEN] = read_array(bytes, 0).ok_or(truncated(HEADER_LEN))?;
     let [_, _, _, _, v0, v1, model_code, scalar_code, l0, l1, l2, l3] = fixed;
     let version = u16::from_le_bytes([v0, v1]);
-    if version != FORMAT_VERSION {
+    if !(OLDEST_READABLE_VERSION..=FORMAT_VERSION).contains(&version) {
         return Err(BlobError::UnsupportedVersion {
             found: version,
             supported: FORMAT_VERSION,
@@ -264,6 +271,15 @@ pub(crate) fn decode_kind<'a, T: serde::Deserialize<'a>>(
     bytes: &'a [u8],
     expected: ModelKind,
 ) -> Result<(BlobHeader, T), BlobError> {
+    let (header, payload) = parse_kind(bytes, expected)?;
+    Ok((header, decode_payload(payload)?))
+}
+
+/// [`parse`], then checks that the blob holds the `expected` kind of model.
+pub(crate) fn parse_kind(
+    bytes: &[u8],
+    expected: ModelKind,
+) -> Result<(BlobHeader, &[u8]), BlobError> {
     let (header, payload) = parse(bytes)?;
     if header.model != expected {
         return Err(BlobError::WrongModelKind {
@@ -271,7 +287,7 @@ pub(crate) fn decode_kind<'a, T: serde::Deserialize<'a>>(
             found: header.model,
         });
     }
-    Ok((header, decode_payload(payload)?))
+    Ok((header, payload))
 }
 
 /// Decodes a postcard payload that must be consumed exactly.

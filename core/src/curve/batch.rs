@@ -26,9 +26,17 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn position_batch(&self, t: &[S], out: &mut [[S; 3]]) -> Result<(), LengthMismatch> {
-        lanes::batch(t, out, S::ZERO, |t| {
-            self.lanes::<LANES, false>(t).map(|point| point.position)
-        })
+        if self.is_cubic() {
+            lanes::batch(t, out, S::ZERO, |t| {
+                self.cubic_lanes::<LANES, false>(t)
+                    .map(|point| point.position)
+            })
+        } else {
+            lanes::batch(t, out, S::ZERO, |t| {
+                self.any_degree_lanes::<LANES, false>(t)
+                    .map(|point| point.position)
+            })
+        }
     }
 
     /// C(t) and dC/dt for every t of `t` into `out` (same length).
@@ -36,7 +44,11 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn eval_batch(&self, t: &[S], out: &mut [CurvePoint<S>]) -> Result<(), LengthMismatch> {
-        lanes::batch(t, out, S::ZERO, |t| self.lanes::<LANES, true>(t))
+        if self.is_cubic() {
+            lanes::batch(t, out, S::ZERO, |t| self.cubic_lanes::<LANES, true>(t))
+        } else {
+            lanes::batch(t, out, S::ZERO, |t| self.any_degree_lanes::<LANES, true>(t))
+        }
     }
 }
 

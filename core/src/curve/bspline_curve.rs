@@ -3,7 +3,7 @@
 use heapless::Vec;
 
 use super::control::{self, POINT_BYTES};
-use super::direction::Direction;
+use super::direction::{Direction, MAX_ORDER};
 use super::payload::CurvePayload;
 use crate::blob::ModelKind;
 use crate::error::{BlobError, Quantity};
@@ -24,7 +24,7 @@ pub struct CurvePoint<S> {
     pub tangent: [S; 3],
 }
 
-/// A uniform cubic B-spline curve, loaded from a blob and validated (see [`crate::curve`] for
+/// A uniform B-spline curve of degree 2 to 5, loaded from a blob and validated (see [`crate::curve`] for
 /// the contract and the payload).
 ///
 /// `C` is the control-point capacity reserved inline (no heap). Evaluation after a successful
@@ -66,7 +66,7 @@ pub struct CurvePoint<S> {
 /// #     let points = [[0.0, 0.0, 0.0], [1.0, 2.0, 0.5], [2.0, 2.0, 0.0], [3.0, 0.0, 1.0], [4.0, 1.0, 0.0], [5.0, 0.0, 0.0]];
 /// #     let control: Vec<u8> = points.iter().flatten().flat_map(|&c| ScalarKind::F32.encode(c).unwrap()).collect();
 /// #     let payload = CurvePayload {
-/// #         dimension: 3, closed: false, frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
+/// #         dimension: 3, closed: false, degree: 3, frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
 /// #         control: &control, metadata: &[] };
 /// #     let mut out = vec![0_u8; 256];
 /// #     let n = payload.write(ScalarKind::F32, &mut out).unwrap();
@@ -127,7 +127,7 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
         if !bytes.is_multiple_of(POINT_BYTES) {
             return Err(control::length_mismatch(count + 1, bytes));
         }
-        let direction = Direction::new(count, payload.closed)?;
+        let direction = Direction::new(count, payload.closed, usize::from(payload.degree))?;
         if count > C {
             return Err(control::over_capacity(count, C));
         }
@@ -154,9 +154,14 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
         self.control.len()
     }
 
-    /// Number of polynomial segments: n when closed, n − 3 when open.
+    /// Number of polynomial segments: n when closed, n − degree when open.
     pub fn segments(&self) -> usize {
         self.direction.segments
+    }
+
+    /// The polynomial degree p, 2 to 5 (0 for an empty curve).
+    pub fn degree(&self) -> usize {
+        self.direction.degree
     }
 
     /// Control point `index`, if it exists.
@@ -170,12 +175,23 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
     }
 
     /// Multiplications (scalar products and accumulator multiply–adds) of one evaluation:
-    /// 20 for [`BSplineCurve::position`], 34 for [`BSplineCurve::eval`] (position and
-    /// tangent). Independent of the number of control points.
+    /// for a cubic curve 20 for [`BSplineCurve::position`], 34 for [`BSplineCurve::eval`]
+    /// (position and tangent); for degree p otherwise 1 + 2p(p + 1) + 7p, plus
+    /// 2p(p − 1) + 4(p − 1) + 3p for the tangent (quadratic: 27 and 41; quintic: 96 and 167).
+    /// Independent of the number of control points.
     pub fn mac_count(&self, tangent: bool) -> usize {
-        let position = Direction::<S>::VALUE_MULS + 9;
+        let p = self.direction.degree;
+        if p == 3 || p == 0 {
+            let position = Direction::<S>::VALUE_MULS + 9;
+            return if tangent {
+                position + Direction::<S>::SLOPE_MULS + 9
+            } else {
+                position
+            };
+        }
+        let position = 1 + 2 * p * (p + 1) + 7 * p;
         if tangent {
-            position + Direction::<S>::SLOPE_MULS + 9
+            position + 2 * p * (p - 1) + 4 * (p - 1) + 3 * p
         } else {
             position
         }
@@ -183,7 +199,11 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
 
     /// C(t). t is clamped to [0, 1]; NaN counts as 0.
     pub fn position(&self, t: S) -> [S; 3] {
-        let [point] = self.lanes::<1, false>(&[t]);
+        let [point] = if self.is_cubic() {
+            self.cubic_lanes::<1, false>(&[t])
+        } else {
+            self.any_degree_point::<false>(t)
+        };
         point.position
     }
 
@@ -194,15 +214,34 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
 
     /// C(t) and dC/dt.
     pub fn eval(&self, t: S) -> CurvePoint<S> {
-        let [point] = self.lanes::<1, true>(&[t]);
+        let [point] = if self.is_cubic() {
+            self.cubic_lanes::<1, true>(&[t])
+        } else {
+            self.any_degree_point::<true>(t)
+        };
         point
     }
 
-    /// `L` parameters at once: first every lane's segment and basis (structure of arrays),
-    /// then every lane's four control points. The single-point calls are `L = 1`, so batches
-    /// give the same bits.
+    /// One point of a curve of degree p ≠ 3, out of line: the single-point calls then hold
+    /// the cubic path alone.
+    #[inline(never)]
+    fn any_degree_point<const TANGENT: bool>(&self, t: S) -> [CurvePoint<S>; 1] {
+        self.any_degree_lanes::<1, TANGENT>(&[t])
+    }
+
+    /// Whether the curve is cubic: each entry point picks [`Self::cubic_lanes`] or
+    /// [`Self::any_degree_lanes`] once, outside its loops, so that the cubic path compiles
+    /// as it did before other degrees existed.
+    #[inline(always)]
+    pub(crate) fn is_cubic(&self) -> bool {
+        self.direction.degree == 3
+    }
+
+    /// `L` parameters at once of a cubic curve: first every lane's segment and basis
+    /// (structure of arrays), then every lane's four control points, four weights around the
+    /// anchor P₁. The single-point calls are `L = 1`, so batches give the same bits.
     #[inline]
-    pub(crate) fn lanes<const L: usize, const TANGENT: bool>(
+    pub(crate) fn cubic_lanes<const L: usize, const TANGENT: bool>(
         &self,
         t: &[S; L],
     ) -> [CurvePoint<S>; L] {
@@ -224,12 +263,7 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
         for (((out, &first), weights), slopes) in
             out.iter_mut().zip(&first).zip(&weights).zip(&slopes)
         {
-            let point = |k| {
-                self.control
-                    .get(direction.index(first, k))
-                    .copied()
-                    .unwrap_or([S::ZERO; 3])
-            };
+            let point = |k| self.point(first, k);
             let anchor = point(1);
             let differences = [0, 2, 3].map(|k| {
                 let p = point(k);
@@ -243,6 +277,61 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
             }
         }
         out
+    }
+
+    /// [`Self::cubic_lanes`] for a curve of degree p ≠ 3: the recurrence's p + 1 weights
+    /// ([`Direction::any_degree`]) around the anchor P₍ₚ/₂₎, each coordinate one accumulation
+    /// over k = 0 … p (the anchor skipped) with one rounding.
+    #[inline]
+    pub(crate) fn any_degree_lanes<const L: usize, const TANGENT: bool>(
+        &self,
+        t: &[S; L],
+    ) -> [CurvePoint<S>; L] {
+        let direction = &self.direction;
+        let order = direction.degree + 1;
+        let anchor = direction.degree / 2;
+        let mut first = [0_usize; L];
+        let mut weights = [([S::ZERO; MAX_ORDER], [S::ZERO; MAX_ORDER]); L];
+        for ((&t, first), weights) in t.iter().zip(&mut first).zip(&mut weights) {
+            let (i, u) = direction.locate(t);
+            *first = i;
+            *weights = direction.any_degree(u, TANGENT.then(|| direction.scale()));
+        }
+        let mut out = [CurvePoint::default(); L];
+        for ((out, &first), (values, slopes)) in out.iter_mut().zip(&first).zip(&weights) {
+            let start = self.point(first, anchor);
+            let mut position = start.map(S::to_acc);
+            let mut tangent = [S::ZERO.to_acc(); 3];
+            for k in (0..order).filter(|&k| k != anchor) {
+                let p = self.point(first, k);
+                let value = values.get(k).copied().unwrap_or(S::ZERO);
+                let slope = slopes.get(k).copied().unwrap_or(S::ZERO);
+                for axis in 0..3 {
+                    let difference = at(&p, axis).sub(at(&start, axis));
+                    if let Some(acc) = position.get_mut(axis) {
+                        *acc = S::mac(*acc, value, difference);
+                    }
+                    if TANGENT && let Some(acc) = tangent.get_mut(axis) {
+                        *acc = S::mac(*acc, slope, difference);
+                    }
+                }
+            }
+            out.position = position.map(S::from_acc);
+            if TANGENT {
+                out.tangent = tangent.map(S::from_acc);
+            }
+        }
+        out
+    }
+
+    /// Control point `k` of the segment starting at `first` (0 when out of range, which a
+    /// validated curve never is).
+    #[inline(always)]
+    fn point(&self, first: usize, k: usize) -> [S; 3] {
+        self.control
+            .get(self.direction.index(first, k))
+            .copied()
+            .unwrap_or([S::ZERO; 3])
     }
 }
 
@@ -329,9 +418,10 @@ impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineCurve<S, C> {
     fn describe(&self, f: &mut dyn core::fmt::Write) -> core::fmt::Result {
         write!(
             f,
-            "{} control points, {}-D, {}, {} segments",
+            "{} control points, {}-D, degree {}, {}, {} segments",
             self.control_count(),
             self.dimension(),
+            self.degree(),
             crate::model::open_or_closed(self.is_closed()),
             self.segments()
         )

@@ -79,7 +79,7 @@ type Patch<S> = [[[S; 3]; 4]; 4];
 /// #         control.extend_from_slice(&ScalarKind::Q16_16.encode(c).unwrap());
 /// #     } } }
 /// #     let payload = SurfacePayload {
-/// #         closed_u: false, closed_v: false, count_u: 4, count_v: 5,
+/// #         closed_u: false, closed_v: false, degree_u: 3, degree_v: 3, count_u: 4, count_v: 5,
 /// #         frame: neurosurf_core::frame::IDENTITY_PAYLOAD, control: &control, metadata: &[] };
 /// #     let mut out = vec![0_u8; 512];
 /// #     let n = payload.write(ScalarKind::Q16_16, &mut out).unwrap();
@@ -126,8 +126,17 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
     fn fill(&mut self, payload: &SurfacePayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
         self.clear();
         control::check_storage(ModelKind::SplineSurface, stored)?;
-        let u = Direction::new(usize::from(payload.count_u), payload.closed_u)?;
-        let v = Direction::new(usize::from(payload.count_v), payload.closed_v)?;
+        for degree in [payload.degree_u, payload.degree_v] {
+            if degree != 3 {
+                return Err(BlobError::ShapeMismatch {
+                    what: crate::error::Quantity::Degree,
+                    expected: 3,
+                    found: usize::from(degree),
+                });
+            }
+        }
+        let u = Direction::new(usize::from(payload.count_u), payload.closed_u, 3)?;
+        let v = Direction::new(usize::from(payload.count_v), payload.closed_v, 3)?;
         // At most 65 535² points: checked anyway, for 16-bit `usize`.
         let count = u
             .count

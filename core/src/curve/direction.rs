@@ -1,11 +1,19 @@
 //! One parametric direction of a spline: where a global parameter falls (segment and local
-//! parameter) and the uniform cubic basis there.
+//! parameter) and the uniform B-spline basis of its degree there.
 
 use crate::error::{BlobError, Quantity};
 use crate::scalar::{Scalar, ScalarKind};
 
-/// Fewest control points along a direction (open or closed): one cubic segment's worth.
+/// Fewest control points along a cubic direction (open or closed): one segment's worth. A
+/// direction of degree p needs p + 1.
 pub const MIN_CONTROL_POINTS: usize = 4;
+
+/// The lowest degree the core evaluates (quadratic).
+pub const MIN_DEGREE: usize = 2;
+/// The highest degree the core evaluates (quintic).
+pub const MAX_DEGREE: usize = 5;
+/// Basis functions of one segment at the highest degree: `MAX_DEGREE + 1`.
+pub(crate) const MAX_ORDER: usize = MAX_DEGREE + 1;
 
 /// Most segments along a direction: 32 767 = 2¹⁵ − 1.
 ///
@@ -22,8 +30,15 @@ pub(crate) struct Direction<S> {
     pub(crate) count: usize,
     /// Whether indices wrap around.
     pub(crate) closed: bool,
-    /// Polynomial segments: `count` when closed, `count − 3` when open.
+    /// Polynomial segments: `count` when closed, `count − degree` when open.
     pub(crate) segments: usize,
+    /// The polynomial degree p ([`MIN_DEGREE`] ..= [`MAX_DEGREE`]; 0 when empty).
+    pub(crate) degree: usize,
+    /// 1/d rounded to `S`, for d = 1 ..= [`MAX_DEGREE`] (index d − 1): the recurrence's
+    /// divisors (1/2 and 1/4 exact).
+    inverses: [S; MAX_DEGREE],
+    /// 0, 1, …, [`MAX_ORDER`] in `S` (exact): the recurrence's knot offsets.
+    integers: [S; MAX_ORDER + 1],
     /// `segments` in `S` (exact).
     scale: S,
     /// `segments / 2` in `S` (exact): the factor of the scaled derivative weights.
@@ -42,6 +57,9 @@ impl<S: Scalar> Direction<S> {
         count: 0,
         closed: false,
         segments: 0,
+        degree: 0,
+        inverses: [S::ZERO; MAX_DEGREE],
+        integers: [S::ZERO; MAX_ORDER + 1],
         scale: S::ZERO,
         half_scale: S::ZERO,
         sixth: S::ZERO,
@@ -49,21 +67,29 @@ impl<S: Scalar> Direction<S> {
         linear: S::ZERO,
     };
 
-    /// Checks `count` control points along a direction.
+    /// Checks `count` control points along a direction of degree `degree`.
     ///
     /// # Errors
-    /// [`BlobError::ShapeMismatch`] (`ControlPoints`, expected [`MIN_CONTROL_POINTS`]) for
-    /// fewer than four points, [`BlobError::CapacityExceeded`] (`Segments`) beyond
-    /// [`MAX_SEGMENTS`].
-    pub(crate) fn new(count: usize, closed: bool) -> Result<Self, BlobError> {
-        if count < MIN_CONTROL_POINTS {
+    /// [`BlobError::ShapeMismatch`] (`Degree`, expected the nearest valid degree) for a
+    /// degree outside [`MIN_DEGREE`] ..= [`MAX_DEGREE`], (`ControlPoints`, expected
+    /// degree + 1) for fewer than degree + 1 points; [`BlobError::CapacityExceeded`]
+    /// (`Segments`) beyond [`MAX_SEGMENTS`].
+    pub(crate) fn new(count: usize, closed: bool, degree: usize) -> Result<Self, BlobError> {
+        if !(MIN_DEGREE..=MAX_DEGREE).contains(&degree) {
+            return Err(BlobError::ShapeMismatch {
+                what: Quantity::Degree,
+                expected: degree.clamp(MIN_DEGREE, MAX_DEGREE),
+                found: degree,
+            });
+        }
+        if count <= degree {
             return Err(BlobError::ShapeMismatch {
                 what: Quantity::ControlPoints,
-                expected: MIN_CONTROL_POINTS,
+                expected: degree + 1,
                 found: count,
             });
         }
-        let segments = if closed { count } else { count - 3 };
+        let segments = if closed { count } else { count - degree };
         if segments > MAX_SEGMENTS {
             return Err(BlobError::CapacityExceeded {
                 what: Quantity::Segments,
@@ -79,6 +105,9 @@ impl<S: Scalar> Direction<S> {
             count,
             closed,
             segments,
+            degree,
+            inverses: core::array::from_fn(|i| S::from_f32_saturating(1.0 / (i + 1) as f32)),
+            integers: core::array::from_fn(|i| S::from_f32_saturating(i as f32)),
             scale: S::from_f32_saturating(g),
             half_scale: S::from_f32_saturating(g * 0.5),
             sixth,
@@ -104,10 +133,11 @@ impl<S: Scalar> Direction<S> {
         split(s, self.segments.saturating_sub(1))
     }
 
-    /// Index of the `k`-th control point of the segment starting at `first` (k ≤ 3).
+    /// Index of the `k`-th control point of the segment starting at `first` (k ≤ degree).
     ///
-    /// Open directions never pass `count − 1` (first ≤ count − 4); closed ones wrap at most
-    /// once (first ≤ count − 1, count ≥ 4), so one subtraction replaces the modulo.
+    /// Open directions never pass `count − 1` (first ≤ count − degree − 1); closed ones wrap
+    /// at most once (first ≤ count − 1, count > degree), so one subtraction replaces the
+    /// modulo.
     #[inline]
     pub(crate) fn index(&self, first: usize, k: usize) -> usize {
         let i = first + k;
@@ -150,6 +180,70 @@ impl<S: Scalar> Direction<S> {
     #[inline]
     pub(crate) fn unit_slopes(&self, u: S) -> [S; 4] {
         scaled_slopes(u, self.half)
+    }
+
+    /// The `degree + 1` basis functions N₀(u) … N_p(u) of a segment (the rest 0) and, with
+    /// `slope` = Some(h), h·N₀′(u) … h·N_p′(u), for a direction of any degree (the cubic
+    /// one has its own [`Direction::values`] and [`Direction::slopes`], whose bits the
+    /// cubic blobs keep).
+    ///
+    /// The values come from the triangle of the Cox–de Boor recurrence on integer knots
+    /// ([`Direction::triangle`]); the derivative weights are differences of the degree p − 1
+    /// basis, N_k′ = N_{k−1}^{p−1} − N_k^{p−1}, whose triangle starts from h instead of 1 so
+    /// that its roundings are not multiplied by h. The evaluation uses the weights as
+    /// differences from an anchor point (see [`crate::curve`]), so a constant control
+    /// polygon is reproduced exactly whatever their rounding.
+    #[inline]
+    pub(crate) fn any_degree(&self, u: S, slope: Option<S>) -> ([S; MAX_ORDER], [S; MAX_ORDER]) {
+        let values = self.triangle(u, self.degree, S::ONE);
+        let mut slopes = [S::ZERO; MAX_ORDER];
+        if let Some(h) = slope {
+            let lower = self.triangle(u, self.degree.saturating_sub(1), h);
+            let mut previous = S::ZERO;
+            for (slope, &b) in slopes.iter_mut().zip(&lower).take(self.degree + 1) {
+                *slope = previous.sub(b);
+                previous = b;
+            }
+        }
+        (values, slopes)
+    }
+
+    /// `start`·N_k^`top`(u) for k = 0 … `top` (the rest 0), by
+    /// N_k^d = ((u + d − k)/d)·N_{k−1}^{d−1} plus ((k + 1 − u)/d)·N_k^{d−1}: each factor
+    /// rounded once (both at most 1, so no partial result exceeds `start` and Q16.16 never
+    /// saturates for |start| ≤ [`MAX_SEGMENTS`]), each sum accumulated with one rounding.
+    #[inline]
+    fn triangle(&self, u: S, top: usize, start: S) -> [S; MAX_ORDER] {
+        let mut basis = [S::ZERO; MAX_ORDER];
+        if let Some(first) = basis.first_mut() {
+            *first = start;
+        }
+        let integer = |n: usize| self.integers.get(n).copied().unwrap_or(S::ZERO);
+        for d in 1..=top.min(MAX_DEGREE) {
+            let inverse = self.inverses.get(d - 1).copied().unwrap_or(S::ZERO);
+            // In place from the top: N_k^d reads N_{k−1}^{d−1} and N_k^{d−1}, not yet
+            // overwritten.
+            for k in (0..=d).rev() {
+                let left = match k.checked_sub(1) {
+                    Some(j) => basis.get(j).copied().unwrap_or(S::ZERO),
+                    None => S::ZERO,
+                };
+                let right = basis.get(k).copied().unwrap_or(S::ZERO);
+                let rising = u.add(integer(d - k)).mul(inverse);
+                let falling = integer(k + 1).sub(u).mul(inverse);
+                let acc = S::mac(S::mac(S::ZERO.to_acc(), rising, left), falling, right);
+                if let Some(b) = basis.get_mut(k) {
+                    *b = S::from_acc(acc);
+                }
+            }
+        }
+        basis
+    }
+
+    /// `segments` in `S` (exact): the factor of dC/dt over dC/du.
+    #[inline]
+    pub(crate) fn scale(&self) -> S {
+        self.scale
     }
 
     /// Multiplications of [`Direction::locate`] and [`Direction::values`].
@@ -198,20 +292,20 @@ mod tests {
 
     #[test]
     fn constants_are_rounded_to_nearest() {
-        let d = Direction::<Q16>::new(7, false).unwrap();
+        let d = Direction::<Q16>::new(7, false, 3).unwrap();
         assert_eq!(d.sixth.to_bits(), 10923);
         assert_eq!(d.half.to_bits(), 1 << 15);
         assert_eq!(d.linear.to_bits(), (1 << 15) - 1);
         assert_eq!(d.scale, Q16::from_num(4));
         assert_eq!(d.half_scale, Q16::from_num(2));
-        let d = Direction::<f32>::new(7, true).unwrap();
+        let d = Direction::<f32>::new(7, true, 3).unwrap();
         assert_eq!((d.sixth, d.linear), (1.0 / 6.0, 0.5));
         assert_eq!((d.scale, d.half_scale), (7.0, 3.5));
     }
 
     #[test]
     fn q16_split_is_exact() {
-        let d = Direction::<Q16>::new(MAX_SEGMENTS, true).unwrap();
+        let d = Direction::<Q16>::new(MAX_SEGMENTS, true, 3).unwrap();
         for bits in [
             0,
             1,
@@ -235,7 +329,7 @@ mod tests {
 
     #[test]
     fn end_weights_mirror_each_other() {
-        let d = Direction::<Q16>::new(5, false).unwrap();
+        let d = Direction::<Q16>::new(5, false, 3).unwrap();
         let [a0, a1, a2, a3] = d.values(Q16::ZERO);
         let [b0, b1, b2, b3] = d.values(Q16::ONE);
         assert_eq!([a0, a1, a2, a3], [b3, b2, b1, b0]);
@@ -247,7 +341,7 @@ mod tests {
 
     #[test]
     fn weights_sum_exactly_in_q16() {
-        let d = Direction::<Q16>::new(5, false).unwrap();
+        let d = Direction::<Q16>::new(5, false, 3).unwrap();
         for bits in (0..=65536).step_by(97) {
             let u = Q16::from_bits(bits);
             let b = d.values(u);

@@ -1,5 +1,6 @@
-//! Uniform cubic B-spline curves and tensor-product surfaces: the curves Hoffmann & Várady fit
-//! through a Kohonen chain's ordering of scattered points, and their two-dimensional analogue.
+//! Uniform B-spline curves of degree 2 to 5 and bicubic tensor-product surfaces: the curves
+//! Hoffmann & Várady fit through a Kohonen chain's ordering of scattered points, and their
+//! two-dimensional analogue.
 //!
 //! - [`BSplineCurve`]: position and tangent of a 2-D or 3-D curve, open or closed;
 //! - [`BSplineSurface`]: position, partial derivatives and unit normal of a surface, open or
@@ -9,8 +10,9 @@
 //!
 //! # The contract
 //!
-//! A direction with n control points is *closed* (n segments, indices wrap mod n) or *open*
-//! (n − 3 segments); n ≥ [`MIN_CONTROL_POINTS`] = 4 either way, and at most
+//! A direction of degree p ([`MIN_DEGREE`] = 2 to [`MAX_DEGREE`] = 5; surfaces: 3) with n
+//! control points is *closed* (n segments, indices wrap mod n) or *open* (n − p segments);
+//! n ≥ p + 1 either way ([`MIN_CONTROL_POINTS`] = 4 for a cubic), and at most
 //! [`MAX_SEGMENTS`] segments. A global parameter t ∈ [0, 1] maps to
 //! s = t·segments, i = min(⌊s⌋, segments − 1), u = s − i; t outside [0, 1] is clamped and a
 //! NaN t is taken as 0. Then
@@ -18,13 +20,19 @@
 //! C(t) = Σₖ Bₖ(u)·P₍ᵢ₊ₖ₎ (k = 0‥3), with B₀ = (1 − u)³/6, B₁ = (3u³ − 6u² + 4)/6,
 //! B₂ = (−3u³ + 3u² + 3u + 1)/6, B₃ = u³/6,
 //!
-//! and dC/dt = segments·Σₖ Bₖ′(u)·P₍ᵢ₊ₖ₎. A surface is the tensor product:
+//! and dC/dt = segments·Σₖ Bₖ′(u)·P₍ᵢ₊ₖ₎. For degree p the sum runs over k = 0‥p with the
+//! uniform B-spline basis on integer knots (the Cox–de Boor recurrence
+//! N_k^d = ((u + d − k)·N_{k−1}^{d−1} + (k + 1 − u)·N_k^{d−1})/d, N₀⁰ = 1; B is N^p) and
+//! the derivative weights N_{k−1}^{p−1} − N_k^{p−1}. A surface is the tensor product:
 //! S(u, v) = Σⱼ Σₖ Bⱼ(v)·Bₖ(u)·P[(i_v + j)·count_u + (i_u + k)].
 //!
 //! # How it is computed
 //!
 //! The basis sums to 1 and its derivative to 0, so the core evaluates
-//! C = P₍ᵢ₊₁₎ + Σ_{k≠1} Bₖ·(P₍ᵢ₊ₖ₎ − P₍ᵢ₊₁₎) (for surfaces, around P₍₁₁₎): a constant control
+//! C = P₍ᵢ₊₁₎ + Σ_{k≠1} Bₖ·(P₍ᵢ₊ₖ₎ − P₍ᵢ₊₁₎) (for surfaces, around P₍₁₁₎; for degree p ≠ 3
+//! around P₍ᵢ₊⌊p/2⌋₎, with the recurrence's weights, each factor and sum rounded once and the
+//! derivative's triangle started from `segments` so that its roundings are not scaled by it;
+//! accuracy as stated in `core/tests/curve_degree.rs`): a constant control
 //! polygon reproduces its constant exactly, in `f32` and in Q16.16, and errors scale with the
 //! control polygon's local differences rather than its distance from the origin. Each output
 //! coordinate is one accumulation ([`Scalar::to_acc`](crate::scalar::Scalar::to_acc),
@@ -48,9 +56,9 @@
 //! [`ScalarKind::Q16_16`](crate::scalar::ScalarKind). The postcard payloads are
 //!
 //! ```text
-//! curve:   { dimension: u8, closed: bool, control: [u8], metadata: [u8] }
-//! surface: { closed_u: bool, closed_v: bool, count_u: u16, count_v: u16,
-//!            control: [u8], metadata: [u8] }
+//! curve:   { dimension: u8, closed: bool, degree: u8, frame, control: [u8], metadata: [u8] }
+//! surface: { closed_u: bool, closed_v: bool, degree_u: u8, degree_v: u8, count_u: u16,
+//!            count_v: u16, frame, control: [u8], metadata: [u8] }
 //! ```
 //!
 //! where `control` holds x, y, z of every control point (z = 0 for 2-D curves), 4
@@ -65,7 +73,7 @@
 //! let square = [[1.0, 1.0, 0.0], [-1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]];
 //! let control: Vec<u8> = square.iter().flatten().flat_map(|&c| ScalarKind::Q16_16.encode(c).unwrap()).collect();
 //! let payload = CurvePayload {
-//!     dimension: 2, closed: true, frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
+//!     dimension: 2, closed: true, degree: 3, frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
 //!     control: &control, metadata: &[],
 //! };
 //! let mut blob = [0_u8; 128];
@@ -92,5 +100,5 @@ mod payload;
 pub use crate::implicit::LANES;
 pub use bspline_curve::{BSplineCurve, CurvePoint, DEFAULT_CURVE_POINTS};
 pub use bspline_surface::{BSplineSurface, DEFAULT_SURFACE_POINTS, SurfacePoint};
-pub use direction::{MAX_SEGMENTS, MIN_CONTROL_POINTS};
+pub use direction::{MAX_DEGREE, MAX_SEGMENTS, MIN_CONTROL_POINTS, MIN_DEGREE};
 pub use payload::{CurvePayload, SurfacePayload};

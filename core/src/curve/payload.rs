@@ -20,7 +20,8 @@ use crate::scalar::ScalarKind;
 /// let control: Vec<u8> =
 ///     points.iter().flatten().flat_map(|&c| ScalarKind::F32.encode(c).unwrap()).collect();
 /// let payload = CurvePayload {
-///     dimension: 2, closed: false, frame: IDENTITY_PAYLOAD, control: &control, metadata: b"fit",
+///     dimension: 2, closed: false, degree: 3, frame: IDENTITY_PAYLOAD, control: &control,
+///     metadata: b"fit",
 /// };
 /// let mut out = [0_u8; 128];
 /// let len = payload.write(ScalarKind::F32, &mut out)?;
@@ -34,8 +35,12 @@ use crate::scalar::ScalarKind;
 pub struct CurvePayload<'a> {
     /// 2 or 3. A 2-D curve stores z = 0 for every control point.
     pub dimension: u8,
-    /// Whether the control points wrap around (n segments) or not (n − 3 segments).
+    /// Whether the control points wrap around (n segments) or not (n − degree segments).
     pub closed: bool,
+    /// The polynomial degree p, 2 to 5 ([`MIN_DEGREE`](super::MIN_DEGREE) to
+    /// [`MAX_DEGREE`](super::MAX_DEGREE)); version 3 blobs, which have no such field, are
+    /// cubic.
+    pub degree: u8,
     /// Where the control points' coordinates sit among the user's ([`crate::frame`]); a 2-D
     /// curve's has z = 0.
     #[serde(borrow)]
@@ -66,7 +71,7 @@ pub struct CurvePayload<'a> {
 ///     }
 /// }
 /// let payload = SurfacePayload {
-///     closed_u: false, closed_v: false, count_u: 4, count_v: 4,
+///     closed_u: false, closed_v: false, degree_u: 3, degree_v: 3, count_u: 4, count_v: 4,
 ///     frame: neurosurf_core::frame::IDENTITY_PAYLOAD, control: &control, metadata: &[],
 /// };
 /// let mut out = vec![0_u8; 256];
@@ -81,6 +86,11 @@ pub struct SurfacePayload<'a> {
     pub closed_u: bool,
     /// Whether the v direction (across rows) wraps around.
     pub closed_v: bool,
+    /// The polynomial degree along u (version 3 blobs: 3). This core evaluates cubic
+    /// surfaces; another degree is refused at load.
+    pub degree_u: u8,
+    /// The polynomial degree along v, as `degree_u`.
+    pub degree_v: u8,
     /// Control points per row (u direction), ≥ 4.
     pub count_u: u16,
     /// Rows (v direction), ≥ 4.
@@ -104,7 +114,21 @@ impl<'a> CurvePayload<'a> {
     /// Framing errors of [`blob::parse`], [`BlobError::WrongModelKind`],
     /// [`BlobError::MalformedPayload`].
     pub fn from_blob(bytes: &'a [u8]) -> Result<(BlobHeader, Self), BlobError> {
-        blob::decode_kind(bytes, ModelKind::Curve)
+        let (header, payload) = blob::parse_kind(bytes, ModelKind::Curve)?;
+        let payload = if header.version == 3 {
+            let old: CurveV3<'a> = blob::decode_payload(payload)?;
+            CurvePayload {
+                dimension: old.dimension,
+                closed: old.closed,
+                degree: 3,
+                frame: old.frame,
+                control: old.control,
+                metadata: old.metadata,
+            }
+        } else {
+            blob::decode_payload(payload)?
+        };
+        Ok((header, payload))
     }
 
     /// Frames this payload as a [`ModelKind::Curve`] blob in `out`, whose `control` is stored
@@ -125,7 +149,24 @@ impl<'a> SurfacePayload<'a> {
     /// Framing errors of [`blob::parse`], [`BlobError::WrongModelKind`],
     /// [`BlobError::MalformedPayload`].
     pub fn from_blob(bytes: &'a [u8]) -> Result<(BlobHeader, Self), BlobError> {
-        blob::decode_kind(bytes, ModelKind::SplineSurface)
+        let (header, payload) = blob::parse_kind(bytes, ModelKind::SplineSurface)?;
+        let payload = if header.version == 3 {
+            let old: SurfaceV3<'a> = blob::decode_payload(payload)?;
+            SurfacePayload {
+                closed_u: old.closed_u,
+                closed_v: old.closed_v,
+                degree_u: 3,
+                degree_v: 3,
+                count_u: old.count_u,
+                count_v: old.count_v,
+                frame: old.frame,
+                control: old.control,
+                metadata: old.metadata,
+            }
+        } else {
+            blob::decode_payload(payload)?
+        };
+        Ok((header, payload))
     }
 
     /// Frames this payload as a [`ModelKind::SplineSurface`] blob in `out`, whose `control`
@@ -136,4 +177,32 @@ impl<'a> SurfacePayload<'a> {
     pub fn write(&self, scalar: ScalarKind, out: &mut [u8]) -> Result<usize, BlobError> {
         blob::write(ModelKind::SplineSurface, scalar, self, out)
     }
+}
+
+/// A version 3 curve payload: no degree (cubic).
+#[derive(Deserialize)]
+struct CurveV3<'a> {
+    dimension: u8,
+    closed: bool,
+    #[serde(borrow)]
+    frame: FramePayload<'a>,
+    #[serde(borrow)]
+    control: &'a [u8],
+    #[serde(borrow)]
+    metadata: &'a [u8],
+}
+
+/// A version 3 surface payload: no degrees (cubic).
+#[derive(Deserialize)]
+struct SurfaceV3<'a> {
+    closed_u: bool,
+    closed_v: bool,
+    count_u: u16,
+    count_v: u16,
+    #[serde(borrow)]
+    frame: FramePayload<'a>,
+    #[serde(borrow)]
+    control: &'a [u8],
+    #[serde(borrow)]
+    metadata: &'a [u8],
 }

@@ -58,9 +58,21 @@ pub fn encode_points(points: &[[f64; 3]], kind: ScalarKind) -> Vec<u8> {
 }
 
 pub fn curve_blob_raw(kind: ScalarKind, dimension: u8, closed: bool, control: &[u8]) -> Vec<u8> {
+    curve_blob_of_degree(kind, dimension, closed, 3, control)
+}
+
+/// [`curve_blob_raw`] of any `degree`.
+pub fn curve_blob_of_degree(
+    kind: ScalarKind,
+    dimension: u8,
+    closed: bool,
+    degree: u8,
+    control: &[u8],
+) -> Vec<u8> {
     let payload = CurvePayload {
         dimension,
         closed,
+        degree,
         frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
         control,
         metadata: b"test curve",
@@ -84,6 +96,8 @@ pub fn surface_blob_raw(
     let payload = SurfacePayload {
         closed_u: closed[0],
         closed_v: closed[1],
+        degree_u: 3,
+        degree_v: 3,
         count_u: counts[0],
         count_v: counts[1],
         frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
@@ -109,6 +123,11 @@ pub fn surface_blob(kind: ScalarKind, reference: &RefSurface) -> Vec<u8> {
 /// the current format version.
 pub fn frame(model: u8, scalar: u8, payload: &[u8]) -> Vec<u8> {
     common::frame(blob::FORMAT_VERSION, model, scalar, payload)
+}
+
+/// [`frame`] in format `version`.
+pub fn frame_version(version: u16, model: u8, scalar: u8, payload: &[u8]) -> Vec<u8> {
+    common::frame(version, model, scalar, payload)
 }
 
 #[allow(unused_imports)]

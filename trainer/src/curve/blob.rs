@@ -78,6 +78,8 @@ pub fn curve_to_blob(
     let payload = CurvePayload {
         dimension: if curve.dimension == 2 { 2 } else { 3 },
         closed: curve.closed,
+        // validate() checked 2..=5.
+        degree: curve.degree as u8,
         frame: frame.payload(),
         control: &control,
         metadata: &metadata,
@@ -117,6 +119,8 @@ pub fn surface_to_blob(
     let payload = SurfacePayload {
         closed_u: surface.closed_u,
         closed_v: surface.closed_v,
+        degree_u: 3,
+        degree_v: 3,
         count_u: count(surface.count_u)?,
         count_v: count(surface.count_v)?,
         frame: frame.payload(),
@@ -147,6 +151,7 @@ pub fn curve_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedCurve> {
     let curve = BSplineCurve {
         dimension: usize::from(payload.dimension),
         closed: payload.closed,
+        degree: usize::from(payload.degree),
         control: decode_control(payload.control, &payload.frame, header.scalar),
     };
     curve
@@ -375,6 +380,7 @@ mod tests {
         BSplineCurve {
             dimension: 2,
             closed: true,
+            degree: 3,
             control: vec![
                 [0.0, 0.0, 0.0],
                 [1.5, 0.25, 0.0],
@@ -465,6 +471,7 @@ mod tests {
         let long = BSplineCurve {
             dimension: 3,
             closed: false,
+            degree: 3,
             control: (0..core_curve::DEFAULT_CURVE_POINTS + 1)
                 .map(|i| [i as f64 * 0.01, 0.0, 0.0])
                 .collect(),

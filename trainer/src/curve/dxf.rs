@@ -1,6 +1,6 @@
 //! Curves as DXF `SPLINE` entities, the form 2-D CAD tools import.
 //!
-//! Each curve becomes one non-rational degree-3 `SPLINE` on clamped knots ([`clamped`]): it
+//! Each curve becomes one non-rational `SPLINE` of its degree (2 to 5) on clamped knots ([`clamped`]): it
 //! starts at its first control point and ends at its last, with the parameter range [0, 1]
 //! of [`BSplineCurve::point`]. A closed curve is marked closed (flag 1); its seam is
 //! continuous to the second derivative, as in the model. A 2-D curve lies in z = 0 and is
@@ -16,7 +16,7 @@ use dxf::{Drawing, Point};
 
 use crate::error::{Error, Result};
 
-use super::export::{DEGREE, clamped, export_curve};
+use super::export::{clamped, export_curve};
 use super::spline::BSplineCurve;
 
 /// DXF `SPLINE` flag: the curve closes on itself.
@@ -35,7 +35,7 @@ pub fn curves_dxf(curves: &[BSplineCurve]) -> Result<Vec<u8>> {
     for curve in curves {
         let export = clamped(&export_curve(curve)?);
         let mut spline = Spline {
-            degree_of_curve: DEGREE as i32,
+            degree_of_curve: export.degree as i32,
             knot_values: export.knots,
             control_points: export
                 .control_points
@@ -95,11 +95,13 @@ mod tests {
             BSplineCurve {
                 dimension: 2,
                 closed: true,
+                degree: 3,
                 control: ring(7, 0.0),
             },
             BSplineCurve {
                 dimension: 3,
                 closed: false,
+                degree: 3,
                 control: ring(12, 0.4),
             },
         ];

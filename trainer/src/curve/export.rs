@@ -1,11 +1,13 @@
 //! Curves and surfaces in the forms CAD tools read: degree, knots and control points (JSON),
 //! and a curve as an SVG path of cubic Béziers in the model's coordinates.
 //!
-//! Both forms are exact: the uniform cubic B-spline of [`BSplineCurve`] is the standard
-//! (unclamped) B-spline of degree 3 on the knots kᵢ = (i − 3)/segments, whose domain
-//! [k₃, k_{m}] is the curve's parameter range [0, 1]; a closed curve repeats its first three
-//! control points at the end (m = n + 3). Each polynomial segment is also a cubic Bézier with
-//! points (P₀ + 4P₁ + P₂)/6, (2P₁ + P₂)/3, (P₁ + 2P₂)/3, (P₁ + 4P₂ + P₃)/6.
+//! Both forms are exact: the uniform B-spline of degree p of [`BSplineCurve`] is the standard
+//! (unclamped) B-spline of degree p on the knots kᵢ = (i − p)/segments, whose domain
+//! [k_p, k_m] is the curve's parameter range [0, 1]; a closed curve repeats its first p
+//! control points at the end (m = n + p). Each polynomial segment of a cubic is also a cubic
+//! Bézier with points (P₀ + 4P₁ + P₂)/6, (2P₁ + P₂)/3, (P₁ + 2P₂)/3, (P₁ + 4P₂ + P₃)/6; a
+//! quadratic's segments are cubic Béziers too (degree elevation), while quartic and quintic
+//! segments have no exact cubic Bézier and no SVG form.
 
 use serde::Serialize;
 
@@ -13,23 +15,23 @@ use crate::error::{Error, Result};
 
 use super::spline::{BSplineCurve, BSplineSurface};
 
-/// The degree of every curve and surface the core evaluates.
+/// The degree of every surface the core evaluates (curves have their own).
 pub const DEGREE: usize = 3;
 
 /// A curve as degree, knots and control points: evaluating the B-spline these define with de
 /// Boor's algorithm at t ∈ `domain` gives [`BSplineCurve::point`]`(t)`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CurveExport {
-    /// Always [`DEGREE`].
+    /// The curve's degree p, 2 to 5.
     pub degree: usize,
     /// 2 or 3: the length of each control point.
     pub dimension: usize,
-    /// Whether the curve closes on itself (its control points then end with its first
-    /// three again).
+    /// Whether the curve closes on itself (its control points then end with its first p
+    /// again).
     pub closed: bool,
     /// The parameter range, [0, 1].
     pub domain: [f64; 2],
-    /// m + 4 non-decreasing knots (uniform; unclamped).
+    /// m + p + 1 non-decreasing knots (uniform; unclamped).
     pub knots: Vec<f64>,
     /// m control points.
     pub control_points: Vec<Vec<f64>>,
@@ -62,15 +64,15 @@ pub struct SurfaceExport {
 
 /// The uniform knots of a direction with `count` control points (before wrapping) and the
 /// indices of its control points in standard form.
-fn direction(count: usize, closed: bool) -> (Vec<f64>, Vec<usize>) {
+fn direction(count: usize, closed: bool, degree: usize) -> (Vec<f64>, Vec<usize>) {
     let (segments, indices): (usize, Vec<usize>) = if closed {
-        (count, (0..count + DEGREE).map(|i| i % count).collect())
+        (count, (0..count + degree).map(|i| i % count).collect())
     } else {
-        (count.saturating_sub(DEGREE), (0..count).collect())
+        (count.saturating_sub(degree), (0..count).collect())
     };
     let segments = segments.max(1) as f64;
-    let knots = (0..indices.len() + DEGREE + 1)
-        .map(|i| (i as f64 - DEGREE as f64) / segments)
+    let knots = (0..indices.len() + degree + 1)
+        .map(|i| (i as f64 - degree as f64) / segments)
         .collect();
     (knots, indices)
 }
@@ -81,9 +83,9 @@ fn direction(count: usize, closed: bool) -> (Vec<f64>, Vec<usize>) {
 /// [`Error::InvalidInput`] when the curve is not valid ([`BSplineCurve::validate`]).
 pub fn export_curve(curve: &BSplineCurve) -> Result<CurveExport> {
     curve.validate()?;
-    let (knots, indices) = direction(curve.control.len(), curve.closed);
+    let (knots, indices) = direction(curve.control.len(), curve.closed, curve.degree);
     Ok(CurveExport {
-        degree: DEGREE,
+        degree: curve.degree,
         dimension: curve.dimension,
         closed: curve.closed,
         domain: [0.0, 1.0],
@@ -96,19 +98,20 @@ pub fn export_curve(curve: &BSplineCurve) -> Result<CurveExport> {
 }
 
 /// `export` with clamped knots: the same curve, parameter for parameter, on the knots
-/// 0, 0, 0, 0, 1/s, …, (s − 1)/s, 1, 1, 1, 1 that CAD tools assume, so that it starts at its
-/// first control point and ends at its last. Each end of the domain is inserted as a knot
-/// (Boehm's algorithm) until it has multiplicity 3, and what lies outside the domain is
-/// dropped; the control point count stays m.
+/// 0 (p + 1 times), 1/s, …, (s − 1)/s, 1 (p + 1 times) that CAD tools assume, so that it
+/// starts at its first control point and ends at its last. Each end of the domain is
+/// inserted as a knot (Boehm's algorithm) until it has multiplicity p, and what lies outside
+/// the domain is dropped; the control point count stays m.
 pub fn clamped(export: &CurveExport) -> CurveExport {
     let (mut knots, mut control) = (export.knots.clone(), export.control_points.clone());
     let [start, end] = export.domain;
-    clamp_start(&mut knots, &mut control, start);
+    let p = export.degree;
+    clamp_start(&mut knots, &mut control, start, p);
     // The end is the start of the reversed curve, on knots t ↦ −t.
     knots.reverse();
     knots.iter_mut().for_each(|k| *k = -*k);
     control.reverse();
-    clamp_start(&mut knots, &mut control, -end);
+    clamp_start(&mut knots, &mut control, -end, p);
     knots.reverse();
     knots.iter_mut().for_each(|k| *k = -*k);
     control.reverse();
@@ -119,12 +122,12 @@ pub fn clamped(export: &CurveExport) -> CurveExport {
     }
 }
 
-/// Clamps a degree-[`DEGREE`] B-spline at the start `a` of its domain (a knot of multiplicity
-/// 1 with [`DEGREE`] knots before it): inserts `a` twice, drops the two control points and
+/// Clamps a degree-`p` B-spline at the start `a` of its domain (a knot of multiplicity 1
+/// with p knots before it): inserts `a` p − 1 times, drops the p − 1 control points and
 /// knots before it, and sets the first knot to `a`.
-fn clamp_start(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, a: f64) {
-    for _ in 1..DEGREE {
-        insert_knot(knots, control, a);
+fn clamp_start(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, a: f64, p: usize) {
+    for _ in 1..p {
+        insert_knot(knots, control, a, p);
     }
     let first = knots.iter().position(|&k| k >= a).unwrap_or(0);
     let drop = first.saturating_sub(1);
@@ -133,10 +136,9 @@ fn clamp_start(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, a: f64) {
     knots[0] = a;
 }
 
-/// Inserts the knot `t` once into a degree-[`DEGREE`] B-spline (Boehm): the curve is
-/// unchanged, one control point more.
-fn insert_knot(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, t: f64) {
-    let p = DEGREE;
+/// Inserts the knot `t` once into a degree-`p` B-spline (Boehm): the curve is unchanged,
+/// one control point more.
+fn insert_knot(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, t: f64, p: usize) {
     // The span k with knots[k] ≤ t < knots[k + 1].
     let k = knots.iter().rposition(|&u| u <= t).unwrap_or(p);
     let mut inserted = Vec::with_capacity(control.len() + 1);
@@ -165,8 +167,8 @@ fn insert_knot(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, t: f64) {
 /// [`Error::InvalidInput`] when the surface is not valid ([`BSplineSurface::validate`]).
 pub fn export_surface(surface: &BSplineSurface) -> Result<SurfaceExport> {
     surface.validate()?;
-    let (knots_u, columns) = direction(surface.count_u, surface.closed_u);
-    let (knots_v, rows) = direction(surface.count_v, surface.closed_v);
+    let (knots_u, columns) = direction(surface.count_u, surface.closed_u, DEGREE);
+    let (knots_v, rows) = direction(surface.count_v, surface.closed_v, DEGREE);
     let control_points = rows
         .iter()
         .flat_map(|&v| {
@@ -189,12 +191,41 @@ pub fn export_surface(surface: &BSplineSurface) -> Result<SurfaceExport> {
     })
 }
 
-/// The curve's polynomial segments as cubic Béziers, in order (four points each).
+/// The curve's polynomial segments as cubic Béziers, in order (four points each): exact for
+/// degrees 2 and 3.
 ///
 /// # Errors
-/// [`Error::InvalidInput`] when the curve is not valid.
+/// [`Error::InvalidInput`] when the curve is not valid, or of degree 4 or 5 (whose segments
+/// no cubic Bézier holds).
 pub fn bezier_segments(curve: &BSplineCurve) -> Result<Vec<[[f64; 3]; 4]>> {
     curve.validate()?;
+    if curve.degree > 3 {
+        return Err(Error::invalid(format!(
+            "an SVG path holds cubic Béziers, and a curve of degree {} has no exact one; \
+             export it as JSON (--json) or DXF (--dxf) instead, or fit it with --degree 3",
+            curve.degree
+        )));
+    }
+    if curve.degree < 3 {
+        // A polynomial of degree ≤ 3 on [0, 1] is the cubic Bézier C(0), C(0) + C′(0)/3,
+        // C(1) − C′(1)/3, C(1) (C′ per unit of the segment's own parameter).
+        let segments = curve.segments();
+        let g = segments as f64;
+        return Ok((0..segments)
+            .map(|i| {
+                let (a, b) = (i as f64 / g, (i + 1) as f64 / g);
+                let (start, end) = (curve.point(a), curve.point(b));
+                // Inside the segment, so that each end's tangent is this segment's.
+                let (ta, tb) = (curve.tangent(a), curve.tangent(b.min(1.0)));
+                [
+                    start,
+                    [0, 1, 2].map(|k| start[k] + ta[k] / (3.0 * g)),
+                    [0, 1, 2].map(|k| end[k] - tb[k] / (3.0 * g)),
+                    end,
+                ]
+            })
+            .collect());
+    }
     let n = curve.control.len();
     let mix = |a: [f64; 3], b: [f64; 3], c: [f64; 3], w: [f64; 3]| {
         [0, 1, 2].map(|k| (w[0] * a[k] + w[1] * b[k] + w[2] * c[k]) / 6.0)
@@ -273,29 +304,10 @@ pub fn curve_svg(curve: &BSplineCurve) -> Result<String> {
 mod tests {
     use super::*;
 
-    /// de Boor's algorithm on standard knots: the reference a CAD tool applies.
+    /// de Boor's algorithm on standard knots (the reference a CAD tool applies), for the
+    /// surfaces' cubic rows and the curves' degree.
     fn de_boor(knots: &[f64], control: &[Vec<f64>], t: f64) -> Vec<f64> {
-        let m = control.len();
-        // The span k with knots[k] ≤ t < knots[k + 1], inside the domain.
-        let k = (DEGREE..m)
-            .rfind(|&k| knots[k] <= t)
-            .unwrap_or(DEGREE)
-            .min(m - 1);
-        let mut d: Vec<Vec<f64>> = (0..=DEGREE)
-            .map(|j| control[j + k - DEGREE].clone())
-            .collect();
-        for r in 1..=DEGREE {
-            for j in (r..=DEGREE).rev() {
-                let i = j + k - DEGREE;
-                let alpha = (t - knots[i]) / (knots[i + DEGREE + 1 - r] - knots[i]);
-                d[j] = d[j]
-                    .iter()
-                    .zip(&d[j - 1])
-                    .map(|(a, b)| (1.0 - alpha) * b + alpha * a)
-                    .collect();
-            }
-        }
-        d[DEGREE].clone()
+        crate::curve::tests::de_boor(knots, control, DEGREE, t)
     }
 
     fn cubic_bezier(b: &[[f64; 3]; 4], u: f64) -> [f64; 3] {
@@ -321,21 +333,25 @@ mod tests {
             BSplineCurve {
                 dimension: 2,
                 closed: false,
+                degree: 3,
                 control: control(9, false),
             },
             BSplineCurve {
                 dimension: 2,
                 closed: true,
+                degree: 3,
                 control: control(6, false),
             },
             BSplineCurve {
                 dimension: 3,
                 closed: false,
+                degree: 3,
                 control: control(4, true),
             },
             BSplineCurve {
                 dimension: 3,
                 closed: true,
+                degree: 3,
                 control: control(11, true),
             },
         ]
@@ -437,6 +453,7 @@ mod tests {
         let curve = BSplineCurve {
             dimension: 3,
             closed: true,
+            degree: 3,
             control: row,
         };
         let points: Vec<Vec<f64>> = e.control_points[..e.count_u]

@@ -10,13 +10,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-use super::basis::{cubic_basis, locate};
+use super::basis::{cubic_basis, locate, uniform_basis};
 use super::corners::{Corner, find_corners};
 use neurosurf_core::curve::DEFAULT_CURVE_POINTS;
 
 use super::least_squares::{Affine, NormalEquations};
 use super::points::MIN_POINTS;
-use super::spline::{BSplineCurve, MIN_CONTROL_POINTS};
+use super::spline::{BSplineCurve, MIN_CONTROL_POINTS, check_degree};
 use super::tridiagonal::{solve_cyclic, solve_tridiagonal};
 use crate::geometry::vector::distance;
 
@@ -38,10 +38,17 @@ pub struct ApproximationOptions {
     /// control points coincide (on by default).
     #[serde(default = "keep_corners")]
     pub corners: bool,
+    /// The polynomial degree, 2 to 5 (3 by default).
+    #[serde(default = "cubic")]
+    pub degree: usize,
 }
 
 fn keep_corners() -> bool {
     true
+}
+
+fn cubic() -> usize {
+    3
 }
 
 impl Default for ApproximationOptions {
@@ -51,6 +58,7 @@ impl Default for ApproximationOptions {
             smoothing: 1e-6,
             tolerance: None,
             corners: true,
+            degree: 3,
         }
     }
 }
@@ -216,15 +224,17 @@ pub fn approximate(
     options: &ApproximationOptions,
 ) -> Result<Approximation> {
     check_ordered(ordered, dimension)?;
+    check_degree(options.degree)?;
     let n = ordered.len();
-    let most = if closed { n } else { n + 2 };
+    let (fewest, most) = control_range(n, closed, options.degree);
     let k = options
         .control_points
-        .unwrap_or_else(|| default_control_points(n, closed));
-    if !(MIN_CONTROL_POINTS..=most).contains(&k) {
+        .unwrap_or_else(|| default_control_points(n, closed).max(fewest));
+    if !(fewest..=most).contains(&k) {
         return Err(Error::invalid(format!(
-            "{k} control points requested for {n} {} points: use {MIN_CONTROL_POINTS}..={most}",
-            if closed { "closed" } else { "open" }
+            "{k} control points requested for {n} {} points at degree {}: use {fewest}..={most}",
+            if closed { "closed" } else { "open" },
+            options.degree
         )));
     }
     if !(options.smoothing.is_finite() && options.smoothing >= 0.0) {
@@ -264,8 +274,9 @@ pub(crate) fn approximate_within(
         )));
     }
     let n = ordered.len();
-    let most = (if closed { n } else { n + 2 }).min(DEFAULT_CURVE_POINTS);
-    let fewest = MIN_CONTROL_POINTS.max(8).min(most);
+    let (least, most) = control_range(n, closed, options.degree);
+    let most = most.min(DEFAULT_CURVE_POINTS);
+    let fewest = least.max(8).min(most);
     // The corners depend on the points alone: found once for every K tried.
     let detected = detect(ordered, closed, options);
     let shape = (dimension, closed);
@@ -343,7 +354,8 @@ fn fit_with_corners(
     options: &ApproximationOptions,
     detected: &[Corner],
 ) -> Result<Approximation> {
-    let segments = if closed { k } else { k - 3 };
+    let degree = options.degree;
+    let segments = if closed { k } else { k - degree };
     let fit = |corners: &[KnotCorner], corrections: usize| {
         let shape = (dimension, closed, k);
         fit_at(
@@ -355,7 +367,7 @@ fn fit_with_corners(
             corrections,
         )
     };
-    let corners = corner_knots(detected, &parameters, segments, closed);
+    let corners = corner_knots(detected, &parameters, segments, closed, degree);
     let smooth = fit(&[], 0)?;
     if corners.is_empty() {
         return Ok(smooth);
@@ -368,7 +380,8 @@ fn fit_with_corners(
     };
     // A corner fits its own points better than a rounded one does; one that fits them worse
     // cuts across a bend that sparse points made look like two straight arms.
-    let reach = (CORRECTED_SEGMENTS * ordered.len() as f64 / segments as f64).ceil() as usize;
+    let reach =
+        (corrected_segments(degree) * ordered.len() as f64 / segments as f64).ceil() as usize;
     let near = |a: &Approximation, c: &KnotCorner| local_rms(a, ordered, c.index, reach, closed);
     let kept: Vec<KnotCorner> = corners
         .iter()
@@ -388,7 +401,8 @@ fn fit_with_corners(
 }
 
 /// The root-mean-square distance of the points within `reach` places of `centre` in the order
-/// from `fit`'s curve at their parameters.
+/// from `fit`'s curve (from their feet on it, found from their parameters: how far along a
+/// straight arm the curve places a point is not the fit's error).
 fn local_rms(
     fit: &Approximation,
     ordered: &[[f64; 3]],
@@ -407,7 +421,11 @@ fn local_rms(
     };
     let sum: f64 = indices
         .iter()
-        .map(|&j| distance(fit.curve.point(fit.parameters[j]), ordered[j]).powi(2))
+        .map(|&j| {
+            let q = ordered[j];
+            let foot = foot_parameter(&fit.curve, q, fit.parameters[j]);
+            distance(fit.curve.point(foot), q).powi(2)
+        })
         .sum();
     (sum / indices.len().max(1) as f64).sqrt()
 }
@@ -439,22 +457,31 @@ fn fit_at(
     corrections: usize,
 ) -> Result<Approximation> {
     let n = ordered.len();
-    let segments = if closed { k } else { k - 3 };
+    let degree = options.degree;
+    let segments = if closed { k } else { k - degree };
     let mut parameters = move_to_knots(parameters, corners, segments, closed);
     let knots: Vec<usize> = corners.iter().map(|c| c.knot).collect();
-    let (controls, unknowns) = tie_corners(control_layout(k, closed, ordered), corners);
+    let layout = control_layout(k, closed, ordered, degree);
+    let (controls, unknowns) = tie_corners(layout, corners, degree);
     let solve = |parameters: &[f64]| -> Result<BSplineCurve> {
         let mut equations = NormalEquations::new(unknowns);
         for (&t, &q) in parameters.iter().zip(ordered) {
             let (i, u) = locate(t, segments);
-            let b = cubic_basis(u);
-            let row: Vec<(f64, &Affine)> = (0..4).map(|a| (b[a], &controls[(i + a) % k])).collect();
+            let b = if degree == 3 {
+                let c = cubic_basis(u);
+                [c[0], c[1], c[2], c[3], 0.0, 0.0]
+            } else {
+                uniform_basis(degree, u)
+            };
+            let row: Vec<(f64, &Affine)> = (0..=degree)
+                .map(|a| (b[a], &controls[(i + a) % k]))
+                .collect();
             equations.add_row(&row, q, 1.0);
         }
         let weight = options.smoothing * equations.mean_diagonal();
         let differences = if closed { 0..k } else { 1..k - 1 };
-        // No bending penalty at a corner's three control points.
-        let at_corner = |c: usize| knots.iter().any(|&i| (c + k - i) % k <= 2);
+        // No bending penalty at a corner's tied control points.
+        let at_corner = |c: usize| knots.iter().any(|&i| (c + k - i) % k < degree);
         for c in differences.filter(|&c| !at_corner(c)) {
             let row = [
                 (1.0, &controls[(c + k - 1) % k]),
@@ -472,6 +499,7 @@ fn fit_at(
         Ok(BSplineCurve {
             dimension,
             closed,
+            degree,
             control: controls.iter().map(|a| a.evaluate(&solution)).collect(),
         })
     };
@@ -481,7 +509,7 @@ fn fit_at(
     // it: each point moves to its foot on the curve and the fit is solved again.
     // Only within a few segments of a corner: elsewhere evenly spread parameters are right,
     // and moving them lets the fit follow the noise.
-    let reach = CORRECTED_SEGMENTS / segments as f64;
+    let reach = corrected_segments(degree) / segments as f64;
     let near_corner = |t: f64| {
         corners.iter().any(|c| {
             let d = (t - c.knot as f64 / segments as f64).abs();
@@ -519,6 +547,12 @@ const MIN_KNOTS_APART: usize = 4;
 
 /// Parameters within this many segments of a corner move to their feet on the curve.
 const CORRECTED_SEGMENTS: f64 = 4.0;
+
+/// [`CORRECTED_SEGMENTS`] for a cubic, one more segment per degree above it: a corner's tied
+/// control points reach p segments.
+fn corrected_segments(degree: usize) -> f64 {
+    CORRECTED_SEGMENTS + degree.saturating_sub(3) as f64
+}
 
 /// Times the parameters of a fit with corners move to their feet on the curve.
 const PARAMETER_CORRECTIONS: usize = 4;
@@ -562,7 +596,11 @@ fn corner_knots(
     parameters: &[f64],
     segments: usize,
     closed: bool,
+    degree: usize,
 ) -> Vec<KnotCorner> {
+    // Cubic: 4 knots apart and knots 2 ..= segments − 2; each degree above 3 one more.
+    let apart_at_least = MIN_KNOTS_APART + degree.saturating_sub(3);
+    let margin = 2 + degree.saturating_sub(3);
     let mut sharpest: Vec<Corner> = corners.to_vec();
     sharpest.sort_by(|a, b| b.turn.total_cmp(&a.turn));
     let apart = |a: usize, b: usize| {
@@ -573,11 +611,11 @@ fn corner_knots(
     for corner in sharpest {
         let nearest = (parameters[corner.index] * segments as f64).round() as usize;
         let knot = if closed { nearest % segments } else { nearest };
-        let allowed = closed || (2..=segments.saturating_sub(2)).contains(&knot);
+        let allowed = closed || (margin..=segments.saturating_sub(margin)).contains(&knot);
         if allowed
             && kept
                 .iter()
-                .all(|other| apart(knot, other.knot) >= MIN_KNOTS_APART)
+                .all(|other| apart(knot, other.knot) >= apart_at_least)
         {
             kept.push(KnotCorner {
                 index: corner.index,
@@ -642,10 +680,15 @@ fn move_to_knots(
         .collect()
 }
 
-/// `controls` with the three control points at each corner's knot i (P_i, P_{i+1}, P_{i+2},
-/// cyclically) made one, fixed at the corner's tip where it has one, and the unknowns still
-/// in use numbered densely; returns them and their count.
-fn tie_corners(mut controls: Vec<Affine>, corners: &[KnotCorner]) -> (Vec<Affine>, usize) {
+/// `controls` with the `degree` control points at each corner's knot i (P_i … P_{i+p−1},
+/// cyclically: the ones the curve depends on at the knot) made one, fixed at the corner's tip
+/// where it has one, and the unknowns still in use numbered densely; returns them and their
+/// count.
+fn tie_corners(
+    mut controls: Vec<Affine>,
+    corners: &[KnotCorner],
+    degree: usize,
+) -> (Vec<Affine>, usize) {
     let k = controls.len();
     for corner in corners {
         let i = corner.knot;
@@ -653,9 +696,9 @@ fn tie_corners(mut controls: Vec<Affine>, corners: &[KnotCorner]) -> (Vec<Affine
             Some(at) => Affine::fixed(at),
             None => controls[i % k].clone(),
         };
-        controls[i % k] = tip.clone();
-        controls[(i + 1) % k] = tip.clone();
-        controls[(i + 2) % k] = tip;
+        for j in 0..degree {
+            controls[(i + j) % k] = tip.clone();
+        }
     }
     let mut used: Vec<usize> = controls
         .iter()
@@ -672,9 +715,12 @@ fn tie_corners(mut controls: Vec<Affine>, corners: &[KnotCorner]) -> (Vec<Affine
 }
 
 /// The K control points as affine functions of the unknowns (see [`approximate`]).
-fn control_layout(k: usize, closed: bool, ordered: &[[f64; 3]]) -> Vec<Affine> {
+fn control_layout(k: usize, closed: bool, ordered: &[[f64; 3]], degree: usize) -> Vec<Affine> {
     if closed {
         return (0..k).map(Affine::unknown).collect();
+    }
+    if degree != 3 {
+        return open_layout(k, ordered, degree);
     }
     let first = Affine::fixed(ordered[0]);
     let last = Affine::fixed(ordered[ordered.len() - 1]);
@@ -688,6 +734,68 @@ fn control_layout(k: usize, closed: bool, ordered: &[[f64; 3]]) -> Vec<Affine> {
     controls.extend(inner);
     controls.push(end);
     controls
+}
+
+/// [`control_layout`] of an open curve of degree p ≠ 3, the cubic's phantoms generalized.
+/// At each end, with m = ⌊(p − 1)/2⌋, the control points before P_m continue the line
+/// through P_m and P_{m+1} at equal steps (P_j = P_m + (m − j)·(P_m − P_{m+1})), and P_m
+/// is what makes the curve start at the first point, C(0) = Σ N_j(0)·P_j = Q₀ (solved for
+/// P_m; its coefficient is at least 1/2 for p ≤ 5). The same mirrored at the other end.
+/// For p = 3 this is the cubic's layout: P₀ = 2P₁ − P₂ and P₁ = Q₀.
+fn open_layout(k: usize, ordered: &[[f64; 3]], degree: usize) -> Vec<Affine> {
+    let m = (degree - 1) / 2;
+    let weights = uniform_basis(degree, 0.0);
+    // The unknowns: every control point that no end condition fixes (k ≥ p + m + 2, see
+    // [`control_range`], so each end's condition reads unknowns only).
+    let mut controls: Vec<Option<Affine>> = vec![None; k];
+    for (f, slot) in controls[m + 1..k - m - 1].iter_mut().enumerate() {
+        *slot = Some(Affine::unknown(f));
+    }
+    let zero = || Affine::fixed([0.0; 3]);
+    // Start: index j of the weights is control point j; end: mirrored (j ↔ k − 1 − j),
+    // where the weights at u = 1 of the last segment mirror those at u = 0.
+    for (target, mirror) in [(ordered[0], false), (ordered[ordered.len() - 1], true)] {
+        let at = |j: usize| if mirror { k - 1 - j } else { j };
+        // C(0) = α·P_m + β·P_{m+1} + Σ_{j>m+1} N_j·P_j = Q.
+        let mut alpha = weights[m];
+        let mut beta = weights[m + 1];
+        for j in 0..m {
+            alpha += weights[j] * (1 + m - j) as f64;
+            beta -= weights[j] * (m - j) as f64;
+        }
+        let next = controls[at(m + 1)].clone().unwrap_or_else(zero);
+        let mut anchor = Affine::fixed(target).combine(1.0 / alpha, &next, -beta / alpha);
+        for j in m + 2..=degree {
+            let p = controls[at(j)].clone().unwrap_or_else(zero);
+            anchor = anchor.combine(1.0, &p, -weights[j] / alpha);
+        }
+        for j in 0..m {
+            let steps = (m - j) as f64;
+            controls[at(j)] = Some(anchor.combine(1.0 + steps, &next, -steps));
+        }
+        controls[at(m)] = Some(anchor);
+    }
+    controls
+        .into_iter()
+        .map(|c| c.unwrap_or_else(zero))
+        .collect()
+}
+
+/// The least and most control points K of a fit of n points at `degree`: closed, degree + 1
+/// (at least 4) to n; open, 4 for a cubic and p + ⌊(p − 1)/2⌋ + 2 otherwise (the end
+/// conditions of [`open_layout`] need one free point between them) to n + 2 for a cubic and
+/// n + p − 1 otherwise.
+pub fn control_range(n: usize, closed: bool, degree: usize) -> (usize, usize) {
+    if closed {
+        (MIN_CONTROL_POINTS.max(degree + 1), n)
+    } else if degree == 3 {
+        (MIN_CONTROL_POINTS, n + 2)
+    } else {
+        (
+            MIN_CONTROL_POINTS.max(degree + (degree - 1) / 2 + 2),
+            n + degree - 1,
+        )
+    }
 }
 
 /// The parameter at which [`interpolate`] passes through Qⱼ: j/(n − 1) open, j/n closed.
@@ -741,6 +849,7 @@ pub fn interpolate(ordered: &[[f64; 3]], dimension: usize, closed: bool) -> Resu
     Ok(BSplineCurve {
         dimension,
         closed,
+        degree: 3,
         control,
     })
 }

@@ -100,7 +100,7 @@ pub use plot::{PlotLayers, PlotOptions, Projection, plot_scene, render_svg, writ
 pub use points::{CurvePoints, DUPLICATE_TOLERANCE, MAX_POINTS, MIN_POINTS};
 pub use refine::{RefineOptions, RefineReport, refine_order};
 pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sample_curve};
-pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS};
+pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS, check_degree};
 pub use surface::{
     SETTLING_RADIUS, SETTLING_RATE, SurfaceFit, SurfaceOptions, control_grid_surface, fit_surface,
     fit_unrolled_surface, map_parameters, shaped_grid,

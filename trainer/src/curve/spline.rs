@@ -10,20 +10,26 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-use super::basis::{cubic_basis, cubic_basis_derivative, locate};
+use super::basis::{
+    MAX_ORDER, cubic_basis, cubic_basis_derivative, locate, uniform_basis, uniform_basis_derivative,
+};
+use neurosurf_core::curve::{MAX_DEGREE, MIN_DEGREE};
 
 /// Fewest control points of a curve (open or closed) or of an open surface direction.
 pub const MIN_CONTROL_POINTS: usize = 4;
 
-/// A uniform cubic B-spline curve. Closed: control points wrap (segments = n). Open:
-/// segments = n − 3, and the fitter adds phantom end points (P₋₁ = 2P₀ − P₁ style) so the
-/// curve starts/ends at the data ends.
+/// A uniform B-spline curve of degree 2 to 5 (cubic by default). Closed: control points
+/// wrap (segments = n). Open: segments = n − degree, and the fitter adds phantom end points
+/// (P₋₁ = 2P₀ − P₁ style) so the curve starts/ends at the data ends.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BSplineCurve {
     /// 2 or 3 (2-D control points have z = 0).
     pub dimension: usize,
     /// Whether the control points wrap around.
     pub closed: bool,
+    /// The polynomial degree p, 2 to 5.
+    #[serde(default = "cubic")]
+    pub degree: usize,
     /// The control points P₀ … P_{n−1}.
     pub control: Vec<[f64; 3]>,
 }
@@ -41,47 +47,61 @@ impl BSplineCurve {
                 self.dimension
             )));
         }
-        if self.control.len() < MIN_CONTROL_POINTS {
+        check_degree(self.degree)?;
+        if self.control.len() <= self.degree {
             return Err(Error::invalid(format!(
-                "a cubic B-spline curve needs at least {MIN_CONTROL_POINTS} control points, \
-                 got {}",
+                "a B-spline curve of degree {} needs at least {} control points, got {}",
+                self.degree,
+                self.degree + 1,
                 self.control.len()
             )));
         }
         check_control(&self.control, self.dimension == 2)
     }
 
-    /// Number of polynomial segments: n when closed, n − 3 when open (0 if too few points).
+    /// Number of polynomial segments: n when closed, n − degree when open (0 if too few
+    /// points).
     pub fn segments(&self) -> usize {
         if self.closed {
             self.control.len()
         } else {
-            self.control.len().saturating_sub(3)
+            self.control.len().saturating_sub(self.degree)
         }
     }
 
     /// C(t), t clamped to [0, 1]. Exact to a few ulp of the control points' magnitude.
     /// Returns NaN coordinates when the curve has fewer than [`MIN_CONTROL_POINTS`] points.
     pub fn point(&self, t: f64) -> [f64; 3] {
-        self.combine(t, cubic_basis, 1.0)
+        if self.degree == 3 {
+            self.combine(t, |u| widen(cubic_basis(u)), 1.0)
+        } else {
+            let degree = self.degree;
+            self.combine(t, |u| uniform_basis(degree, u), 1.0)
+        }
     }
 
     /// dC/dt (includes the factor `segments` of s = t · segments), t clamped to [0, 1];
     /// NaN like [`BSplineCurve::point`].
     pub fn tangent(&self, t: f64) -> [f64; 3] {
-        self.combine(t, cubic_basis_derivative, self.segments() as f64)
+        let factor = self.segments() as f64;
+        if self.degree == 3 {
+            self.combine(t, |u| widen(cubic_basis_derivative(u)), factor)
+        } else {
+            let degree = self.degree;
+            self.combine(t, |u| uniform_basis_derivative(degree, u), factor)
+        }
     }
 
     /// Σ weights(u)ₖ · P_{i+k} · factor.
-    fn combine(&self, t: f64, weights: fn(f64) -> [f64; 4], factor: f64) -> [f64; 3] {
+    fn combine(&self, t: f64, weights: impl Fn(f64) -> [f64; MAX_ORDER], factor: f64) -> [f64; 3] {
         let n = self.control.len();
-        if n < MIN_CONTROL_POINTS {
+        if n <= self.degree || !(MIN_DEGREE..=MAX_DEGREE).contains(&self.degree) {
             return [f64::NAN; 3];
         }
         let (i, u) = locate(t, self.segments());
         let w = weights(u);
         let mut c = [0.0; 3];
-        for (k, &wk) in w.iter().enumerate() {
+        for (k, &wk) in w.iter().enumerate().take(self.degree + 1) {
             let p = self.control[(i + k) % n];
             for axis in 0..3 {
                 c[axis] += wk * p[axis];
@@ -97,6 +117,33 @@ impl BSplineCurve {
         (0..=samples)
             .map(|k| self.point(k as f64 / samples as f64))
             .collect()
+    }
+}
+
+/// The default degree of curves (and of version 3 blobs).
+fn cubic() -> usize {
+    3
+}
+
+/// The four cubic weights in the array of any degree.
+fn widen(w: [f64; 4]) -> [f64; MAX_ORDER] {
+    let mut out = [0.0; MAX_ORDER];
+    out[..4].copy_from_slice(&w);
+    out
+}
+
+/// Checks a curve degree: 2 to 5, what the core evaluates.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming the degree and the range.
+pub fn check_degree(degree: usize) -> Result<()> {
+    if (MIN_DEGREE..=MAX_DEGREE).contains(&degree) {
+        Ok(())
+    } else {
+        Err(Error::invalid(format!(
+            "degree {degree}: the core evaluates B-splines of degree {MIN_DEGREE} to \
+             {MAX_DEGREE}; give --degree {MIN_DEGREE}..={MAX_DEGREE}"
+        )))
     }
 }
 

@@ -327,6 +327,7 @@ fn basis_and_evaluation_follow_the_definition() {
     let curve = BSplineCurve {
         dimension: 2,
         closed: false,
+        degree: 3,
         control: vec![
             [0.0, 0.0, 0.0],
             [1.0, 2.0, 0.0],
@@ -990,4 +991,135 @@ fn density_parameters_follow_the_points() {
     let sparse = 1.0 - t[199];
     assert!((0.05..0.15).contains(&sparse), "{sparse}");
     assert!(density_parameters(&[[1.0; 3]; 5], true).is_err());
+}
+
+/// Every degree the core evaluates (2 to 5), through the whole pipeline: the sample curves
+/// (closed ellipse, open spiral, the trefoil in space) within the cubic's Hausdorff limit;
+/// open ends at the data's ends; polygon corners kept sharp; the blob read back with its
+/// degree, the core's `f32` within 10⁻⁵ of the `f64` curve; the exports reproducing the
+/// curve; and the SVG path refused for degrees without an exact cubic Bézier.
+#[test]
+fn every_degree_fits_and_keeps_ends_corners_and_exports() {
+    use crate::curve::{clamped, curve_from_blob, curve_svg, curve_to_blob, export_curve};
+    use neurosurf_core::scalar::ScalarKind;
+    for degree in [2, 4, 5] {
+        for curve in [
+            SampleCurve::Ellipse,
+            SampleCurve::Spiral,
+            SampleCurve::Trefoil,
+        ] {
+            let sample = sample(curve, COUNT, 3);
+            let points = sample.curve_points().unwrap();
+            let mut options = CurveOptions::new(sample.curve.topology(), 3);
+            options.approximation.degree = degree;
+            let result = reconstruct_curve(&points, &options).unwrap();
+            let fitted = &result.approximation.curve;
+            assert_eq!(fitted.degree, degree);
+            let truth: Vec<[f64; 3]> = sample.truth.iter().step_by(4).copied().collect();
+            let hausdorff = hausdorff_distance(&fitted.polyline(2000), &truth) / sample.size;
+            assert!(
+                hausdorff <= MAX_HAUSDORFF,
+                "{curve:?} degree {degree}: {hausdorff}"
+            );
+            if !sample.curve.closed() {
+                let order = &result.ordering.order;
+                let (first, last) = (
+                    points.points()[order[0]],
+                    points.points()[order[order.len() - 1]],
+                );
+                assert!(
+                    distance(fitted.point(0.0), first) < 1e-9,
+                    "degree {degree} start"
+                );
+                assert!(
+                    distance(fitted.point(1.0), last) < 1e-9,
+                    "degree {degree} end"
+                );
+            }
+            // The blob keeps the degree; the core evaluates it.
+            let blob = curve_to_blob(fitted, None, ScalarKind::F32).unwrap();
+            let decoded = curve_from_blob(&blob, Path::new("test.nsb")).unwrap();
+            assert_eq!(decoded.curve.degree, degree);
+            let core = neurosurf_core::curve::BSplineCurve::<f32>::from_blob(&blob).unwrap();
+            assert_eq!(core.degree(), degree);
+            for j in 0..=50 {
+                let t = f64::from(j) / 50.0;
+                let c = core.position(t as f32).map(f64::from);
+                assert!(distance(c, fitted.point(t)) < 1e-5 * sample.size, "t {t}");
+            }
+            // Unclamped and clamped knots give the same curve (de Boor at 101 parameters).
+            let export = export_curve(fitted).unwrap();
+            assert_eq!(export.degree, degree);
+            for e in [export.clone(), clamped(&export)] {
+                assert_eq!(e.knots.len(), e.control_points.len() + degree + 1);
+                for j in 0..=100 {
+                    let t = f64::from(j) / 100.0;
+                    let p = de_boor(&e.knots, &e.control_points, degree, t);
+                    let q = fitted.point(t);
+                    assert!((0..p.len()).all(|k| (p[k] - q[k]).abs() < 1e-9), "t {t}");
+                }
+            }
+            if fitted.dimension == 2 {
+                let svg = curve_svg(fitted);
+                if degree == 2 {
+                    assert!(svg.unwrap().contains(" C "));
+                } else {
+                    let error = message(svg.unwrap_err());
+                    assert!(
+                        error.contains("degree") && error.contains("--degree 3"),
+                        "{error}"
+                    );
+                }
+            }
+        }
+        // A square keeps its four corners, each exactly at its vertex.
+        let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let raw = polygon_points(&square, 1_000, 2e-4, 21);
+        let points = CurvePoints::new(2, raw).unwrap();
+        let mut options = CurveOptions::new(Topology::Closed, 21);
+        options.approximation.degree = degree;
+        let sharp = reconstruct_curve(&points, &options).unwrap();
+        assert_eq!(sharp.approximation.corners.len(), 4, "degree {degree}");
+        let error = polygon_hausdorff(&square, &sharp.approximation.curve);
+        assert!(error <= 1e-3, "degree {degree}: {error}");
+    }
+}
+
+/// De Boor's algorithm for a B-spline of `degree` on `knots` (the domain's span found by
+/// search): the reference of the export tests.
+pub(crate) fn de_boor(knots: &[f64], control: &[Vec<f64>], degree: usize, t: f64) -> Vec<f64> {
+    let p = degree;
+    let last = control.len() - 1;
+    let k = (p..=last).rev().find(|&k| knots[k] <= t).unwrap_or(p);
+    let mut d: Vec<Vec<f64>> = (0..=p).map(|j| control[j + k - p].clone()).collect();
+    for r in 1..=p {
+        for j in (r..=p).rev() {
+            let i = j + k - p;
+            let alpha = (t - knots[i]) / (knots[i + p + 1 - r] - knots[i]);
+            d[j] = d[j - 1]
+                .iter()
+                .zip(&d[j])
+                .map(|(a, b)| (1.0 - alpha) * a + alpha * b)
+                .collect();
+        }
+    }
+    d[p].clone()
+}
+
+/// Degrees outside 2 to 5 are refused by name, before any fitting.
+#[test]
+fn degrees_outside_two_to_five_are_refused() {
+    let sample = sample(SampleCurve::Ellipse, 60, 1);
+    let ordered = sample.points.clone();
+    for degree in [0, 1, 6] {
+        let options = ApproximationOptions {
+            degree,
+            ..ApproximationOptions::default()
+        };
+        let error = message(approximate(&ordered, 2, true, &options).unwrap_err());
+        assert!(
+            error.contains(&format!("degree {degree}")) && error.contains("2..=5"),
+            "{error}"
+        );
+    }
 }
