@@ -739,7 +739,7 @@ fn separate_groups_get_a_curve_each_and_stray_points_are_left_out() {
 /// the simulated target print the same rows in both scalars, the exports carry the degree
 /// (DXF clamped with p + 1 equal end knots, reproducing `eval`), an SVG path exists for the
 /// quadratic and is refused for the quintic, and bad degrees are refused before anything is
-/// written.
+/// written. `curve surface --degree 4` likewise runs the same on the host and the target.
 #[test]
 fn curves_of_degree_two_to_five_run_on_the_host_and_the_target() {
     let dir = tempfile::tempdir().unwrap();

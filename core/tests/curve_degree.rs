@@ -1,4 +1,4 @@
-//! Curves of every degree the core accepts (2 to 5): `f32` and Q16.16 against an independent
+//! Curves and surfaces of every degree the core accepts (2 to 5): `f32` and Q16.16 against an independent
 //! `f64` reference (the Cox–de Boor recursion over the whole integer knot vector, not the
 //! core's per-segment triangle), tangents against the reference's, batches against single
 //! calls, exact constants, version 3 blobs read as cubic, and the degree's validation.
@@ -256,35 +256,179 @@ fn version_3_blobs_read_as_cubic() {
     }
 }
 
-/// Surfaces carry their degrees; this core evaluates cubic ones and names any other degree.
+/// A surface blob of `degrees` [u, v] in `kind`, `counts` [u, v] control points, rows of
+/// constant v.
+fn surface_of_degrees(
+    kind: ScalarKind,
+    closed: [bool; 2],
+    degrees: [u8; 2],
+    counts: [u16; 2],
+    points: &[[f64; 3]],
+) -> Vec<u8> {
+    let control = encode_points(points, kind);
+    let payload = SurfacePayload {
+        closed_u: closed[0],
+        closed_v: closed[1],
+        degree_u: degrees[0],
+        degree_v: degrees[1],
+        count_u: counts[0],
+        count_v: counts[1],
+        frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
+        control: &control,
+        metadata: &[],
+    };
+    let mut out = vec![0_u8; 128 + control.len()];
+    let len = payload.write(kind, &mut out).unwrap();
+    out.truncate(len);
+    out
+}
+
+/// The reference basis weights of one direction: (first control index, [N_k], [h·N_k′]).
+fn direction_weights(count: usize, closed: bool, p: usize, t: f64) -> (usize, Vec<f64>, Vec<f64>) {
+    let segments = if closed { count } else { count - p };
+    let s = t.clamp(0.0, 1.0) * segments as f64;
+    let i = (s.floor() as usize).min(segments - 1);
+    let x = (i + p) as f64 + (s - i as f64);
+    let values = (0..=p).map(|k| cox_de_boor((i + k) as i64, p, x)).collect();
+    let slopes = (0..=p)
+        .map(|k| {
+            // N′_{j,p} = N_{j,p−1} − N_{j+1,p−1} on unit knot spacing.
+            let j = (i + k) as i64;
+            (cox_de_boor(j, p - 1, x) - cox_de_boor(j + 1, p - 1, x)) * segments as f64
+        })
+        .collect();
+    (i, values, slopes)
+}
+
 #[test]
-fn surfaces_of_another_degree_are_refused_by_name() {
-    let points = vec![[1.0, 2.0, 3.0]; 25];
-    let control = encode_points(&points, ScalarKind::F32);
-    for degrees in [[2_u8, 3], [3, 5]] {
-        let payload = SurfacePayload {
-            closed_u: false,
-            closed_v: false,
-            degree_u: degrees[0],
-            degree_v: degrees[1],
-            count_u: 5,
-            count_v: 5,
-            frame: neurosurf_core::frame::IDENTITY_PAYLOAD,
-            control: &control,
-            metadata: &[],
-        };
-        let mut out = vec![0_u8; 512];
-        let len = payload.write(ScalarKind::F32, &mut out).unwrap();
-        let found = usize::from(if degrees[0] == 3 {
-            degrees[1]
-        } else {
-            degrees[0]
-        });
+fn surfaces_of_every_degree_match_the_reference_in_both_scalars() {
+    let mut rng = Rng::new(77);
+    let mut worst = [0.0_f64; 4];
+    for (pu, pv) in [(2, 2), (2, 5), (4, 3), (5, 4), (3, 2)] {
+        for closed in [[false, false], [true, false], [false, true]] {
+            let counts = [pu + 1 + rng.below(4), pv + 1 + rng.below(4)];
+            let points = rng.points(counts[0] * counts[1], 20.0, false);
+            let (delta, magnitude) = scales(&points);
+            let degrees = [pu as u8, pv as u8];
+            let counts16 = counts.map(|c| c as u16);
+            let f = BSplineSurface::<f32>::from_blob(&surface_of_degrees(
+                ScalarKind::F32,
+                closed,
+                degrees,
+                counts16,
+                &points,
+            ))
+            .unwrap();
+            let q = BSplineSurface::<Q16>::from_blob(&surface_of_degrees(
+                ScalarKind::Q16_16,
+                closed,
+                degrees,
+                counts16,
+                &points,
+            ))
+            .unwrap();
+            assert_eq!(f.degrees(), [pu, pv]);
+            let mut uvs: Vec<[f64; 2]> = (0..30)
+                .map(|_| [rng.parameter(), rng.parameter()])
+                .collect();
+            uvs.extend([[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+            for &[u, v] in &uvs {
+                let (iu, bu, su) = direction_weights(counts[0], closed[0], pu, u);
+                let (iv, bv, sv) = direction_weights(counts[1], closed[1], pv, v);
+                let mut want = [[0.0; 3]; 3];
+                for j in 0..=pv {
+                    for k in 0..=pu {
+                        let point =
+                            points[((iv + j) % counts[1]) * counts[0] + (iu + k) % counts[0]];
+                        for axis in 0..3 {
+                            want[0][axis] += bv[j] * bu[k] * point[axis];
+                            want[1][axis] += bv[j] * su[k] * point[axis];
+                            want[2][axis] += sv[j] * bu[k] * point[axis];
+                        }
+                    }
+                }
+                let g = counts[0].max(counts[1]) as f64;
+                let pf = f.eval([u as f32, v as f32]);
+                let pq = q.eval([q16(u), q16(v)]);
+                let errors = [
+                    max_abs_diff(f64s_f32(pf.position), want[0])
+                        / (F32_EPS * (magnitude + delta) * (1.0 + g)),
+                    max_abs_diff(f64s_f32(pf.du), want[1])
+                        .max(max_abs_diff(f64s_f32(pf.dv), want[2]))
+                        / (F32_EPS * g * delta * (1.0 + g)),
+                    max_abs_diff(f64s_q16(pq.position), want[0]) / (LSB * (delta + 1.0)),
+                    max_abs_diff(f64s_q16(pq.du), want[1])
+                        .max(max_abs_diff(f64s_q16(pq.dv), want[2]))
+                        / (LSB * g * (delta + 1.0)),
+                ];
+                for (w, e) in worst.iter_mut().zip(errors) {
+                    *w = w.max(e);
+                }
+                // Batches give the single calls' bits; the normal is the partials' direction.
+                let mut batch = [Default::default(); 1];
+                f.eval_batch(&[[u as f32, v as f32]], &mut batch).unwrap();
+                assert_eq!(batch[0], pf);
+                let mut normals = [None; 1];
+                f.normal_batch(&[[u as f32, v as f32]], &mut normals)
+                    .unwrap();
+                assert_eq!(normals[0], f.normal([u as f32, v as f32]));
+                if let Some(n) = f.normal([u as f32, v as f32]) {
+                    let cross = curve_support::cross(want[1], want[2]);
+                    let length = curve_support::norm(cross);
+                    if length > 1e-3 * curve_support::norm(want[1]) * curve_support::norm(want[2]) {
+                        let angle = curve_support::angle(f64s_f32(n), cross);
+                        assert!(angle < 1e-3, "normal off by {angle} rad");
+                    }
+                }
+            }
+        }
+    }
+    // Bounds in units of the scales above (measured worst in brackets): f32 position
+    // within 2·ε·(M + Δ)·(1 + g) (0.20), partials within ε·g·Δ·(1 + g) (0.19); Q16.16
+    // position within 8 LSB·(Δ + 1) (3.0), partials within 8 LSB·g·(Δ + 1) (1.0).
+    let bounds = [2.0, 1.0, 8.0, 8.0];
+    for ((what, e), bound) in [
+        "f32 position",
+        "f32 partials",
+        "q16 position",
+        "q16 partials",
+    ]
+    .iter()
+    .zip(worst)
+    .zip(bounds)
+    {
+        assert!(e < bound, "{what} error {e:.2} units (bound {bound})");
+    }
+}
+
+/// A constant net gives its constant and zero partials in every degree, in both scalars; a
+/// degree outside 2 to 5 is refused by name.
+#[test]
+fn surface_constants_are_exact_and_bad_degrees_are_refused() {
+    let points = vec![[1.5, -2.25, 3.0]; 36];
+    for degrees in [[2_u8, 5], [5, 2], [4, 4]] {
+        let blob = surface_of_degrees(ScalarKind::Q16_16, [true, false], degrees, [6, 6], &points);
+        let f = BSplineSurface::<f32>::from_blob(&blob).unwrap();
+        let q = BSplineSurface::<Q16>::from_blob(&blob).unwrap();
+        for uv in [[0.0, 0.0], [0.3, 0.7], [1.0, 0.5]] {
+            let p = f.eval(uv);
+            assert_eq!(
+                (p.position, p.du, p.dv),
+                ([1.5, -2.25, 3.0], [0.0; 3], [0.0; 3])
+            );
+            assert_eq!(f.normal(uv), None);
+            let p = q.eval(uv.map(|c: f32| q16(f64::from(c))));
+            assert_eq!(f64s_q16(p.position), [1.5, -2.25, 3.0]);
+            assert_eq!((f64s_q16(p.du), f64s_q16(p.dv)), ([0.0; 3], [0.0; 3]));
+        }
+    }
+    for (degrees, found) in [([1_u8, 3], 1_usize), ([3, 6], 6)] {
+        let blob = surface_of_degrees(ScalarKind::F32, [false, false], degrees, [6, 6], &points);
         assert_eq!(
-            BSplineSurface::<f32>::from_blob(&out[..len]).unwrap_err(),
+            BSplineSurface::<f32>::from_blob(&blob).unwrap_err(),
             BlobError::ShapeMismatch {
                 what: Quantity::Degree,
-                expected: 3,
+                expected: found.clamp(MIN_DEGREE, MAX_DEGREE),
                 found,
             }
         );

@@ -145,6 +145,9 @@ pub struct SurfaceArgs {
     /// parameters from the two edges instead of a map
     #[arg(long, conflicts_with = "map")]
     tube: bool,
+    /// Polynomial degree of the surface in both directions, 2 to 5.
+    #[arg(long, default_value_t = 3)]
+    degree: usize,
     #[command(flatten)]
     blob: BlobArgs,
     /// Also write a triangle mesh of the surface (`.obj`, `.ply` or `.stl`).
@@ -164,6 +167,8 @@ struct SurfaceReport<'a> {
     stored_as: &'static str,
     blob_bytes: usize,
     control: [usize; 2],
+    /// The surface's degrees along u and v.
+    degrees: [usize; 2],
     /// The patch's length over its width, measured along it, when the map was shaped by it.
     aspect: Option<f64>,
     map_iterations: usize,
@@ -177,6 +182,7 @@ struct SurfaceReport<'a> {
 fn surface(args: &SurfaceArgs) -> Result<()> {
     let scalar = blob_scalar(args.blob.scalar)?;
     neurosurf_trainer::io::check_output(&args.blob.out)?;
+    neurosurf_trainer::curve::check_degree(args.degree)?;
     let (dimension, raw) = read_scattered_points(&args.points)?;
     if dimension != 3 {
         anyhow::bail!(
@@ -211,6 +217,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     }
     options.map.seed = args.blob.seed;
     options.tube = args.tube;
+    options.degree = args.degree;
     let start = Instant::now();
     let fit = fit_unrolled_surface(&points, &options, unrolled.as_ref())
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
@@ -236,6 +243,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         stored_as: scalar.name(),
         blob_bytes: blob.len(),
         control: [fit.surface.count_u, fit.surface.count_v],
+        degrees: [fit.surface.degree_u, fit.surface.degree_v],
         aspect,
         map_iterations: fit
             .map_report

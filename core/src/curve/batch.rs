@@ -58,9 +58,16 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
     /// # Errors
     /// [`LengthMismatch`] when the slices differ in length (nothing is written).
     pub fn position_batch(&self, uv: &[[S; 2]], out: &mut [[S; 3]]) -> Result<(), LengthMismatch> {
-        lanes::batch(uv, out, [S::ZERO; 2], |uv| {
-            self.lanes::<LANES, false>(uv).map(|point| point.position)
-        })
+        if self.is_bicubic() {
+            lanes::batch(uv, out, [S::ZERO; 2], |uv| {
+                self.lanes::<LANES, false>(uv).map(|point| point.position)
+            })
+        } else {
+            lanes::batch(uv, out, [S::ZERO; 2], |uv| {
+                self.any_degree_lanes::<LANES, false>(uv)
+                    .map(|point| point.position)
+            })
+        }
     }
 
     /// S(u, v), ∂S/∂u and ∂S/∂v for every `[u, v]` of `uv` into `out` (same length).
@@ -72,7 +79,13 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
         uv: &[[S; 2]],
         out: &mut [SurfacePoint<S>],
     ) -> Result<(), LengthMismatch> {
-        lanes::batch(uv, out, [S::ZERO; 2], |uv| self.lanes::<LANES, true>(uv))
+        if self.is_bicubic() {
+            lanes::batch(uv, out, [S::ZERO; 2], |uv| self.lanes::<LANES, true>(uv))
+        } else {
+            lanes::batch(uv, out, [S::ZERO; 2], |uv| {
+                self.any_degree_lanes::<LANES, true>(uv)
+            })
+        }
     }
 
     /// The unit normal for every `[u, v]` of `uv` into `out` (same length).
@@ -84,6 +97,12 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
         uv: &[[S; 2]],
         out: &mut [Option<[S; 3]>],
     ) -> Result<(), LengthMismatch> {
-        lanes::batch(uv, out, [S::ZERO; 2], |uv| self.normal_lanes::<LANES>(uv))
+        if self.is_bicubic() {
+            lanes::batch(uv, out, [S::ZERO; 2], |uv| self.normal_lanes::<LANES>(uv))
+        } else {
+            lanes::batch(uv, out, [S::ZERO; 2], |uv| {
+                self.any_degree_normal::<LANES>(uv)
+            })
+        }
     }
 }

@@ -101,8 +101,9 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
          another kind of blob; [`BlobError::MalformedPayload`]; \
          [`BlobError::UnsupportedStorage`] for `f64` storage; \
          [`BlobError::ShapeMismatch`] for a dimension other than 2 or 3 (`Dimension`), a \
-         control byte string that is not whole points (`Parameters`, in words), fewer \
-         than 4 points (`ControlPoints`), or a nonzero z in a 2-D curve (`Dimension`, \
+         control byte string that is not whole points (`Parameters`, in words), a degree \
+         outside 2 to 5 (`Degree`), no more points than the degree (`ControlPoints`), or a \
+         nonzero z in a 2-D curve (`Dimension`, \
          expected 2, found 3); [`BlobError::CapacityExceeded`] beyond \
          [`MAX_SEGMENTS`](super::MAX_SEGMENTS) segments (`Segments`) or `C` points \
          (`ControlPoints`); [`BlobError::NonFiniteParameter`] / \

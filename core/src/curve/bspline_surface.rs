@@ -5,7 +5,7 @@ use heapless::Vec;
 
 use super::bspline_curve::at;
 use super::control::{self, POINT_BYTES};
-use super::direction::Direction;
+use super::direction::{Direction, MAX_ORDER};
 use super::payload::SurfacePayload;
 use crate::blob::ModelKind;
 use crate::error::BlobError;
@@ -32,7 +32,11 @@ pub struct SurfacePoint<S> {
 /// row v + j, column u + k.
 type Patch<S> = [[[S; 3]; 4]; 4];
 
-/// A uniform cubic B-spline tensor-product surface, loaded from a blob and validated (see
+/// The control points of one patch of any degree, as differences from its anchor.
+type WidePatch<S> = [[[S; 3]; MAX_ORDER]; MAX_ORDER];
+
+/// A uniform tensor-product B-spline surface of degree 2 to 5 along each direction (bicubic
+/// by default), loaded from a blob and validated (see
 /// [`crate::curve`] for the contract and the payload).
 ///
 /// `C` is the control-point capacity (count_u·count_v) reserved inline. Evaluation after a
@@ -55,6 +59,10 @@ type Patch<S> = [[[S; 3]; 4]; 4];
 ///   saturating at ±32 768 (unlike a curve's tangent their error grows with g: the tensor
 ///   weights g·Bⱼ′(v)·Bₖ(u) carry Bₖ's rounding times g); normal within 5 LSB·κ radians (3.0;
 ///   at most 2.8·10⁻⁴ rad where κ < 10).
+///
+/// Surfaces of other degrees (2 to 5 along each direction) evaluate by the curves' any-degree
+/// recurrence, within the bounds of `core/tests/curve_degree.rs` (Q16.16 position within
+/// 8 LSB·(Δ + 1), partials within 8 LSB·g·(Δ + 1)).
 ///
 /// A constant net gives its constant, zero partials and no normal, exactly; a net in the plane
 /// z = 0 gives the normal (0, 0, ±1) (exactly, at every point the tests try).
@@ -112,8 +120,9 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
         "spline surface",
         "Framing errors ([`crate::blob::parse`]); [`BlobError::WrongModelKind`]; \
          [`BlobError::MalformedPayload`]; [`BlobError::UnsupportedStorage`] for `f64` \
-         storage; [`BlobError::ShapeMismatch`] for fewer than 4 points along a direction \
-         (`ControlPoints`, u checked first) or a control byte string that does not hold \
+         storage; [`BlobError::ShapeMismatch`] for a degree outside 2 to 5 (`Degree`) or no \
+         more points than the degree along a direction (`ControlPoints`), u checked first, \
+         or a control byte string that does not hold \
          exactly count_u·count_v points (`Parameters`, in words); \
          [`BlobError::CapacityExceeded`] beyond [`MAX_SEGMENTS`](super::MAX_SEGMENTS) \
          segments along a direction (`Segments`) or `C` points in total \
@@ -126,17 +135,16 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
     fn fill(&mut self, payload: &SurfacePayload<'_>, stored: ScalarKind) -> Result<(), BlobError> {
         self.clear();
         control::check_storage(ModelKind::SplineSurface, stored)?;
-        for degree in [payload.degree_u, payload.degree_v] {
-            if degree != 3 {
-                return Err(BlobError::ShapeMismatch {
-                    what: crate::error::Quantity::Degree,
-                    expected: 3,
-                    found: usize::from(degree),
-                });
-            }
-        }
-        let u = Direction::new(usize::from(payload.count_u), payload.closed_u, 3)?;
-        let v = Direction::new(usize::from(payload.count_v), payload.closed_v, 3)?;
+        let u = Direction::new(
+            usize::from(payload.count_u),
+            payload.closed_u,
+            usize::from(payload.degree_u),
+        )?;
+        let v = Direction::new(
+            usize::from(payload.count_v),
+            payload.closed_v,
+            usize::from(payload.degree_v),
+        )?;
         // At most 65 535² points: checked anyway, for 16-bit `usize`.
         let count = u
             .count
@@ -188,7 +196,18 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
     /// Multiplications (scalar products and accumulator multiply–adds) of one evaluation:
     /// 82 for [`BSplineSurface::position`], 212 for [`BSplineSurface::eval`] (position and
     /// both partials). Independent of the number of control points.
+    /// Other degrees p_u, p_v: each direction's basis (1 + 2p(p + 1) + 4p, and
+    /// 2p(p − 1) + 4(p − 1) more for a derivative), then per output t = (p_u + 1)(p_v + 1) − 1
+    /// tensor weights and 3t multiply–adds.
     pub fn mac_count(&self, derivatives: bool) -> usize {
+        if !self.is_bicubic() && self.u.degree > 0 {
+            let [basis, slopes, output] = self.any_degree_counts();
+            return if derivatives {
+                basis + slopes + 3 * output
+            } else {
+                basis + output
+            };
+        }
         // Per output: 15 tensor weights, then 15 multiply–adds per coordinate.
         const OUTPUT: usize = 15 + 3 * 15;
         let basis = 2 * Direction::<S>::VALUE_MULS;
@@ -203,19 +222,60 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
     /// cross product and three normalizations, each of which also takes a square root and a
     /// reciprocal).
     pub fn normal_mac_count(&self) -> usize {
+        if !self.is_bicubic() && self.u.degree > 0 {
+            let [basis, slopes, output] = self.any_degree_counts();
+            return basis + slopes + 2 * output + 6 + 27;
+        }
         2 * (Direction::<S>::VALUE_MULS + Direction::<S>::SLOPE_MULS) + 2 * (15 + 3 * 15) + 6 + 27
+    }
+
+    /// Multiplications of both directions' bases, of their derivative weights, and of one
+    /// output, for degrees other than bicubic.
+    fn any_degree_counts(&self) -> [usize; 3] {
+        let basis = |p: usize| 1 + 2 * p * (p + 1) + 4 * p;
+        let slopes = |p: usize| 2 * p * p.saturating_sub(1) + 4 * p.saturating_sub(1);
+        let (pu, pv) = (self.u.degree, self.v.degree);
+        let terms = (pu + 1) * (pv + 1) - 1;
+        [basis(pu) + basis(pv), slopes(pu) + slopes(pv), 4 * terms]
     }
 
     /// S(u, v).
     pub fn position(&self, uv: [S; 2]) -> [S; 3] {
-        let [point] = self.lanes::<1, false>(&[uv]);
+        let [point] = if self.is_bicubic() {
+            self.lanes::<1, false>(&[uv])
+        } else {
+            self.any_degree_point::<false>(uv)
+        };
         point.position
     }
 
     /// S(u, v), ∂S/∂u and ∂S/∂v (including the segment factors).
     pub fn eval(&self, uv: [S; 2]) -> SurfacePoint<S> {
-        let [point] = self.lanes::<1, true>(&[uv]);
+        let [point] = if self.is_bicubic() {
+            self.lanes::<1, true>(&[uv])
+        } else {
+            self.any_degree_point::<true>(uv)
+        };
         point
+    }
+
+    /// The polynomial degrees along u and v, 2 to 5 each (0 for an empty surface).
+    pub fn degrees(&self) -> [usize; 2] {
+        [self.u.degree, self.v.degree]
+    }
+
+    /// Whether both directions are cubic: each entry point picks the bicubic path or the
+    /// any-degree one once, outside its loops, so that the bicubic path compiles as it did
+    /// before other degrees existed.
+    #[inline(always)]
+    pub(crate) fn is_bicubic(&self) -> bool {
+        self.u.degree == 3 && self.v.degree == 3
+    }
+
+    /// One point of a surface of other degrees, out of line (see [`Self::is_bicubic`]).
+    #[inline(never)]
+    fn any_degree_point<const DERIVATIVES: bool>(&self, uv: [S; 2]) -> [SurfacePoint<S>; 1] {
+        self.any_degree_lanes::<1, DERIVATIVES>(&[uv])
     }
 
     /// The unit normal (∂S/∂u × ∂S/∂v)/|…|, `None` where the cross product vanishes.
@@ -224,7 +284,11 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
     /// segment factors), so it never saturates in Q16.16; there it is reliable where the
     /// partials are not nearly parallel and not within a few LSB of zero.
     pub fn normal(&self, uv: [S; 2]) -> Option<[S; 3]> {
-        let [normal] = self.normal_lanes::<1>(&[uv]);
+        let [normal] = if self.is_bicubic() {
+            self.normal_lanes::<1>(&[uv])
+        } else {
+            self.any_degree_normal::<1>(&[uv])
+        };
         normal
     }
 
@@ -293,6 +357,102 @@ impl<S: Scalar, const C: usize> BSplineSurface<S, C> {
             *out = unit_cross(du, dv);
         }
         out
+    }
+
+    /// [`Self::lanes`] for a surface of other degrees (p_u along u, p_v along v): the
+    /// recurrence's weights ([`Direction::any_degree`]) around the anchor P at
+    /// (⌊p_v/2⌋, ⌊p_u/2⌋), each tensor weight wv[j]·wu[k] rounded once, each coordinate one
+    /// accumulation with one rounding.
+    #[inline]
+    pub(crate) fn any_degree_lanes<const L: usize, const DERIVATIVES: bool>(
+        &self,
+        uv: &[[S; 2]; L],
+    ) -> [SurfacePoint<S>; L] {
+        let (first, local) = self.locate_lanes(uv);
+        let mut out = [SurfacePoint::default(); L];
+        for ((out, &first), &[u, v]) in out.iter_mut().zip(&first).zip(&local) {
+            let slope = |d: &Direction<S>| DERIVATIVES.then(|| d.scale());
+            let (bu, su) = self.u.any_degree(u, slope(&self.u));
+            let (bv, sv) = self.v.any_degree(v, slope(&self.v));
+            let (anchor, patch) = self.wide_patch(first);
+            out.position = self.wide_tensor(anchor, &bv, &bu, &patch);
+            if DERIVATIVES {
+                out.du = self.wide_tensor([S::ZERO; 3], &bv, &su, &patch);
+                out.dv = self.wide_tensor([S::ZERO; 3], &sv, &bu, &patch);
+            }
+        }
+        out
+    }
+
+    /// [`Self::normal_lanes`] for a surface of other degrees (partials of the local
+    /// parameters, as for the bicubic).
+    #[inline]
+    pub(crate) fn any_degree_normal<const L: usize>(
+        &self,
+        uv: &[[S; 2]; L],
+    ) -> [Option<[S; 3]>; L] {
+        let (first, local) = self.locate_lanes(uv);
+        let mut out = [None; L];
+        for ((out, &first), &[u, v]) in out.iter_mut().zip(&first).zip(&local) {
+            let (bu, su) = self.u.any_degree(u, Some(S::ONE));
+            let (bv, sv) = self.v.any_degree(v, Some(S::ONE));
+            let (_, patch) = self.wide_patch(first);
+            let du = self.wide_tensor([S::ZERO; 3], &bv, &su, &patch);
+            let dv = self.wide_tensor([S::ZERO; 3], &sv, &bu, &patch);
+            *out = unit_cross(du, dv);
+        }
+        out
+    }
+
+    /// The anchor of the patch of any degree whose first control point is `first`, and
+    /// every point's difference from it (`[j][k]`: row v + j, column u + k; unused entries 0).
+    #[inline]
+    fn wide_patch(&self, [iu, iv]: [usize; 2]) -> ([S; 3], WidePatch<S>) {
+        let (pu, pv) = (self.u.degree, self.v.degree);
+        let point = |j: usize, k: usize| {
+            let row = self.v.index(iv, j);
+            let column = self.u.index(iu, k);
+            self.control
+                .get(row * self.u.count + column)
+                .copied()
+                .unwrap_or([S::ZERO; 3])
+        };
+        let anchor = point(pv / 2, pu / 2);
+        let mut patch = [[[S::ZERO; 3]; MAX_ORDER]; MAX_ORDER];
+        for (j, row) in patch.iter_mut().enumerate().take(pv + 1) {
+            for (k, difference) in row.iter_mut().enumerate().take(pu + 1) {
+                let p = point(j, k);
+                *difference = [0, 1, 2].map(|axis| at(&p, axis).sub(at(&anchor, axis)));
+            }
+        }
+        (anchor, patch)
+    }
+
+    /// `start + Σ_{(j,k) ≠ anchor} (wv[j]·wu[k])·patch[j][k]` over the patch's
+    /// (p_v + 1) × (p_u + 1) points, per coordinate with one rounding.
+    #[inline]
+    fn wide_tensor(
+        &self,
+        start: [S; 3],
+        wv: &[S; MAX_ORDER],
+        wu: &[S; MAX_ORDER],
+        patch: &WidePatch<S>,
+    ) -> [S; 3] {
+        let (pu, pv) = (self.u.degree, self.v.degree);
+        let anchor = (pv / 2, pu / 2);
+        let mut acc = start.map(S::to_acc);
+        for (j, (points, &a)) in patch.iter().zip(wv).enumerate().take(pv + 1) {
+            for (k, (p, &b)) in points.iter().zip(wu).enumerate().take(pu + 1) {
+                if (j, k) == anchor {
+                    continue;
+                }
+                let w = a.mul(b);
+                for (acc, &d) in acc.iter_mut().zip(p) {
+                    *acc = S::mac(*acc, w, d);
+                }
+            }
+        }
+        acc.map(S::from_acc)
     }
 
     /// The anchor P₁₁ of the patch whose first control point is `first` = [u index, v index],
@@ -447,7 +607,9 @@ impl<S: Scalar, const C: usize> crate::model::Model<S> for BSplineSurface<S, C> 
         let ([count_u, count_v], [closed_u, closed_v]) = (self.counts(), self.is_closed());
         write!(
             f,
-            "{count_u} × {count_v} control points, {} × {}",
+            "{count_u} × {count_v} control points, degree {} × {}, {} × {}",
+            self.u.degree,
+            self.v.degree,
             crate::model::open_or_closed(closed_u),
             crate::model::open_or_closed(closed_v)
         )

@@ -1,5 +1,5 @@
-//! Uniform B-spline curves of degree 2 to 5 and bicubic tensor-product surfaces: the curves
-//! Hoffmann & Várady fit through a Kohonen chain's ordering of scattered points, and their
+//! Uniform B-spline curves and tensor-product surfaces of degree 2 to 5: the curves Hoffmann
+//! & Várady fit through a Kohonen chain's ordering of scattered points, and their
 //! two-dimensional analogue.
 //!
 //! - [`BSplineCurve`]: position and tangent of a 2-D or 3-D curve, open or closed;
@@ -10,7 +10,7 @@
 //!
 //! # The contract
 //!
-//! A direction of degree p ([`MIN_DEGREE`] = 2 to [`MAX_DEGREE`] = 5; surfaces: 3) with n
+//! A direction of degree p ([`MIN_DEGREE`] = 2 to [`MAX_DEGREE`] = 5) with n
 //! control points is *closed* (n segments, indices wrap mod n) or *open* (n − p segments);
 //! n ≥ p + 1 either way ([`MIN_CONTROL_POINTS`] = 4 for a cubic), and at most
 //! [`MAX_SEGMENTS`] segments. A global parameter t ∈ [0, 1] maps to
@@ -30,7 +30,8 @@
 //!
 //! The basis sums to 1 and its derivative to 0, so the core evaluates
 //! C = P₍ᵢ₊₁₎ + Σ_{k≠1} Bₖ·(P₍ᵢ₊ₖ₎ − P₍ᵢ₊₁₎) (for surfaces, around P₍₁₁₎; for degree p ≠ 3
-//! around P₍ᵢ₊⌊p/2⌋₎, with the recurrence's weights, each factor and sum rounded once and the
+//! around P₍ᵢ₊⌊p/2⌋₎, for surfaces of other degrees around P at (⌊p_v/2⌋, ⌊p_u/2⌋), with
+//! the recurrence's weights, each factor and sum rounded once and the
 //! derivative's triangle started from `segments` so that its roundings are not scaled by it;
 //! accuracy as stated in `core/tests/curve_degree.rs`): a constant control
 //! polygon reproduces its constant exactly, in `f32` and in Q16.16, and errors scale with the

@@ -86,8 +86,7 @@ pub struct SurfacePayload<'a> {
     pub closed_u: bool,
     /// Whether the v direction (across rows) wraps around.
     pub closed_v: bool,
-    /// The polynomial degree along u (version 3 blobs: 3). This core evaluates cubic
-    /// surfaces; another degree is refused at load.
+    /// The polynomial degree along u, 2 to 5 (version 3 blobs: 3).
     pub degree_u: u8,
     /// The polynomial degree along v, as `degree_u`.
     pub degree_v: u8,

@@ -119,8 +119,8 @@ pub fn surface_to_blob(
     let payload = SurfacePayload {
         closed_u: surface.closed_u,
         closed_v: surface.closed_v,
-        degree_u: 3,
-        degree_v: 3,
+        degree_u: surface.degree_u as u8,
+        degree_v: surface.degree_v as u8,
         count_u: count(surface.count_u)?,
         count_v: count(surface.count_v)?,
         frame: frame.payload(),
@@ -178,6 +178,8 @@ pub fn surface_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedSurface> {
     let surface = BSplineSurface {
         closed_u: payload.closed_u,
         closed_v: payload.closed_v,
+        degree_u: usize::from(payload.degree_u),
+        degree_v: usize::from(payload.degree_v),
         count_u: usize::from(payload.count_u),
         count_v: usize::from(payload.count_v),
         control: decode_control(payload.control, &payload.frame, header.scalar),
@@ -428,6 +430,8 @@ mod tests {
         let surface = BSplineSurface {
             closed_u: false,
             closed_v: false,
+            degree_u: 3,
+            degree_v: 3,
             count_u: 5,
             count_v: 4,
             control,

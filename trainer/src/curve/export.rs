@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 
 use super::spline::{BSplineCurve, BSplineSurface};
 
-/// The degree of every surface the core evaluates (curves have their own).
+/// The default degree of curves and surfaces: cubic.
 pub const DEGREE: usize = 3;
 
 /// A curve as degree, knots and control points: evaluating the B-spline these define with de
@@ -40,13 +40,13 @@ pub struct CurveExport {
 /// A surface as degrees, knots and its control grid, row by row along u.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SurfaceExport {
-    /// Always [`DEGREE`].
+    /// The degree along u, 2 to 5.
     pub degree_u: usize,
-    /// Always [`DEGREE`].
+    /// The degree along v, 2 to 5.
     pub degree_v: usize,
-    /// Whether the surface closes along u (each row then ends with its first three points).
+    /// Whether the surface closes along u (each row then ends with its first p_u points).
     pub closed_u: bool,
-    /// Whether it closes along v (the grid then ends with its first three rows).
+    /// Whether it closes along v (the grid then ends with its first p_v rows).
     pub closed_v: bool,
     /// The parameter ranges of u and v, each [0, 1].
     pub domain: [[f64; 2]; 2],
@@ -167,8 +167,8 @@ fn insert_knot(knots: &mut Vec<f64>, control: &mut Vec<Vec<f64>>, t: f64, p: usi
 /// [`Error::InvalidInput`] when the surface is not valid ([`BSplineSurface::validate`]).
 pub fn export_surface(surface: &BSplineSurface) -> Result<SurfaceExport> {
     surface.validate()?;
-    let (knots_u, columns) = direction(surface.count_u, surface.closed_u, DEGREE);
-    let (knots_v, rows) = direction(surface.count_v, surface.closed_v, DEGREE);
+    let (knots_u, columns) = direction(surface.count_u, surface.closed_u, surface.degree_u);
+    let (knots_v, rows) = direction(surface.count_v, surface.closed_v, surface.degree_v);
     let control_points = rows
         .iter()
         .flat_map(|&v| {
@@ -178,8 +178,8 @@ pub fn export_surface(surface: &BSplineSurface) -> Result<SurfaceExport> {
         })
         .collect();
     Ok(SurfaceExport {
-        degree_u: DEGREE,
-        degree_v: DEGREE,
+        degree_u: surface.degree_u,
+        degree_v: surface.degree_v,
         closed_u: surface.closed_u,
         closed_v: surface.closed_v,
         domain: [[0.0, 1.0]; 2],
@@ -434,6 +434,8 @@ mod tests {
         let surface = BSplineSurface {
             closed_u: true,
             closed_v: false,
+            degree_u: 3,
+            degree_v: 3,
             count_u,
             count_v,
             control,

@@ -111,7 +111,9 @@ pub use surface_boundary::{
 pub use surface_extent::{
     EXTENT_LANDMARKS, EXTENT_NEIGHBOURS, EXTENT_SAMPLE, Unrolled, patch_aspect, unroll,
 };
-pub use surface_fit::{MAX_SURFACE_CONTROL_POINTS, fit_surface_to_parameters};
+pub use surface_fit::{
+    MAX_SURFACE_CONTROL_POINTS, fit_surface_of_degree, fit_surface_to_parameters,
+};
 pub use surface_mesh::{MAX_MESH_VERTICES, SurfaceMesh, surface_mesh};
 pub use surface_tube::{TUBE_GAP, TUBE_NEIGHBOURS, TUBE_SLICES, tube_parameters};
 

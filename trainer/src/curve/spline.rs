@@ -147,14 +147,21 @@ pub fn check_degree(degree: usize) -> Result<()> {
     }
 }
 
-/// Tensor-product uniform cubic B-spline surface; control[v * count_u + u]; open directions
-/// have count ≥ 4.
+/// Tensor-product uniform B-spline surface of degree 2 to 5 along each direction (bicubic by
+/// default); control[v * count_u + u]; each direction has more control points than its
+/// degree, and at least 4.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BSplineSurface {
     /// Whether the u direction wraps around.
     pub closed_u: bool,
     /// Whether the v direction wraps around.
     pub closed_v: bool,
+    /// The polynomial degree along u, 2 to 5.
+    #[serde(default = "cubic")]
+    pub degree_u: usize,
+    /// The polynomial degree along v, 2 to 5.
+    #[serde(default = "cubic")]
+    pub degree_v: usize,
     /// Control points per row (along u).
     pub count_u: usize,
     /// Rows (along v).
@@ -170,11 +177,20 @@ impl BSplineSurface {
     /// # Errors
     /// [`Error::InvalidInput`] naming the problem.
     pub fn validate(&self) -> Result<()> {
+        check_degree(self.degree_u)?;
+        check_degree(self.degree_v)?;
         if self.count_u < MIN_CONTROL_POINTS || self.count_v < MIN_CONTROL_POINTS {
             return Err(Error::invalid(format!(
-                "a cubic B-spline surface needs at least {MIN_CONTROL_POINTS} control points \
+                "a B-spline surface needs at least {MIN_CONTROL_POINTS} control points \
                  per direction, got {} × {}",
                 self.count_u, self.count_v
+            )));
+        }
+        if self.count_u <= self.degree_u || self.count_v <= self.degree_v {
+            return Err(Error::invalid(format!(
+                "a B-spline surface of degrees {} × {} needs more control points than its \
+                 degree in each direction, got {} × {}",
+                self.degree_u, self.degree_v, self.count_u, self.count_v
             )));
         }
         if Some(self.control.len()) != self.count_u.checked_mul(self.count_v) {
@@ -189,39 +205,37 @@ impl BSplineSurface {
         check_control(&self.control, false)
     }
 
-    /// Segments along u: `count_u` when closed, `count_u − 3` when open.
+    /// Segments along u: `count_u` when closed, `count_u − degree_u` when open.
     pub fn segments_u(&self) -> usize {
-        segments(self.count_u, self.closed_u)
+        segments(self.count_u, self.closed_u, self.degree_u)
     }
 
-    /// Segments along v: `count_v` when closed, `count_v − 3` when open.
+    /// Segments along v: `count_v` when closed, `count_v − degree_v` when open.
     pub fn segments_v(&self) -> usize {
-        segments(self.count_v, self.closed_v)
+        segments(self.count_v, self.closed_v, self.degree_v)
     }
 
     /// S(u, v), both clamped to [0, 1]; NaN for a surface that fails
     /// [`BSplineSurface::validate`]'s counts. Exact to a few ulp.
     pub fn point(&self, u: f64, v: f64) -> [f64; 3] {
-        self.combine(u, v, cubic_basis, cubic_basis, 1.0)
+        self.combine(u, v, [false, false], 1.0)
     }
 
     /// (∂S/∂u, ∂S/∂v), including the factors `segments_u` and `segments_v`.
     pub fn partials(&self, u: f64, v: f64) -> ([f64; 3], [f64; 3]) {
-        let du = self.combine(
-            u,
-            v,
-            cubic_basis_derivative,
-            cubic_basis,
-            self.segments_u() as f64,
-        );
-        let dv = self.combine(
-            u,
-            v,
-            cubic_basis,
-            cubic_basis_derivative,
-            self.segments_v() as f64,
-        );
+        let du = self.combine(u, v, [true, false], self.segments_u() as f64);
+        let dv = self.combine(u, v, [false, true], self.segments_v() as f64);
         (du, dv)
+    }
+
+    /// The basis weights of one direction of `degree` at `u`: values, or their derivative.
+    fn weights(degree: usize, u: f64, derivative: bool) -> [f64; MAX_ORDER] {
+        match (degree, derivative) {
+            (3, false) => widen(cubic_basis(u)),
+            (3, true) => widen(cubic_basis_derivative(u)),
+            (_, false) => uniform_basis(degree, u),
+            (_, true) => uniform_basis_derivative(degree, u),
+        }
     }
 
     /// The unit normal ∂S/∂u × ∂S/∂v / |…|; `None` where the cross product vanishes or is
@@ -233,29 +247,31 @@ impl BSplineSurface {
         (length > 0.0 && length.is_finite()).then(|| n.map(|c| c / length))
     }
 
-    fn combine(
-        &self,
-        u: f64,
-        v: f64,
-        weights_u: fn(f64) -> [f64; 4],
-        weights_v: fn(f64) -> [f64; 4],
-        factor: f64,
-    ) -> [f64; 3] {
+    /// Σ wv·wu·P times `factor`, with each direction's weights or their derivative as
+    /// `derivative` says.
+    fn combine(&self, u: f64, v: f64, derivative: [bool; 2], factor: f64) -> [f64; 3] {
         let (nu, nv) = (self.count_u, self.count_v);
+        let degrees_valid = [self.degree_u, self.degree_v]
+            .iter()
+            .all(|d| (MIN_DEGREE..=MAX_DEGREE).contains(d));
         if nu < MIN_CONTROL_POINTS
             || nv < MIN_CONTROL_POINTS
+            || !degrees_valid
+            || nu <= self.degree_u
+            || nv <= self.degree_v
             || Some(self.control.len()) != nu.checked_mul(nv)
         {
             return [f64::NAN; 3];
         }
         let (i, lu) = locate(u, self.segments_u());
         let (j, lv) = locate(v, self.segments_v());
-        let (wu, wv) = (weights_u(lu), weights_v(lv));
+        let wu = Self::weights(self.degree_u, lu, derivative[0]);
+        let wv = Self::weights(self.degree_v, lv, derivative[1]);
         let mut c = [0.0; 3];
-        for (b, &wb) in wv.iter().enumerate() {
+        for (b, &wb) in wv.iter().enumerate().take(self.degree_v + 1) {
             let row = (j + b) % nv;
             let mut r = [0.0; 3];
-            for (a, &wa) in wu.iter().enumerate() {
+            for (a, &wa) in wu.iter().enumerate().take(self.degree_u + 1) {
                 let p = self.control[row * nu + (i + a) % nu];
                 for axis in 0..3 {
                     r[axis] += wa * p[axis];
@@ -269,11 +285,11 @@ impl BSplineSurface {
     }
 }
 
-fn segments(count: usize, closed: bool) -> usize {
+fn segments(count: usize, closed: bool, degree: usize) -> usize {
     if closed {
         count
     } else {
-        count.saturating_sub(3)
+        count.saturating_sub(degree)
     }
 }
 

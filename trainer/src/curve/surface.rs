@@ -26,7 +26,7 @@ use super::points::CurvePoints;
 use super::spline::BSplineSurface;
 use super::surface_boundary::{BOUNDARY_NEIGHBOURS, CLOSED_BELOW, largest_boundary};
 use super::surface_extent::{Unrolled, patch_aspect, unroll};
-use super::surface_fit::fit_surface_to_parameters;
+use super::surface_fit::fit_surface_of_degree;
 use super::surface_tube::tube_parameters;
 use crate::geometry::vector::{distance, dot, sub};
 
@@ -59,6 +59,8 @@ pub struct SurfaceOptions {
     /// Start the map from the patch unrolled into the plane ([`unroll`]) instead of random
     /// weights (true).
     pub unroll: bool,
+    /// The surface's degree in both directions, 2 to 5 (3).
+    pub degree: usize,
 }
 
 impl Default for SurfaceOptions {
@@ -71,6 +73,7 @@ impl Default for SurfaceOptions {
             parameter_corrections: 3,
             tube: false,
             unroll: true,
+            degree: 3,
         }
     }
 }
@@ -207,13 +210,13 @@ pub fn fit_unrolled_surface(
     };
     let closed_u = map.is_none();
     let fit = |parameters: &[[f64; 2]]| {
-        fit_surface_to_parameters(
+        fit_surface_of_degree(
             points.points(),
             parameters,
-            options.control_u,
-            options.control_v,
+            [options.control_u, options.control_v],
             closed_u,
             options.smoothing,
+            options.degree,
         )
     };
     let mut surface = fit(&parameters)?;
@@ -394,6 +397,8 @@ pub fn control_grid_surface(map: &KohonenMap) -> Result<BSplineSurface> {
     let surface = BSplineSurface {
         closed_u: false,
         closed_v: false,
+        degree_u: 3,
+        degree_v: 3,
         count_u: map.columns,
         count_v: map.rows,
         control: map.neurons.clone(),

@@ -1,9 +1,9 @@
-//! Least-squares fit of a uniform cubic B-spline surface, open or closed along u, to
-//! parametrized points.
+//! Least-squares fit of a uniform B-spline surface (bicubic, or of degree 2 to 5 in both
+//! directions), open or closed along u, to parametrized points.
 
 use crate::error::{Error, Result};
 
-use super::basis::{cubic_basis, locate};
+use super::basis::{cubic_basis, locate, uniform_basis};
 use super::least_squares::{Affine, NormalEquations};
 use super::spline::{BSplineSurface, MIN_CONTROL_POINTS};
 
@@ -28,8 +28,32 @@ pub fn fit_surface_to_parameters(
     closed_u: bool,
     smoothing: f64,
 ) -> Result<BSplineSurface> {
-    if count_u < MIN_CONTROL_POINTS
-        || count_v < MIN_CONTROL_POINTS
+    fit_surface_of_degree(
+        points,
+        parameters,
+        [count_u, count_v],
+        closed_u,
+        smoothing,
+        3,
+    )
+}
+
+/// [`fit_surface_to_parameters`] of `degree` (2 to 5) in both directions.
+///
+/// # Errors
+/// As [`fit_surface_to_parameters`], and for a degree outside 2 to 5 or a direction with no
+/// more control points than the degree.
+pub fn fit_surface_of_degree(
+    points: &[[f64; 3]],
+    parameters: &[[f64; 2]],
+    [count_u, count_v]: [usize; 2],
+    closed_u: bool,
+    smoothing: f64,
+    degree: usize,
+) -> Result<BSplineSurface> {
+    super::spline::check_degree(degree)?;
+    if count_u < MIN_CONTROL_POINTS.max(degree + 1)
+        || count_v < MIN_CONTROL_POINTS.max(degree + 1)
         || count_u.saturating_mul(count_v) > MAX_SURFACE_CONTROL_POINTS
     {
         return Err(Error::invalid(format!(
@@ -60,16 +84,24 @@ pub fn fit_surface_to_parameters(
     }
     let controls: Vec<Affine> = (0..count_u * count_v).map(Affine::unknown).collect();
     let mut equations = NormalEquations::new(controls.len());
-    let segments_u = if closed_u { count_u } else { count_u - 3 };
-    let segments_v = count_v - 3;
-    let mut row: Vec<(f64, &Affine)> = Vec::with_capacity(16);
+    let segments_u = if closed_u { count_u } else { count_u - degree };
+    let segments_v = count_v - degree;
+    let basis = |u: f64| {
+        if degree == 3 {
+            let c = cubic_basis(u);
+            [c[0], c[1], c[2], c[3], 0.0, 0.0]
+        } else {
+            uniform_basis(degree, u)
+        }
+    };
+    let mut row: Vec<(f64, &Affine)> = Vec::with_capacity(36);
     for (q, p) in points.iter().zip(parameters) {
         let (i, lu) = locate(p[0], segments_u);
         let (j, lv) = locate(p[1], segments_v);
-        let (bu, bv) = (cubic_basis(lu), cubic_basis(lv));
+        let (bu, bv) = (basis(lu), basis(lv));
         row.clear();
-        for b in 0..4 {
-            for a in 0..4 {
+        for b in 0..=degree {
+            for a in 0..=degree {
                 row.push((
                     bu[a] * bv[b],
                     &controls[(j + b) * count_u + (i + a) % count_u],
@@ -106,6 +138,8 @@ pub fn fit_surface_to_parameters(
     Ok(BSplineSurface {
         closed_u,
         closed_v: false,
+        degree_u: degree,
+        degree_v: degree,
         count_u,
         count_v,
         control,

@@ -383,6 +383,8 @@ fn surface_partials_and_normals_match_differences() {
         let surface = BSplineSurface {
             closed_u,
             closed_v,
+            degree_u: 3,
+            degree_v: 3,
             count_u,
             count_v,
             control: control.clone(),
@@ -407,6 +409,8 @@ fn surface_partials_and_normals_match_differences() {
     let flat = BSplineSurface {
         closed_u: false,
         closed_v: false,
+        degree_u: 3,
+        degree_v: 3,
         count_u: 4,
         count_v: 4,
         control: vec![[1.0, 2.0, 3.0]; 16],
@@ -541,6 +545,19 @@ fn an_open_cylinder_is_fitted_closed_around() {
     assert!(error.contains("not a tube"), "{error}");
 }
 
+/// The largest distance of the `clean` samples from `fit`'s surface, each projected from its
+/// fitted parameters.
+fn worst_sample_distance(fit: &SurfaceFit, clean: &[[f64; 3]]) -> f64 {
+    clean
+        .iter()
+        .zip(&fit.parameters)
+        .map(|(&q, &p)| {
+            let p = super::surface::project(&fit.surface, q, p);
+            distance(fit.surface.point(p[0], p[1]), q)
+        })
+        .fold(0.0, f64::max)
+}
+
 #[test]
 fn paraboloid_patch_is_meshed_within_tolerance() {
     // The patch is 2 × 2 (diagonal 2.8); noise 0.005 per coordinate.
@@ -564,14 +581,7 @@ fn paraboloid_patch_is_meshed_within_tolerance() {
     }
     // Every clean sample lies within 0.03 of the fitted surface (projected from its fitted
     // parameters).
-    let worst_sample = clean
-        .iter()
-        .zip(&fit.parameters)
-        .map(|(&q, &p)| {
-            let p = super::surface::project(&fit.surface, q, p);
-            distance(fit.surface.point(p[0], p[1]), q)
-        })
-        .fold(0.0, f64::max);
+    let worst_sample = worst_sample_distance(&fit, &clean);
     // The mesh does not fold: every normal points to the same side of the xy-plane.
     let side = mesh.normals[0][2].signum();
     let folded = mesh.normals.iter().filter(|n| n[2] * side <= 0.0).count();
@@ -1121,5 +1131,51 @@ fn degrees_outside_two_to_five_are_refused() {
             error.contains(&format!("degree {degree}")) && error.contains("2..=5"),
             "{error}"
         );
+    }
+}
+
+/// Surfaces of degree 2 and 5 fit the noisy paraboloid as well as the bicubic does: mesh
+/// vertices within 1 % of the diagonal of the truth, every clean sample within it of the
+/// surface, no fold; the blob keeps the degrees, and the JSON export's knots match them.
+#[test]
+fn surfaces_of_other_degrees_fit_the_paraboloid() {
+    use crate::curve::{export_surface, surface_from_blob, surface_to_blob};
+    use neurosurf_core::scalar::ScalarKind;
+    let (clean, noisy) = paraboloid(1500, 0.005, 4);
+    let points = CurvePoints::from_3d(&noisy).unwrap();
+    for degree in [2, 5] {
+        let options = SurfaceOptions {
+            degree,
+            ..SurfaceOptions::default()
+        };
+        let fit = fit_surface(&points, &options).unwrap();
+        assert_eq!(
+            (fit.surface.degree_u, fit.surface.degree_v),
+            (degree, degree)
+        );
+        let mesh = surface_mesh(&fit.surface, 40, 40).unwrap();
+        let worst_vertex = mesh
+            .mesh
+            .positions
+            .iter()
+            .filter(|p| p[0].abs() <= 1.0 && p[1].abs() <= 1.0)
+            .map(|p| (p[2] - 0.5 * (p[0] * p[0] + p[1] * p[1])).abs())
+            .fold(0.0, f64::max);
+        let worst_sample = worst_sample_distance(&fit, &clean);
+        let side = mesh.normals[0][2].signum();
+        let folded = mesh.normals.iter().filter(|n| n[2] * side <= 0.0).count();
+        assert!(worst_vertex <= 0.03, "degree {degree}: {worst_vertex}");
+        assert!(worst_sample <= 0.03, "degree {degree}: {worst_sample}");
+        assert_eq!(folded, 0, "degree {degree}");
+        let blob = surface_to_blob(&fit.surface, None, ScalarKind::Q16_16).unwrap();
+        let decoded = surface_from_blob(&blob, Path::new("patch.nsb")).unwrap();
+        assert_eq!(
+            (decoded.surface.degree_u, decoded.surface.degree_v),
+            (degree, degree)
+        );
+        let export = export_surface(&fit.surface).unwrap();
+        assert_eq!((export.degree_u, export.degree_v), (degree, degree));
+        assert_eq!(export.knots_u.len(), export.count_u + degree + 1);
+        assert_eq!(export.knots_v.len(), export.count_v + degree + 1);
     }
 }
