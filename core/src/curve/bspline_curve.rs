@@ -200,11 +200,10 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
 
     /// C(t). t is clamped to [0, 1]; NaN counts as 0.
     pub fn position(&self, t: S) -> [S; 3] {
-        let [point] = if self.is_cubic() {
-            self.cubic_lanes::<1, false>(&[t])
-        } else {
-            self.any_degree_point::<false>(t)
-        };
+        if !self.is_cubic() {
+            return self.any_degree_position(t);
+        }
+        let [point] = self.cubic_lanes::<1, false>(&[t]);
         point.position
     }
 
@@ -215,19 +214,27 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
 
     /// C(t) and dC/dt.
     pub fn eval(&self, t: S) -> CurvePoint<S> {
-        let [point] = if self.is_cubic() {
-            self.cubic_lanes::<1, true>(&[t])
-        } else {
-            self.any_degree_point::<true>(t)
-        };
+        if !self.is_cubic() {
+            return self.any_degree_point(t);
+        }
+        let [point] = self.cubic_lanes::<1, true>(&[t]);
         point
     }
 
-    /// One point of a curve of degree p ≠ 3, out of line: the single-point calls then hold
-    /// the cubic path alone.
+    /// C(t) of a curve of degree p ≠ 3, out of line: the single-point calls then hold the
+    /// cubic path alone.
     #[inline(never)]
-    fn any_degree_point<const TANGENT: bool>(&self, t: S) -> [CurvePoint<S>; 1] {
-        self.any_degree_lanes::<1, TANGENT>(&[t])
+    fn any_degree_position(&self, t: S) -> [S; 3] {
+        let [point] = self.any_degree_lanes::<1, false>(&[t]);
+        point.position
+    }
+
+    /// C(t) and dC/dt of a curve of degree p ≠ 3, out of line (see
+    /// [`Self::any_degree_position`]).
+    #[inline(never)]
+    fn any_degree_point(&self, t: S) -> CurvePoint<S> {
+        let [point] = self.any_degree_lanes::<1, true>(&[t]);
+        point
     }
 
     /// Whether the curve is cubic: each entry point picks [`Self::cubic_lanes`] or
@@ -241,7 +248,7 @@ impl<S: Scalar, const C: usize> BSplineCurve<S, C> {
     /// `L` parameters at once of a cubic curve: first every lane's segment and basis
     /// (structure of arrays), then every lane's four control points, four weights around the
     /// anchor P₁. The single-point calls are `L = 1`, so batches give the same bits.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn cubic_lanes<const L: usize, const TANGENT: bool>(
         &self,
         t: &[S; L],
