@@ -846,6 +846,23 @@ fn curves_of_degree_two_to_five_run_on_the_host_and_the_target() {
         error.contains("--interpolate") && error.contains("cubic"),
         "{error}"
     );
+    // Too few control points for the degree: refused before the chain trains, naming both.
+    let error = fails(&[
+        "curve",
+        "fit",
+        s(&points),
+        "--degree",
+        "5",
+        "--control",
+        "5",
+        "--closed",
+        "--out",
+        s(&blob),
+    ]);
+    assert!(
+        error.contains("--control 5") && error.contains("--control 6"),
+        "{error}"
+    );
     assert!(!blob.exists());
 }
 

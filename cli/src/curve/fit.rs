@@ -138,6 +138,18 @@ pub fn run(args: &FitArgs) -> Result<()> {
         args.control,
         args.interpolate,
     )?;
+    if let Some(control) = args.control {
+        let (fewest, _) =
+            neurosurf_trainer::curve::control_range(points.len(), args.closed, args.degree);
+        if control < fewest {
+            anyhow::bail!(
+                "--control {control}: a{} curve of degree {} needs at least {fewest} control \
+                 points; give --control {fewest} or more, or a lower --degree",
+                if args.closed { " closed" } else { "n open" },
+                args.degree
+            );
+        }
+    }
     let topology = if args.closed {
         Topology::Closed
     } else {

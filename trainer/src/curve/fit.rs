@@ -783,7 +783,7 @@ fn open_layout(k: usize, ordered: &[[f64; 3]], degree: usize) -> Vec<Affine> {
 
 /// The least and most control points K of a fit of n points at `degree`: closed, degree + 1
 /// (at least 4) to n; open, 4 for a cubic and p + ⌊(p − 1)/2⌋ + 2 otherwise (the end
-/// conditions of [`open_layout`] need one free point between them) to n + 2 for a cubic and
+/// conditions of an open curve of another degree need one free point between them) to n + 2 for a cubic and
 /// n + p − 1 otherwise.
 pub fn control_range(n: usize, closed: bool, degree: usize) -> (usize, usize) {
     if closed {

@@ -82,8 +82,8 @@ pub use export::{
 };
 pub use fit::{
     Approximation, ApproximationOptions, DENSITY_WINDOW, approximate, check_curve_capacity,
-    chord_length_parameters, default_control_points, density_parameters, interpolate,
-    interpolation_parameter,
+    chord_length_parameters, control_range, default_control_points, density_parameters,
+    interpolate, interpolation_parameter,
 };
 pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map, train_map_from};
 pub use groups::{GROUP_NEIGHBOURS, GROUP_REACH, point_groups};
