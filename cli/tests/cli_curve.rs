@@ -97,14 +97,7 @@ fn a_fitted_curve_evaluates_identically_on_the_host_and_the_target() {
     let f64_rows = ok(&["eval", s(&model), "--points", s(&t)]);
     assert!(f64_rows.starts_with("t,x,y,z,tx,ty,tz\n"), "{f64_rows}");
     assert_eq!(f64_rows.lines().count(), 45);
-    for scalar in ["q16.16", "f32"] {
-        let common = [s(&model), "--points", s(&t), "--scalar", scalar];
-        let host = ok(&[&["eval"], &common[..]].concat());
-        for mode in ["batch", "single"] {
-            let target = ok(&[&["sim"], &common[..], &["--mode", mode]].concat());
-            assert!(host == target, "{scalar} {mode}\n{host}\n---\n{target}");
-        }
-    }
+    host_equals_target(&model, &t);
     let cost = json(&ok(&[
         "sim",
         s(&model),
@@ -773,14 +766,7 @@ fn curves_of_degree_two_to_five_run_on_the_host_and_the_target() {
         assert!(fit["rms_residual"].as_f64().unwrap() < 0.01, "{fit}");
         let info = ok(&["info", s(&blob)]);
         assert!(info.contains(&format!("degree {degree}")), "{info}");
-        for scalar in ["q16.16", "f32"] {
-            let common = [s(&blob), "--points", s(&t_path), "--scalar", scalar];
-            let host = ok(&[&["eval"], &common[..]].concat());
-            for mode in ["batch", "single"] {
-                let target = ok(&[&["sim"], &common[..], &["--mode", mode]].concat());
-                assert!(host == target, "degree {degree} {scalar} {mode}");
-            }
-        }
+        host_equals_target(&blob, &t_path);
         let (json_path, dxf_path) = (dir.path().join("e.json"), dir.path().join("e.dxf"));
         ok(&[
             "curve",
@@ -818,7 +804,37 @@ fn curves_of_degree_two_to_five_run_on_the_host_and_the_target() {
             assert!(!svg.exists());
         }
     }
+    // A surface of degree 4 in both directions: the same rows on the host and the target.
+    let sheet = sheet_file(dir.path());
+    let patch = dir.path().join("patch4.nsb");
+    let fit = json(&ok(&[
+        "curve",
+        "surface",
+        s(&sheet),
+        "--degree",
+        "4",
+        "--out",
+        s(&patch),
+        "--json",
+    ]));
+    assert_eq!(fit["degrees"], serde_json::json!([4, 4]), "{fit}");
+    assert!(fit["rms_residual"].as_f64().unwrap() < 0.01, "{fit}");
+    let info = ok(&["info", s(&patch)]);
+    assert!(info.contains("degree 4 × 4"), "{info}");
+    let uv = dir.path().join("uv.txt");
+    fs::write(&uv, "0 0\n0.5 0.5\n1 1\n0.25 0.75\n0.9 0.1\n").unwrap();
+    host_equals_target(&patch, &uv);
     let blob = dir.path().join("bad.nsb");
+    let error = fails(&[
+        "curve",
+        "surface",
+        s(&sheet),
+        "--degree",
+        "1",
+        "--out",
+        s(&blob),
+    ]);
+    assert!(error.contains("degree 1"), "{error}");
     let error = fails(&[
         "curve",
         "fit",
@@ -864,6 +880,19 @@ fn curves_of_degree_two_to_five_run_on_the_host_and_the_target() {
         "{error}"
     );
     assert!(!blob.exists());
+}
+
+/// `eval` of `model` at `points` prints exactly what the simulated target prints, in both
+/// scalars and both modes.
+fn host_equals_target(model: &Path, points: &Path) {
+    for scalar in ["q16.16", "f32"] {
+        let common = [s(model), "--points", s(points), "--scalar", scalar];
+        let host = ok(&[&["eval"], &common[..]].concat());
+        for mode in ["batch", "single"] {
+            let target = ok(&[&["sim"], &common[..], &["--mode", mode]].concat());
+            assert!(host == target, "{} {scalar} {mode}", model.display());
+        }
+    }
 }
 
 /// De Boor's algorithm for degree `p` (the span found by search over the domain).
