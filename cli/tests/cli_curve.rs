@@ -824,61 +824,32 @@ fn curves_of_degree_two_to_five_run_on_the_host_and_the_target() {
     let uv = dir.path().join("uv.txt");
     fs::write(&uv, "0 0\n0.5 0.5\n1 1\n0.25 0.75\n0.9 0.1\n").unwrap();
     host_equals_target(&patch, &uv);
+    // Bad degrees, and too few control points for one, are refused before the chain
+    // trains, each naming what to change; nothing is written.
     let blob = dir.path().join("bad.nsb");
-    let error = fails(&[
-        "curve",
-        "surface",
-        s(&sheet),
-        "--degree",
-        "1",
-        "--out",
-        s(&blob),
-    ]);
-    assert!(error.contains("degree 1"), "{error}");
-    let error = fails(&[
-        "curve",
-        "fit",
-        s(&points),
-        "--degree",
-        "6",
-        "--out",
-        s(&blob),
-    ]);
-    assert!(
-        error.contains("degree 6") && error.contains("--degree 2..=5"),
-        "{error}"
-    );
-    let error = fails(&[
-        "curve",
-        "fit",
-        s(&points),
-        "--degree",
-        "2",
-        "--interpolate",
-        "--out",
-        s(&blob),
-    ]);
-    assert!(
-        error.contains("--interpolate") && error.contains("cubic"),
-        "{error}"
-    );
-    // Too few control points for the degree: refused before the chain trains, naming both.
-    let error = fails(&[
-        "curve",
-        "fit",
-        s(&points),
-        "--degree",
-        "5",
-        "--control",
-        "5",
-        "--closed",
-        "--out",
-        s(&blob),
-    ]);
-    assert!(
-        error.contains("--control 5") && error.contains("--control 6"),
-        "{error}"
-    );
+    let (sheet, points, out) = (s(&sheet), s(&points), s(&blob));
+    let refusals: [(&[&str], &[&str]); 4] = [
+        (&["surface", sheet, "--degree", "1"], &["degree 1"]),
+        (
+            &["fit", points, "--degree", "6"],
+            &["degree 6", "--degree 2..=5"],
+        ),
+        (
+            &["fit", points, "--degree", "2", "--interpolate"],
+            &["--interpolate", "cubic"],
+        ),
+        (
+            &["fit", points, "--degree", "5", "--control", "5", "--closed"],
+            &["--control 5", "--control 6"],
+        ),
+    ];
+    for (args, wanted) in refusals {
+        let error = fails(&[&["curve"], args, &["--out", out]].concat());
+        assert!(
+            wanted.iter().all(|w| error.contains(w)),
+            "{args:?}: {error}"
+        );
+    }
     assert!(!blob.exists());
 }
 
