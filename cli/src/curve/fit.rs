@@ -339,11 +339,12 @@ pub fn run(args: &FitArgs) -> Result<()> {
     );
     if let Some(band) = &report.band {
         println!(
-            "noise across the curve {:.3e} ({:.1}× the spacing along it): fitted at parameters \
-             along the band's middle (±{} points averaged) with {} control points",
+            "noise across the curve {:.3e} ({:.1}× the spacing along it): the curve follows \
+             the band's middle ({} rounds of ordering the points along the fit) with {} \
+             control points",
             band.noise,
             band.noise / band.spacing,
-            band.window,
+            band.rounds,
             report.control_points
         );
     }

@@ -41,6 +41,23 @@ pub struct ApproximationOptions {
     /// The polynomial degree, 2 to 5 (3 by default).
     #[serde(default = "cubic")]
     pub degree: usize,
+    /// Where an open curve ends: at the first and last ordered point (the default), or where
+    /// the least squares places them (for a band of noise, whose first and last points lie
+    /// anywhere across it).
+    #[serde(default)]
+    pub ends: Ends,
+}
+
+/// Where an open curve's ends go.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Ends {
+    /// C(0) = Q₀ and C(1) = Q_{n−1}.
+    #[default]
+    AtData,
+    /// C(0) and C(1) are unknowns of the fit like any control point (the natural end
+    /// condition, C″ = 0, stays: with the ends free as well, a few noisy points near an end
+    /// swing the last segment).
+    Fitted,
 }
 
 fn keep_corners() -> bool {
@@ -59,6 +76,7 @@ impl Default for ApproximationOptions {
             tolerance: None,
             corners: true,
             degree: 3,
+            ends: Ends::AtData,
         }
     }
 }
@@ -461,7 +479,7 @@ fn fit_at(
     let segments = if closed { k } else { k - degree };
     let mut parameters = move_to_knots(parameters, corners, segments, closed);
     let knots: Vec<usize> = corners.iter().map(|c| c.knot).collect();
-    let layout = control_layout(k, closed, ordered, degree);
+    let layout = control_layout(k, closed, ordered, degree, options.ends);
     let (controls, unknowns) = tie_corners(layout, corners, degree);
     let solve = |parameters: &[f64]| -> Result<BSplineCurve> {
         let mut equations = NormalEquations::new(unknowns);
@@ -715,15 +733,24 @@ fn tie_corners(
 }
 
 /// The K control points as affine functions of the unknowns (see [`approximate`]).
-fn control_layout(k: usize, closed: bool, ordered: &[[f64; 3]], degree: usize) -> Vec<Affine> {
+fn control_layout(
+    k: usize,
+    closed: bool,
+    ordered: &[[f64; 3]],
+    degree: usize,
+    ends: Ends,
+) -> Vec<Affine> {
     if closed {
         return (0..k).map(Affine::unknown).collect();
     }
+    // The curve's ends: the data's, or two more unknowns after the K that any layout uses.
+    let [first, last] = match ends {
+        Ends::AtData => [ordered[0], ordered[ordered.len() - 1]].map(Affine::fixed),
+        Ends::Fitted => [k, k + 1].map(Affine::unknown),
+    };
     if degree != 3 {
-        return open_layout(k, ordered, degree);
+        return open_layout(k, [first, last], degree);
     }
-    let first = Affine::fixed(ordered[0]);
-    let last = Affine::fixed(ordered[ordered.len() - 1]);
     // P₁ = Q₀, P₂ … P_{K−3} unknowns 0 … K−5, P_{K−2} = Q_{n−1}.
     let mut inner = vec![first];
     inner.extend((0..k - 4).map(Affine::unknown));
@@ -739,10 +766,10 @@ fn control_layout(k: usize, closed: bool, ordered: &[[f64; 3]], degree: usize) -
 /// [`control_layout`] of an open curve of degree p ≠ 3, the cubic's phantoms generalized.
 /// At each end, with m = ⌊(p − 1)/2⌋, the control points before P_m continue the line
 /// through P_m and P_{m+1} at equal steps (P_j = P_m + (m − j)·(P_m − P_{m+1})), and P_m
-/// is what makes the curve start at the first point, C(0) = Σ N_j(0)·P_j = Q₀ (solved for
+/// is what makes the curve start at its start point, C(0) = Σ N_j(0)·P_j = E₀ (solved for
 /// P_m; its coefficient is at least 1/2 for p ≤ 5). The same mirrored at the other end.
-/// For p = 3 this is the cubic's layout: P₀ = 2P₁ − P₂ and P₁ = Q₀.
-fn open_layout(k: usize, ordered: &[[f64; 3]], degree: usize) -> Vec<Affine> {
+/// For p = 3 this is the cubic's layout: P₀ = 2P₁ − P₂ and P₁ = E₀.
+fn open_layout(k: usize, ends: [Affine; 2], degree: usize) -> Vec<Affine> {
     let m = (degree - 1) / 2;
     let weights = uniform_basis(degree, 0.0);
     // The unknowns: every control point that no end condition fixes (k ≥ p + m + 2, see
@@ -754,7 +781,8 @@ fn open_layout(k: usize, ordered: &[[f64; 3]], degree: usize) -> Vec<Affine> {
     let zero = || Affine::fixed([0.0; 3]);
     // Start: index j of the weights is control point j; end: mirrored (j ↔ k − 1 − j),
     // where the weights at u = 1 of the last segment mirror those at u = 0.
-    for (target, mirror) in [(ordered[0], false), (ordered[ordered.len() - 1], true)] {
+    let [first, last] = ends;
+    for (target, mirror) in [(first, false), (last, true)] {
         let at = |j: usize| if mirror { k - 1 - j } else { j };
         // C(0) = α·P_m + β·P_{m+1} + Σ_{j>m+1} N_j·P_j = Q.
         let mut alpha = weights[m];
@@ -764,7 +792,7 @@ fn open_layout(k: usize, ordered: &[[f64; 3]], degree: usize) -> Vec<Affine> {
             beta -= weights[j] * (m - j) as f64;
         }
         let next = controls[at(m + 1)].clone().unwrap_or_else(zero);
-        let mut anchor = Affine::fixed(target).combine(1.0 / alpha, &next, -beta / alpha);
+        let mut anchor = target.combine(1.0 / alpha, &next, -beta / alpha);
         for j in m + 2..=degree {
             let p = controls[at(j)].clone().unwrap_or_else(zero);
             anchor = anchor.combine(1.0, &p, -weights[j] / alpha);

@@ -53,6 +53,7 @@ mod path_graph;
 mod pipeline;
 mod plot;
 mod points;
+mod principal;
 mod refine;
 mod samples;
 mod schedule;
@@ -81,7 +82,7 @@ pub use export::{
     export_surface,
 };
 pub use fit::{
-    Approximation, ApproximationOptions, DENSITY_WINDOW, approximate, check_curve_capacity,
+    Approximation, ApproximationOptions, DENSITY_WINDOW, Ends, approximate, check_curve_capacity,
     chord_length_parameters, control_range, default_control_points, density_parameters,
     interpolate, interpolation_parameter,
 };

@@ -6,13 +6,14 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 
 use super::fit::{
-    Approximation, ApproximationOptions, approximate, approximate_at, approximate_within,
-    density_parameters, interpolate,
+    Approximation, ApproximationOptions, Ends, approximate, approximate_within, density_parameters,
+    interpolate,
 };
 use super::kohonen::{KohonenChain, KohonenOptions, Topology, TrainingReport, train_chain};
 use super::noise::{BandReport, band_parameters};
 use super::ordering::{Ordering, order_points};
 use super::points::CurvePoints;
+use super::principal::follow_either;
 use super::refine::{RefineOptions, RefineReport, refine_order};
 use super::spline::BSplineCurve;
 
@@ -93,44 +94,50 @@ pub fn reconstruct_curve(
     let closed = ordering.closed;
     let dimension = points.dimension();
     let band = band_parameters(&ordered, dimension, closed);
+    let (mut ordering, mut ordered) = (ordering, ordered);
+    // A band's first and last points lie anywhere across it: the fit places the ends. And
+    // its order zig-zags across it, where the corner detector's arms see turns everywhere:
+    // noise wider than the spacing hides corners (they are rounded).
+    let mut fitting = options.approximation.clone();
+    if band.is_some() {
+        fitting.ends = Ends::Fitted;
+        fitting.corners = false;
+    }
     let within = |parameters: Vec<f64>, tolerance: f64| {
-        approximate_within(
-            &ordered,
-            parameters,
-            dimension,
-            closed,
-            tolerance,
-            &options.approximation,
-        )
+        approximate_within(&ordered, parameters, dimension, closed, tolerance, &fitting)
     };
     let tolerance = match options.approximation.control_points {
         None => options.approximation.tolerance,
         Some(_) => None,
     };
-    let approximation = match (&band, tolerance) {
-        (Some(band), Some(tolerance)) => within(band.parameters.clone(), tolerance)?,
+    let mut report = band.as_ref().map(|b| b.report.clone());
+    let approximation = match (band, tolerance) {
+        (Some(band), Some(tolerance)) => within(band.parameters, tolerance)?,
         (None, Some(tolerance)) => within(density_parameters(&ordered, closed)?, tolerance)?,
-        (band, None) => match band {
-            Some(band) => {
-                let k = options
-                    .approximation
-                    .control_points
-                    .unwrap_or(band.control_points);
-                approximate_at(
-                    &ordered,
-                    band.parameters.clone(),
-                    dimension,
-                    closed,
-                    k,
-                    &options.approximation,
-                )?
+        (None, None) => approximate(&ordered, dimension, closed, &options.approximation)?,
+        (Some(band), None) => {
+            // The fit knows better where the band runs than the order it was fitted in.
+            let followed = follow_either(
+                &ordered,
+                (dimension, closed),
+                (band.report.noise, band.parameters),
+                options.approximation.control_points,
+                &fitting,
+            )?;
+            if let Some(report) = &mut report {
+                report.rounds = followed.rounds;
+                report.noise = followed.noise;
+                report.spacing = followed.length / ordered.len() as f64;
+                report.control_points = followed.approximation.curve.control.len();
             }
-            None => approximate(&ordered, dimension, closed, &options.approximation)?,
-        },
+            ordering.order = followed.order.iter().map(|&i| ordering.order[i]).collect();
+            ordered = followed.order.iter().map(|&i| ordered[i]).collect();
+            followed.approximation
+        }
     };
     let interpolation = interpolate(&ordered, dimension, closed)?;
     Ok(CurveReconstruction {
-        band: band.map(|b| b.report),
+        band: report,
         chain,
         training,
         chain_ordering,

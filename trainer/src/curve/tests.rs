@@ -773,9 +773,9 @@ fn open_curves_end_where_they_end() {
 }
 
 /// Noise wider than the spacing (1 % of the size on 1 000 points: about 5 spacings) makes
-/// the order zig-zag; the fit is parametrized along the band's middle with fewer control
-/// points and stays within 1.2 % of the true curve (measured 0.7–0.8 %; chord lengths along
-/// the zig-zag gave 2.2–2.5 %). Data with noise below the spacing is fitted as before.
+/// the order zig-zag; the fit follows the band's middle with fewer control points and stays
+/// within 1.2 % of the true curve (measured 0.42–0.65 %; chord lengths along the zig-zag
+/// gave 2.2–2.5 %). Data with noise below the spacing is fitted as before.
 #[test]
 fn a_noisy_band_is_fitted_along_its_middle() {
     for curve in [SampleCurve::Ellipse, SampleCurve::Peanut] {
@@ -975,6 +975,87 @@ fn a_density_step_is_fitted_without_swings() {
         let polyline = result.approximation.curve.polyline(20_000);
         let error = hausdorff_distance(&polyline, &truth) / size;
         assert!(error <= 0.02, "seed {seed}: {error}");
+    }
+}
+
+/// The Hausdorff distance, over the bounding-box diagonal, between the truth `at(t)` (t from
+/// 0 to 1) and the curve fitted with default options to 1 000 points at random along it
+/// with Gaussian noise of `noise` × the diagonal in each coordinate.
+fn fit_noisy(
+    at: &dyn Fn(f64) -> [f64; 3],
+    dimension: usize,
+    closed: bool,
+    noise: f64,
+    seed: u64,
+) -> f64 {
+    let truth: Vec<[f64; 3]> = (0..=4_000).map(|j| at(j as f64 / 4_000.0)).collect();
+    let (lo, hi) = truth.iter().fold(
+        ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+        |(lo, hi), p| {
+            (
+                [0, 1, 2].map(|k| lo[k].min(p[k])),
+                [0, 1, 2].map(|k| hi[k].max(p[k])),
+            )
+        },
+    );
+    let diagonal = distance(lo, hi);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let raw: Vec<[f64; 3]> = (0..1_000)
+        .map(|_| {
+            let p = at(rng.random::<f64>());
+            [0, 1, 2].map(|k| {
+                if k < dimension {
+                    p[k] + noise * diagonal * gaussian(&mut rng)
+                } else {
+                    0.0
+                }
+            })
+        })
+        .collect();
+    let points = CurvePoints::new(dimension, raw).unwrap();
+    let topology = if closed {
+        Topology::Closed
+    } else {
+        Topology::Open
+    };
+    let result = reconstruct_curve(&points, &CurveOptions::new(topology, seed)).unwrap();
+    assert!(result.band.is_some(), "seed {seed}: a band");
+    let polyline = result.approximation.curve.polyline(4_000);
+    hausdorff_distance(&polyline, &truth) / diagonal
+}
+
+/// Noise of σ = 5 % of the diagonal (a band some 40 spacings wide): the fit follows the
+/// band, within 5 % of the true curve both ways, closed or open (the open ends where the
+/// band thins out). Measured on seeds 1–3: the epitrochoid 2.4–3.3 %, the sine 3.3–4.1 %.
+/// A 3-D arc, with noise in all three coordinates (a band √2 times as wide across), gets 6 %
+/// (measured 2.4–4.8 %, the worst at an end).
+#[test]
+fn a_band_five_percent_wide_is_followed() {
+    let tau = std::f64::consts::TAU;
+    let epitrochoid = |t: f64| {
+        let t = tau * t;
+        [
+            4.0 * t.cos() - 0.5 * (4.0 * t).cos(),
+            4.0 * t.sin() - 0.5 * (4.0 * t).sin(),
+            0.0,
+        ]
+    };
+    let sine = |t: f64| [8.0 * t, (8.0 * t).sin(), 0.0];
+    let arc = |t: f64| {
+        let a = 1.5 * std::f64::consts::PI * t;
+        [2.0 * a.cos(), a.sin(), 0.3 * a]
+    };
+    type Truth<'a> = &'a dyn Fn(f64) -> [f64; 3];
+    let cases: [(&str, Truth, usize, bool, f64); 3] = [
+        ("epitrochoid", &epitrochoid, 2, true, 0.05),
+        ("sine", &sine, 2, false, 0.05),
+        ("3-D arc", &arc, 3, false, 0.06),
+    ];
+    for (name, at, dimension, closed, limit) in cases {
+        for seed in 1..=3 {
+            let error = fit_noisy(at, dimension, closed, 0.05, seed);
+            assert!(error <= limit, "{name} seed {seed}: {error}");
+        }
     }
 }
 

@@ -1,0 +1,471 @@
+//! A noisy band followed by its own fit: each point moves to its foot on the curve, the
+//! points are ordered by it, and the curve is fitted again (a principal curve, after Hastie
+//! and Stuetzle).
+//!
+//! An order through a band many spacings wide zig-zags across it and may start or stop
+//! inside it: its first and last points are wherever the chain's ends came to rest. A smooth
+//! fit knows better where the band runs. Ordering the points by their feet on it repairs
+//! the order, and measuring along it gives arc-length parameters. An open band's ends are
+//! found from the points themselves: Gaussian noise of deviation σ carries about
+//! ρσ/√(2π) ≈ 0.4ρσ points past a true end (ρ points per unit length), so the end lies that
+//! many points in from the outermost foot.
+
+use super::fit::{Approximation, ApproximationOptions, approximate_at, control_range};
+use super::noise::{band_control_points, gaussian_median};
+use super::path_graph::{neighbour_graph, shortest_paths};
+use crate::error::Result;
+use crate::fidelity::median;
+use crate::geometry::vector::{distance, dot, sub};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+
+/// Most rounds of fitting and re-ordering.
+const ROUNDS: usize = 6;
+/// A round that lowers the points' RMS distance from the curve by less than this fraction
+/// ends the rounds.
+const SETTLED: f64 = 0.005;
+/// Vertices of the polyline the feet are found on (at least 64 per segment).
+const FOOT_VERTICES: usize = 1024;
+/// How far past an open curve's ends feet may lie, in noise deviations: far enough for the
+/// noise, not so far that the straight extension reaches across a 'C' to its other end.
+const PAST_REACH: f64 = 4.0;
+/// Points past a true end per unit of ρσ: 1/√(2π).
+const PAST_THE_END: f64 = 0.398_942_3;
+
+/// A band's fit after the rounds, with the order it was fitted in.
+pub(crate) struct Followed {
+    /// Indices into the points as given, in their order along the curve.
+    pub(crate) order: Vec<usize>,
+    /// The fit of the points in `order`.
+    pub(crate) approximation: Approximation,
+    /// Rounds of feet, order and fit.
+    pub(crate) rounds: usize,
+    /// The noise across the band measured from the fit: the points' median distance from
+    /// their feet, scaled for Gaussian noise as [`noise_across`](super::noise) is.
+    pub(crate) noise: f64,
+    /// The fitted curve's length.
+    pub(crate) length: f64,
+}
+
+/// [`follow_either`] keeps the shorter of two fits unless the RMS distance of its points
+/// exceeds this many times what Gaussian noise of the deviation their median gives would
+/// have: then some points lie far off, in a part of the band that fit skipped.
+const FARTHER: f64 = 1.5;
+
+/// [`fit_band`] from two starts, keeping the better fit: the chain's order at `band`'s
+/// parameters, and the order along the band through the graph of nearest points
+/// ([`geodesic_order`] when open, [`ring_order`] when closed). Each start can fail where
+/// the other holds: a chain folds in a band many spacings wide (an end at rest inside it,
+/// or a stretch that runs back), and a graph path jumps a gap where the sampling thins.
+/// Closeness alone cannot choose: a curve that wanders through the band comes closer to
+/// its points than the band's middle does, and a fold or a loop (and the extra control
+/// points the lower noise it measures then asks for) brings it 5–35 % closer. So the
+/// shorter curve wins unless its distances have a tail that noise does not explain
+/// ([`FARTHER`]): a start that skipped part of the band, whose points then lie as far off
+/// as that part is long.
+///
+/// # Errors
+/// As [`approximate_at`].
+pub(crate) fn follow_either(
+    ordered: &[[f64; 3]],
+    (dimension, closed): (usize, bool),
+    (noise, parameters): (f64, Vec<f64>),
+    fixed: Option<usize>,
+    options: &ApproximationOptions,
+) -> Result<Followed> {
+    let shape = (dimension, closed);
+    let chain = fit_band(ordered, shape, (noise, parameters), fixed, options)?;
+    let around = if closed {
+        ring_order(ordered)
+    } else {
+        geodesic_order(ordered)
+    };
+    let Some((order, places)) = around else {
+        return Ok(chain);
+    };
+    let points: Vec<[f64; 3]> = order.iter().map(|&i| ordered[i]).collect();
+    let Ok(mut graph) = fit_band(&points, shape, (noise, places), fixed, options) else {
+        return Ok(chain);
+    };
+    graph.order = graph.order.iter().map(|&i| order[i]).collect();
+    let (shorter, longer) = if graph.length <= chain.length {
+        (graph, chain)
+    } else {
+        (chain, graph)
+    };
+    // Gaussian noise across a curve in d dimensions has an RMS of √(d − 1) deviations.
+    let across = (dimension as f64 - 1.0).sqrt();
+    let gaussian = |f: &Followed| f.approximation.rms_residual <= FARTHER * across * f.noise;
+    Ok(if gaussian(&shorter) { shorter } else { longer })
+}
+
+/// Rounds of [`fit_band`] that re-count the control points from the noise and length the
+/// last fit measured.
+const RECOUNTS: usize = 3;
+
+/// [`follow_band`] from `parameters` at the fewest control points [`band_control_points`]
+/// allows (or `fixed` ones), then, unless fixed, again at the count it gives for the noise
+/// and length that fit measured, until the count settles ([`RECOUNTS`] times at most).
+///
+/// The noise and length measured from a fit are better than the ones measured along the
+/// order: the order's zig-zag across the band lengthens it and hides part of the noise. And
+/// the stiffest curve starts: with more control points a first fit in a folded order keeps
+/// the fold, measures the lower noise the fold leaves, and so asks for more control points.
+///
+/// # Errors
+/// As [`approximate_at`].
+pub(crate) fn fit_band(
+    ordered: &[[f64; 3]],
+    (dimension, closed): (usize, bool),
+    (noise, parameters): (f64, Vec<f64>),
+    fixed: Option<usize>,
+    options: &ApproximationOptions,
+) -> Result<Followed> {
+    let shape = (dimension, closed);
+    let n = ordered.len();
+    let (least, most) = control_range(n, closed, options.degree);
+    let stiffest = band_control_points(0.0, 1.0, n, closed)
+        .max(least)
+        .min(most);
+    let mut k = fixed.unwrap_or(stiffest);
+    let first = approximate_at(ordered, parameters, dimension, closed, k, options)?;
+    let mut followed = follow_band(ordered, shape, noise, options, first)?;
+    if fixed.is_some() {
+        return Ok(followed);
+    }
+    for _ in 0..RECOUNTS {
+        let next = band_control_points(followed.length, followed.noise, n, closed)
+            .max(least)
+            .min(most);
+        if next == k {
+            break;
+        }
+        k = next;
+        let order = followed.order;
+        let points: Vec<[f64; 3]> = order.iter().map(|&i| ordered[i]).collect();
+        let start = approximate_at(
+            &points,
+            followed.approximation.parameters,
+            dimension,
+            closed,
+            k,
+            options,
+        )?;
+        let mut again = follow_band(&points, shape, followed.noise, options, start)?;
+        again.order = again.order.iter().map(|&i| order[i]).collect();
+        again.rounds += followed.rounds;
+        followed = again;
+    }
+    Ok(followed)
+}
+
+/// Refits `first` (a fit of `ordered` with `options`) by rounds of feet, order and fit at
+/// the same number of control points, until the points' distance from the curve settles.
+/// `noise` is the deviation of the noise across the band.
+///
+/// The first round may leave the points farther from the curve than the start: a fit in a
+/// zig-zag order follows part of the zig-zag, and so comes closer to the points than a
+/// smooth curve through the band's middle.
+///
+/// # Errors
+/// As [`approximate_at`].
+pub(crate) fn follow_band(
+    ordered: &[[f64; 3]],
+    (dimension, closed): (usize, bool),
+    noise: f64,
+    options: &ApproximationOptions,
+    first: Approximation,
+) -> Result<Followed> {
+    let n = ordered.len();
+    let k = first.curve.control.len();
+    let reach = PAST_REACH * noise;
+    let order: Vec<usize> = (0..n).collect();
+    let mut feet = Feet::of(&first, ordered, (dimension, closed), &order, reach);
+    let mut best = Followed {
+        order,
+        approximation: first,
+        rounds: 0,
+        noise: feet.noise,
+        length: feet.length,
+    };
+    for round in 1..=ROUNDS {
+        let (order, parameters) = feet.order_and_parameters(noise, closed);
+        let points: Vec<[f64; 3]> = order.iter().map(|&i| ordered[i]).collect();
+        let fit = approximate_at(&points, parameters, dimension, closed, k, options)?;
+        let next = Feet::of(&fit, ordered, (dimension, closed), &order, reach);
+        let settled = (next.rms - feet.rms).abs() <= SETTLED * feet.rms;
+        best = Followed {
+            order,
+            approximation: fit,
+            rounds: round,
+            noise: next.noise,
+            length: next.length,
+        };
+        feet = next;
+        if settled {
+            break;
+        }
+    }
+    Ok(best)
+}
+
+/// Neighbours of each point in the graph [`geodesic_order`] measures along.
+const GRAPH_NEIGHBOURS: usize = 10;
+
+/// An open band's points ordered by their distance along the band from its far ends,
+/// measured through the graph of nearest points: the end a path from any point reaches
+/// farthest, the other end as far from that one, and each point's place half its distance
+/// from the first end plus half the whole length less its distance from the second. Across
+/// the band the places differ by about its width, which the rounds of [`follow_band`]
+/// smooth out; along it they never run backwards, where a chain's end can come to rest
+/// inside the band and fold it. Returns the order and each ordered point's place as a
+/// parameter from 0 to 1; `None` when the graph falls apart.
+pub(crate) fn geodesic_order(points: &[[f64; 3]]) -> Option<(Vec<usize>, Vec<f64>)> {
+    let graph = neighbour_graph(points, GRAPH_NEIGHBOURS)?;
+    let farthest = |d: &[f64]| {
+        d.iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(i, _)| i)
+    };
+    let from_any = shortest_paths(&graph, &[0]);
+    if from_any.iter().any(|d| !d.is_finite()) {
+        return None;
+    }
+    let start = farthest(&from_any)?;
+    let from_start = shortest_paths(&graph, &[start]);
+    let end = farthest(&from_start)?;
+    let from_end = shortest_paths(&graph, &[end]);
+    let length = from_start[end];
+    let mut places: Vec<(f64, usize)> = (0..points.len())
+        .map(|i| (0.5 * (from_start[i] + length - from_end[i]), i))
+        .collect();
+    places.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (first, last) = (places[0].0, places[places.len() - 1].0);
+    // Finite: every path length was checked.
+    if last <= first {
+        return None;
+    }
+    Some(
+        places
+            .into_iter()
+            .map(|(s, i)| (i, (s - first) / (last - first)))
+            .unzip(),
+    )
+}
+
+/// A closed band's points ordered around it, measured through the graph of nearest points
+/// as [`geodesic_order`] measures an open one: from a point A, the path length to every
+/// point is its distance around the ring in one direction or the other. A point C a quarter
+/// of the way round tells the two apart: a point on C's side is as far from C as their
+/// distances from A differ, one on the other side as far as they add up (through A or
+/// through the point opposite A). Returns the order and each point's place around the ring
+/// from 0 to 1; `None` when the graph falls apart.
+pub(crate) fn ring_order(points: &[[f64; 3]]) -> Option<(Vec<usize>, Vec<f64>)> {
+    let graph = neighbour_graph(points, GRAPH_NEIGHBOURS)?;
+    let from_a = shortest_paths(&graph, &[0]);
+    if from_a.iter().any(|d| !d.is_finite()) {
+        return None;
+    }
+    let half = from_a.iter().copied().fold(0.0, f64::max);
+    if half <= 0.0 {
+        return None;
+    }
+    let quarter = (0..points.len()).min_by(|&i, &j| {
+        (from_a[i] - 0.5 * half)
+            .abs()
+            .total_cmp(&(from_a[j] - 0.5 * half).abs())
+    })?;
+    let from_c = shortest_paths(&graph, &[quarter]);
+    let c = from_a[quarter];
+    let length = 2.0 * half;
+    let mut places: Vec<(f64, usize)> = (0..points.len())
+        .map(|i| {
+            let a = from_a[i];
+            let same = (a - c).abs();
+            let other = (a + c).min(length - a - c);
+            let place = if (from_c[i] - same).abs() <= (from_c[i] - other).abs() {
+                a
+            } else {
+                length - a
+            };
+            (place.rem_euclid(length) / length, i)
+        })
+        .collect();
+    places.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Some(
+        places
+            .into_iter()
+            .map(|(t, i)| (i, t.min(1.0 - f64::EPSILON)))
+            .unzip(),
+    )
+}
+
+/// Where every point's foot lies along a fitted curve.
+struct Feet {
+    /// (arc length along the curve, extended past an open curve's ends; point index; foot).
+    along: Vec<(f64, usize, [f64; 3])>,
+    /// The curve's length.
+    length: f64,
+    /// √(mean squared distance of the points from their feet).
+    rms: f64,
+    /// The median distance of the points from their feet, scaled for Gaussian noise.
+    noise: f64,
+}
+
+impl Feet {
+    /// The feet of `points` (indexed by `order`'s values) on `fit`'s curve, an open one
+    /// extended by `reach` past each end.
+    fn of(
+        fit: &Approximation,
+        points: &[[f64; 3]],
+        (dimension, closed): (usize, bool),
+        order: &[usize],
+        reach: f64,
+    ) -> Feet {
+        let curve = &fit.curve;
+        let samples = FOOT_VERTICES.max(64 * curve.segments());
+        let line = Polyline::new(curve.polyline(samples), closed);
+        let length = line.length();
+        let mut distances = Vec::with_capacity(order.len());
+        let along = order
+            .iter()
+            .map(|&i| {
+                let (s, d, at) = line.foot(points[i], reach);
+                distances.push(d);
+                (s, i, at)
+            })
+            .collect();
+        let squares: f64 = distances.iter().map(|d| d * d).sum();
+        Feet {
+            along,
+            length,
+            rms: (squares / order.len().max(1) as f64).sqrt(),
+            noise: median(&mut distances) / gaussian_median(dimension),
+        }
+    }
+
+    /// The points in order of their feet, and their parameters: chord lengths between
+    /// consecutive feet over their sum (closed, the closing chord included), or between the
+    /// ends the points imply (open, clamped).
+    ///
+    /// Chords between the feet rather than arc lengths along the curve: where the fit swings
+    /// out between two points (a span without data, which only the light bending penalty
+    /// holds), arc lengths would give the swing a stretch of parameters with no point in it,
+    /// and the next fit would swing farther.
+    fn order_and_parameters(&self, noise: f64, closed: bool) -> (Vec<usize>, Vec<f64>) {
+        let mut along = self.along.clone();
+        along.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let n = along.len();
+        let order = along.iter().map(|a| a.1).collect();
+        let mut chords = Vec::with_capacity(n);
+        let mut total = 0.0;
+        chords.push(0.0);
+        for pair in along.windows(2) {
+            total += distance(pair[0].2, pair[1].2);
+            chords.push(total);
+        }
+        if closed {
+            let length = (total + distance(along[n - 1].2, along[0].2)).max(f64::MIN_POSITIVE);
+            let parameters = chords
+                .iter()
+                .map(|c| (c / length).clamp(0.0, 1.0 - f64::EPSILON))
+                .collect();
+            return (order, parameters);
+        }
+        let span = total.max(f64::MIN_POSITIVE);
+        let past = ((PAST_THE_END * noise * n as f64 / span).round() as usize).min(n / 8);
+        let (start, end) = (chords[past], chords[n - 1 - past]);
+        let width = (end - start).max(f64::MIN_POSITIVE);
+        let parameters = chords
+            .iter()
+            .map(|c| ((c - start) / width).clamp(0.0, 1.0))
+            .collect();
+        (order, parameters)
+    }
+}
+
+/// A polyline with the arc length at each vertex and a tree of its vertices, for feet.
+pub(crate) struct Polyline {
+    line: Vec<[f64; 3]>,
+    at: Vec<f64>,
+    tree: Option<ImmutableKdTree<f64, 3>>,
+    closed: bool,
+}
+
+impl Polyline {
+    /// `line` (closed: its last vertex equals its first).
+    pub(crate) fn new(line: Vec<[f64; 3]>, closed: bool) -> Polyline {
+        let mut at = Vec::with_capacity(line.len());
+        let mut length = 0.0;
+        at.push(0.0);
+        for pair in line.windows(2) {
+            length += distance(pair[0], pair[1]);
+            at.push(length);
+        }
+        let tree = ImmutableKdTree::new_from_slice(&line).ok();
+        Polyline {
+            line,
+            at,
+            tree,
+            closed,
+        }
+    }
+
+    /// The polyline's length.
+    pub(crate) fn length(&self) -> f64 {
+        self.at.last().copied().unwrap_or(0.0)
+    }
+
+    /// The arc length at the foot of `q`, the distance to it and the foot: on a segment
+    /// next to the vertex nearest `q` (the segments are short), or, open, on the first or
+    /// last segment extended straight by `reach` past the end.
+    pub(crate) fn foot(&self, q: [f64; 3], reach: f64) -> (f64, f64, [f64; 3]) {
+        let segments = self.line.len().saturating_sub(1);
+        let mut best = (0.0, f64::INFINITY, q);
+        if segments == 0 {
+            return best;
+        }
+        let nearest = match &self.tree {
+            Some(tree) => {
+                tree.query(&q)
+                    .nearest_one::<SquaredEuclidean<f64>>()
+                    .execute()
+                    .item as usize
+            }
+            None => 0,
+        };
+        let mut candidates = [
+            nearest.saturating_sub(1),
+            nearest.min(segments - 1),
+            0,
+            segments - 1,
+        ];
+        if self.closed && nearest == 0 {
+            candidates[0] = segments - 1;
+        }
+        let ends = if self.closed { 2 } else { 4 };
+        for &j in &candidates[..ends] {
+            let (a, b) = (self.line[j], self.line[j + 1]);
+            let ab = sub(b, a);
+            let length2 = dot(ab, ab);
+            let t = if length2 > 0.0 {
+                dot(sub(q, a), ab) / length2
+            } else {
+                0.0
+            };
+            let first = j == 0 && !self.closed;
+            let last = j == segments - 1 && !self.closed;
+            let beyond = reach / length2.sqrt().max(f64::MIN_POSITIVE);
+            let t = t.clamp(
+                if first { -beyond } else { 0.0 },
+                if last { 1.0 + beyond } else { 1.0 },
+            );
+            let p = [0, 1, 2].map(|k| a[k] + t * ab[k]);
+            let d = distance(q, p);
+            if d < best.1 {
+                best = (self.at[j] + t * (self.at[j + 1] - self.at[j]), d, p);
+            }
+        }
+        best
+    }
+}
