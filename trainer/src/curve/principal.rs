@@ -20,7 +20,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 /// Most rounds of fitting and re-ordering.
 const ROUNDS: usize = 6;
-/// A round that lowers the points' RMS distance from the curve by less than this fraction
+/// A round that changes the points' RMS distance from the curve by less than this fraction
 /// ends the rounds.
 const SETTLED: f64 = 0.005;
 /// Vertices of the polyline the feet are found on (at least 64 per segment).
@@ -180,7 +180,7 @@ pub(crate) fn follow_band(
     let reach = PAST_REACH * noise;
     let order: Vec<usize> = (0..n).collect();
     let mut feet = Feet::of(&first, ordered, (dimension, closed), &order, reach);
-    let mut best = Followed {
+    let mut latest = Followed {
         order,
         approximation: first,
         rounds: 0,
@@ -193,7 +193,7 @@ pub(crate) fn follow_band(
         let fit = approximate_at(&points, parameters, dimension, closed, k, options)?;
         let next = Feet::of(&fit, ordered, (dimension, closed), &order, reach);
         let settled = (next.rms - feet.rms).abs() <= SETTLED * feet.rms;
-        best = Followed {
+        latest = Followed {
             order,
             approximation: fit,
             rounds: round,
@@ -205,7 +205,7 @@ pub(crate) fn follow_band(
             break;
         }
     }
-    Ok(best)
+    Ok(latest)
 }
 
 /// Neighbours of each point in the graph [`geodesic_order`] measures along.
