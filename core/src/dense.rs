@@ -13,7 +13,9 @@
 //! `Kernels::transposed_kernel`), for the chain rule through a layer
 //! (`Kernels::times_slope_kernel`) and for both at once (`Kernels::transposed_slope_kernel`):
 //! for single points whose layer shape one of them covers, the loops below hand the work to
-//! it. Q16.16 on a Cortex-M4F has them for the N = 9 shapes (`neurosurf-m4f`). For a lane
+//! it. Q16.16 on a Cortex-M4F has them for the N = 9 shapes (`neurosurf-m4f`); `f32` on x86-64
+//! with AVX2 for the N = 9 layers with nine neurons and their transposes onto nine inputs, a
+//! node's three-part layer a′ included (`neurosurf-avx2`'s single-point kernels). For a lane
 //! group of [`LANES`] points, a scalar may bring lane kernels (`Kernels::forward_lanes_kernel`,
 //! `Kernels::transposed_lanes_kernel`, `Kernels::transposed_slope_lanes_kernel`): `f32` and
 //! Q16.16 on x86-64 with AVX2 (`neurosurf-avx2`). Every kernel computes the loops' exact bits,
@@ -102,6 +104,54 @@ fn forward_by_kernel<S: Scalar, const L: usize, const OUT: usize>(
         9 => layer_kernel::<S, 9, OUT>(weights, biases, x.as_flattened())?,
         _ => return None,
     };
+    let mut out = unwritten::<S, L, OUT>();
+    fill(&mut out, layer).then_some(out)
+}
+
+/// [`forward`] for a node's layer a′ (three parts) in the field-and-gradient pass: for one
+/// point through the scalar's target kernel where it has node kernels (see
+/// `Kernels::NODE_KERNELS`). Kept out of [`forward`] and out of the field-only pass: in either
+/// place its test, though constant on the Cortex-M4F, changed how the field evaluation
+/// compiled there (1–7 % more instructions per evaluation, leaf-only models included).
+#[inline(always)]
+pub(crate) fn forward_node<S: Scalar, const L: usize, const OUT: usize>(
+    params: &[S],
+    layout: &DenseLayout,
+    inputs: LayerInputs<'_, S, L>,
+) -> [[S; L]; OUT] {
+    if S::NODE_KERNELS
+        && L == 1
+        && let Some(weights) =
+            params.get(layout.weights..layout.weights + layout.inputs * layout.outputs)
+        && let Some(biases) = params.get(layout.biases..layout.biases + layout.outputs)
+        && let Some(out) = node_forward_by_kernel(weights, biases, inputs)
+    {
+        return out;
+    }
+    forward(params, layout, inputs)
+}
+
+/// Inputs of a node's layer a′ at the kernels' width: both children's last hidden layers and
+/// the node's normalized position.
+const NODE_INPUTS: usize = 2 * KERNEL_WIDTH + 3;
+
+/// [`forward`] for one point on a node's three-part input, joined, through the scalar's
+/// target kernel (see `Kernels::NODE_KERNELS`); `None` unless it is a width-9 node's a′.
+#[inline(always)]
+fn node_forward_by_kernel<S: Scalar, const L: usize, const OUT: usize>(
+    weights: &[S],
+    biases: &[S],
+    (left, right, position): LayerInputs<'_, S, L>,
+) -> Option<[[S; L]; OUT]> {
+    if left.len() + right.len() + position.len() != NODE_INPUTS {
+        return None;
+    }
+    let mut x = [S::ZERO; NODE_INPUTS];
+    let parts = left.iter().chain(right).chain(position);
+    for (slot, input) in x.iter_mut().zip(parts) {
+        *slot = *input.first()?;
+    }
+    let layer = layer_kernel::<S, NODE_INPUTS, OUT>(weights, biases, &x)?;
     let mut out = unwritten::<S, L, OUT>();
     fill(&mut out, layer).then_some(out)
 }
@@ -308,6 +358,14 @@ pub(crate) fn transposed_through_activation<
     {
         return out;
     }
+    if S::NODE_KERNELS
+        && L == 1
+        && layout.inputs == NODE_INPUTS
+        && columns == KERNEL_WIDTH
+        && let Some(out) = node_transposed_slope_by_kernel(params, layout, first, g, outputs)
+    {
+        return out;
+    }
     if S::LANE_KERNELS
         && L == LANES
         && let Some(out) =
@@ -339,6 +397,27 @@ fn transposed_slope_by_kernel<S: Scalar, const L: usize, const K: usize>(
         _ => return None,
     }
     .then_some(out)
+}
+
+/// [`transposed_through_activation`] for one point onto one child's part (nine columns from
+/// `first`) of a width-9 node's layer a′, through the scalar's target kernel (see
+/// `Kernels::NODE_KERNELS`); `None` when it declines.
+#[inline(always)]
+fn node_transposed_slope_by_kernel<S: Scalar, const L: usize, const K: usize>(
+    params: &[S],
+    layout: &DenseLayout,
+    first: usize,
+    g: &[[S; L]],
+    outputs: &[[S; L]],
+) -> Option<[[S; L]; K]> {
+    let weights = params.get(layout.weights..layout.weights + NODE_INPUTS * KERNEL_WIDTH)?;
+    let (rows, _) = weights.as_chunks::<NODE_INPUTS>();
+    let rows: &[[S; NODE_INPUTS]; KERNEL_WIDTH] = rows.try_into().ok()?;
+    let g: &[S; KERNEL_WIDTH] = g.get(..layout.outputs)?.as_flattened().try_into().ok()?;
+    let a: &[S; KERNEL_WIDTH] = outputs.as_flattened().try_into().ok()?;
+    let delta = S::transposed_part_kernel(rows, first, g, Some(a))?;
+    let mut out = unwritten::<S, L, K>();
+    fill(&mut out, delta).then_some(out)
 }
 
 /// [`transposed_through_activation`] for a lane group through the scalar's lane kernel, when

@@ -318,7 +318,7 @@ fn multiply_accumulate<const B: usize, R: AsRef<[f32]>>(
 /// The core's branch-free `f32` activation on eight lanes, operation for operation.
 #[target_feature(enable = "avx2")]
 #[inline]
-fn activate(h: __m256, constants: &Activation) -> __m256 {
+pub(crate) fn activate(h: __m256, constants: &Activation) -> __m256 {
     let saturation = _mm256_set1_ps(constants.saturation);
     let rounder = _mm256_set1_ps(constants.rounder);
     let one = _mm256_set1_ps(1.0);
@@ -352,7 +352,7 @@ fn activate(h: __m256, constants: &Activation) -> __m256 {
 
 #[target_feature(enable = "avx2")]
 #[inline]
-fn splat_bits(bits: i32) -> core::arch::x86_64::__m256i {
+pub(crate) fn splat_bits(bits: i32) -> core::arch::x86_64::__m256i {
     core::arch::x86_64::_mm256_set1_epi32(bits)
 }
 

@@ -4,7 +4,9 @@
 //! x86-64 AVX2 intrinsics and chosen at run time, in `f32` (`lanes.rs`: the forward layer with
 //! its activation, the transposed layer, the transposed layer fused with the chain rule through
 //! the activation) and in Q16.16 (`fixed_lanes.rs`: the same three, with exact 64-bit sums and
-//! the core's activation table). On a processor without AVX2, and on every other target, each
+//! the core's activation table); and one point's width-9 `f32` layers with its nine neurons
+//! side by side (`single.rs`: the forward layer, and the transposed layer onto nine inputs,
+//! with or without the chain rule). On a processor without AVX2, and on every other target, each
 //! function returns `false` and the core runs its portable loops; on other targets the crate is
 //! empty but for [`AVAILABLE`] and [`available`].
 //!
@@ -18,12 +20,12 @@
 //! simulator tests compare the host's batches with the Cortex-M4F's portable results bit for
 //! bit.
 //!
-//! **Safety.** The unsafe code is in the two kernel modules: the calls into functions compiled
+//! **Safety.** The unsafe code is in the three kernel modules: the calls into functions compiled
 //! with `#[target_feature(enable = "avx2")]`, made only after run-time detection has found
 //! AVX2; unaligned loads and stores of eight-lane arrays through references, so the lengths
 //! read and written are fixed by the types; and the Q16.16 table's gathers, whose indices are
 //! clamped to the table's checked length. Every slice index is checked before the unsafe code
-//! runs: a function whose slices do not fit its shape returns `false`.
+//! runs: a function whose slices do not fit its shape returns `false` (or `None`).
 //!
 //! Layouts are the core's: `weights` is row-major, one row of `inputs` weights per output
 //! neuron; a point set is structure-of-arrays, one eight-lane array per neuron or input, lane
@@ -73,6 +75,8 @@ pub struct Slope {
 mod fixed_lanes;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
+#[cfg(target_arch = "x86_64")]
+pub mod single;
 
 #[cfg(target_arch = "x86_64")]
 pub use fixed_lanes::{FixedLanes, FixedSlope, FixedTable, fixed_forward, fixed_transposed};

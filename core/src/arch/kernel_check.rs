@@ -40,6 +40,9 @@ pub fn check_kernels(seed: u32, cases: u32) -> Result<u32, KernelMismatch> {
         checked += transposed_slope::<9, 9>("transposed_slope 9x9", case, &mut draw)?;
         checked += transposed_slope::<9, 1>("transposed_slope 1x9", case, &mut draw)?;
     }
+    if <f32 as Kernels>::TARGET_KERNELS {
+        checked += f32_kernels::check(seed, cases)?;
+    }
     if <f32 as Kernels>::LANE_KERNELS {
         checked += lane_kernels::check::<f32>(seed, cases)?;
     }
@@ -213,6 +216,126 @@ impl Xorshift {
     fn below(&mut self, bound: i32) -> i32 {
         let bound = bound.max(1) as u32;
         (self.next() % bound) as i32
+    }
+}
+
+/// The `f32` single-point kernels (x86-64 with AVX2) against their contracts, bit for bit, on
+/// the inputs of the `f32` lane kernels' check: zeros of both signs, saturation, infinities,
+/// NaN and subnormals, then seeded random values.
+mod f32_kernels {
+    use super::lane_kernels::Sample;
+    use super::{KernelMismatch, Kernels, Xorshift};
+    use crate::implicit::Activation;
+    use crate::scalar::Scalar;
+
+    /// Every `f32` single-point kernel of the layer shapes the models use (N = 9: a leaf's
+    /// 9×3, 9×9 and 1×9 layers and their transposes, a node's 9×21 layer and the parts of its
+    /// transpose) on `cases` inputs; how many kernel calls ran and matched.
+    #[inline(never)]
+    pub(super) fn check(seed: u32, cases: u32) -> Result<u32, KernelMismatch> {
+        let mut random = Xorshift(seed | 1);
+        let mut checked = 0;
+        for case in 0..cases {
+            let mut draw = |scale: f32| f32::value(case, scale, &mut random);
+            checked += layer::<9, 9>("f32 layer 9x9", case, &mut draw)?;
+            checked += layer::<3, 9>("f32 layer 9x3", case, &mut draw)?;
+            checked += layer::<9, 1>("f32 layer 1x9", case, &mut draw)?;
+            checked += transposed::<9, 9>("f32 transposed 9x9", case, false, &mut draw)?;
+            checked += transposed::<3, 9>("f32 transposed 9x3", case, false, &mut draw)?;
+            checked += transposed::<9, 9>("f32 transposed_slope 9x9", case, true, &mut draw)?;
+            checked += transposed::<9, 1>("f32 transposed_slope 1x9", case, true, &mut draw)?;
+            // A node's layer a′ (2N + 3 inputs) and the chain rule onto each child's part.
+            checked += layer::<21, 9>("f32 layer 9x21", case, &mut draw)?;
+            for first in [0, 9, 12] {
+                checked += part::<21, 9>("f32 transposed_slope part 9x21", case, first, &mut draw)?;
+            }
+        }
+        Ok(checked)
+    }
+
+    fn same<const N: usize>(got: Option<[f32; N]>, want: &[f32; N]) -> Option<bool> {
+        Some(got?.iter().zip(want).all(|(&a, &b)| f32::same(a, b)))
+    }
+
+    fn verdict(kernel: &'static str, case: u32, same: Option<bool>) -> Result<u32, KernelMismatch> {
+        match same {
+            None => Ok(0),
+            Some(true) => Ok(1),
+            Some(false) => Err(KernelMismatch { kernel, case }),
+        }
+    }
+
+    fn layer<const IN: usize, const OUT: usize>(
+        kernel: &'static str,
+        case: u32,
+        draw: &mut dyn FnMut(f32) -> f32,
+    ) -> Result<u32, KernelMismatch> {
+        let w: [[f32; IN]; OUT] = core::array::from_fn(|_| core::array::from_fn(|_| draw(4.0)));
+        let b: [f32; OUT] = core::array::from_fn(|_| draw(4.0));
+        let x: [f32; IN] = core::array::from_fn(|_| draw(2.0));
+        let mut want = [0.0; OUT];
+        for ((out, row), bias) in want.iter_mut().zip(&w).zip(&b) {
+            let acc = row
+                .iter()
+                .zip(&x)
+                .fold(bias.to_acc(), |acc, (&wi, &xi)| f32::mac(acc, wi, xi));
+            *out = f32::activation_from_acc(acc);
+        }
+        let got = <f32 as Kernels>::layer_kernel(&w, &b, &x);
+        verdict(kernel, case, same(got, &want))
+    }
+
+    /// Columns `first..first + 9` of a `COUNT`-column transpose with the chain rule.
+    fn part<const COUNT: usize, const OUT: usize>(
+        kernel: &'static str,
+        case: u32,
+        first: usize,
+        draw: &mut dyn FnMut(f32) -> f32,
+    ) -> Result<u32, KernelMismatch> {
+        let w: [[f32; COUNT]; OUT] = core::array::from_fn(|_| core::array::from_fn(|_| draw(4.0)));
+        let g: [f32; OUT] = core::array::from_fn(|_| draw(8.0));
+        let a: [f32; 9] = core::array::from_fn(|_| draw(1.7159));
+        let mut want = [f32::ZERO.to_acc(); 9];
+        for (row, &gj) in w.iter().zip(&g) {
+            for (sum, &wi) in want.iter_mut().zip(row.iter().skip(first)) {
+                *sum = f32::mac(*sum, wi, gj);
+            }
+        }
+        for (out, &ai) in want.iter_mut().zip(&a) {
+            *out = f32::times_slope(f32::from_acc(*out), ai);
+        }
+        let got = <f32 as Kernels>::transposed_part_kernel(&w, first, &g, Some(&a));
+        verdict(kernel, case, same(got, &want))
+    }
+
+    fn transposed<const IN: usize, const OUT: usize>(
+        kernel: &'static str,
+        case: u32,
+        slope: bool,
+        draw: &mut dyn FnMut(f32) -> f32,
+    ) -> Result<u32, KernelMismatch> {
+        let w: [[f32; IN]; OUT] = core::array::from_fn(|_| core::array::from_fn(|_| draw(4.0)));
+        let g: [f32; OUT] = core::array::from_fn(|_| draw(8.0));
+        // Activations lie within ±1.7159.
+        let a: [f32; IN] = core::array::from_fn(|_| draw(1.7159));
+        let mut want = [f32::ZERO.to_acc(); IN];
+        for (row, &gj) in w.iter().zip(&g) {
+            for (sum, &wi) in want.iter_mut().zip(row) {
+                *sum = f32::mac(*sum, wi, gj);
+            }
+        }
+        for (out, &ai) in want.iter_mut().zip(&a) {
+            *out = f32::from_acc(*out);
+            if slope {
+                *out = f32::times_slope(*out, ai);
+            }
+        }
+        let got = if slope {
+            <f32 as Kernels>::transposed_slope_kernel(&w, &g, &a)
+        } else {
+            <f32 as Kernels>::transposed_kernel(&w, &g)
+        };
+        verdict(kernel, case, same(got, &want))
     }
 }
 
@@ -469,14 +592,20 @@ mod lane_kernels {
 mod tests {
     use super::*;
 
-    /// On the host only the lane kernels can run (x86-64 with AVX2): every one of them matches
-    /// its contract, and nothing is checked where they cannot run. The Q16.16 chain rule
+    /// On the host only the lane kernels and the `f32` single-point kernels can run (x86-64
+    /// with AVX2): every one of them matches its contract, and nothing is checked where they cannot run. The Q16.16 chain rule
     /// declines lanes outside its fast range (the edge cases), for the portable loop to take.
     #[test]
     fn the_host_kernels_match_their_contracts() {
         let runs = <f32 as Kernels>::LANE_KERNELS && neurosurf_avx2::available();
         let expected = if runs { 64 * (8 + 2 * 8) } else { 0 };
         assert_eq!(lane_kernels::check::<f32>(1, 64), Ok(expected));
+        // One point's width-9 layers: the 9×9, 9×3 and 9×21 forward layers, the 9×9
+        // transpose, both chain-rule transposes and three nine-column parts of a node's (the
+        // 1×9 layer and the 9×3 transpose stay portable).
+        let single = <f32 as Kernels>::TARGET_KERNELS && neurosurf_avx2::available();
+        let expected = if single { 64 * 9 } else { 0 };
+        assert_eq!(f32_kernels::check(1, 64), Ok(expected));
         let checked = lane_kernels::check::<Q16>(1, 64).expect("Q16.16 lane kernels");
         if runs {
             // Every forward and plain transposed call, and the chain rule on most random cases.

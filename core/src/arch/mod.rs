@@ -105,6 +105,25 @@ pub trait Kernels: Sized + Copy {
         None
     }
 
+    /// Whether this scalar's single-point kernels also take a node's layer a′ at N = 9 (its
+    /// 2N + 3 inputs in three parts, offered to `layer_kernel` joined) and the transposes onto
+    /// each child's part of it (`transposed_part_kernel`); the layer loops only offer them when
+    /// it does.
+    const NODE_KERNELS: bool = false;
+    /// `transposed_slope_kernel` onto the columns `first..first + COLUMNS` of rows of `COUNT`
+    /// weights: with `a`, each output times the activation's slope at `a[c]`; `None` means
+    /// "use the portable loop". (`f32` on x86-64 with AVX2: nine columns of a node's a′.)
+    #[inline(always)]
+    fn transposed_part_kernel<const COUNT: usize, const OUT: usize, const COLUMNS: usize>(
+        w: &[[Self; COUNT]; OUT],
+        first: usize,
+        g: &[Self; OUT],
+        a: Option<&[Self; COLUMNS]>,
+    ) -> Option<[Self; COLUMNS]> {
+        let _ = (w, first, g, a);
+        None
+    }
+
     /// Whether this scalar has kernels for whole lane groups ([`crate::implicit::LANES`]
     /// points in structure-of-arrays form) on the machine compiled for; the layer loops only
     /// ask when it does.
@@ -155,10 +174,11 @@ pub trait Kernels: Sized + Copy {
     }
 }
 
-/// No kernels: on the Cortex-M4F the portable loops cost fewer estimated cycles than assembly
-/// layer products (`docs/performance/kernels.md`).
+/// No single-point kernels on the Cortex-M4F, where the portable loops cost fewer estimated
+/// cycles than assembly layer products (`docs/performance/kernels.md`); on x86-64 with AVX2,
+/// one point's width-9 layers with the neurons side by side (`neurosurf-avx2`).
 impl Kernels for f32 {
-    const TARGET_KERNELS: bool = false;
+    const TARGET_KERNELS: bool = target::F32_TARGET_KERNELS;
     /// Eight `f32` accumulators (and their inputs) fit the FPU's 32 registers.
     const LANE_GROUP: usize = 8;
     /// Eight on 64-bit hosts (the lanes vectorize); one on 32-bit targets: on the Cortex-M4F
@@ -208,6 +228,40 @@ impl Kernels for f32 {
         out: &mut [Lanes],
     ) -> bool {
         target::f32_transposed_slope_lanes(weights, count, columns, g, outputs, out)
+    }
+
+    const NODE_KERNELS: bool = target::F32_TARGET_KERNELS;
+    #[inline(always)]
+    fn transposed_part_kernel<const COUNT: usize, const OUT: usize, const COLUMNS: usize>(
+        w: &[[f32; COUNT]; OUT],
+        first: usize,
+        g: &[f32; OUT],
+        a: Option<&[f32; COLUMNS]>,
+    ) -> Option<[f32; COLUMNS]> {
+        target::f32_transposed(w, first, g, a)
+    }
+    #[inline(always)]
+    fn layer_kernel<const IN: usize, const OUT: usize>(
+        w: &[[f32; IN]; OUT],
+        b: &[f32; OUT],
+        x: &[f32; IN],
+    ) -> Option<[f32; OUT]> {
+        target::f32_layer(w, b, x)
+    }
+    #[inline(always)]
+    fn transposed_kernel<const IN: usize, const OUT: usize>(
+        w: &[[f32; IN]; OUT],
+        g: &[f32; OUT],
+    ) -> Option<[f32; IN]> {
+        target::f32_transposed(w, 0, g, None)
+    }
+    #[inline(always)]
+    fn transposed_slope_kernel<const IN: usize, const OUT: usize>(
+        w: &[[f32; IN]; OUT],
+        g: &[f32; OUT],
+        a: &[f32; IN],
+    ) -> Option<[f32; IN]> {
+        target::f32_transposed(w, 0, g, Some(a))
     }
 }
 

@@ -43,6 +43,28 @@ pub(super) fn q16_transposed_slope<const IN: usize, const OUT: usize>(
     None
 }
 
+/// No `f32` single-point kernels.
+pub(super) const F32_TARGET_KERNELS: bool = false;
+
+#[inline(always)]
+pub(super) fn f32_layer<const IN: usize, const OUT: usize>(
+    _: &[[f32; IN]; OUT],
+    _: &[f32; OUT],
+    _: &[f32; IN],
+) -> Option<[f32; OUT]> {
+    None
+}
+
+#[inline(always)]
+pub(super) fn f32_transposed<const COUNT: usize, const OUT: usize, const COLUMNS: usize>(
+    _: &[[f32; COUNT]; OUT],
+    _: usize,
+    _: &[f32; OUT],
+    _: Option<&[f32; COLUMNS]>,
+) -> Option<[f32; COLUMNS]> {
+    None
+}
+
 /// No `f32` lane kernels.
 pub(super) const F32_LANE_KERNELS: bool = false;
 

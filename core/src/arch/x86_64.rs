@@ -1,5 +1,6 @@
-//! x86-64: the `neurosurf-avx2` kernels for eight-lane `f32` and Q16.16 batches, which run
-//! when the processor has AVX2 (detected at run time; otherwise they decline and the portable
+//! x86-64: the `neurosurf-avx2` kernels for eight-lane `f32` and Q16.16 batches, and for one
+//! point's width-9 `f32` layers (its nine neurons side by side), which run when the processor
+//! has AVX2 (detected at run time; otherwise they decline and the portable
 //! loops run). Same bits either way: every lane computes the portable loop's operations in its
 //! order (`f32`: unfused IEEE operations; Q16.16: exact 64-bit sums, the same roundings,
 //! saturations and table lookups).
@@ -68,6 +69,44 @@ pub(super) fn f32_transposed_slope_lanes(
     out: &mut [Lanes],
 ) -> bool {
     avx2::transposed_slope(weights, count, columns, g, (outputs, &SLOPE), out)
+}
+
+/// The `f32` single-point kernels are compiled in, unless a comparison build turns them off
+/// with `--cfg neurosurf_portable="f32_single"`.
+pub(super) const F32_TARGET_KERNELS: bool = !cfg!(neurosurf_portable = "f32_single");
+
+/// One point's forward layer, when it has nine neurons (any inputs).
+#[inline(always)]
+pub(super) fn f32_layer<const IN: usize, const OUT: usize>(
+    w: &[[f32; IN]; OUT],
+    b: &[f32; OUT],
+    x: &[f32; IN],
+) -> Option<[f32; OUT]> {
+    if OUT != avx2::single::WIDTH {
+        return None;
+    }
+    let out = avx2::single::layer(w.first_chunk()?, b.first_chunk()?, x, &ACTIVATION)?;
+    out.as_slice().try_into().ok()
+}
+
+/// One point's transposed layer onto nine of its `COUNT` inputs from `first` on (any rows), and
+/// with `a` the chain rule through their activations.
+#[inline(always)]
+pub(super) fn f32_transposed<const COUNT: usize, const OUT: usize, const COLUMNS: usize>(
+    w: &[[f32; COUNT]; OUT],
+    first: usize,
+    g: &[f32; OUT],
+    a: Option<&[f32; COLUMNS]>,
+) -> Option<[f32; COLUMNS]> {
+    if COLUMNS != avx2::single::WIDTH {
+        return None;
+    }
+    let slope = match a {
+        Some(a) => Some((a.as_slice().try_into().ok()?, &SLOPE)),
+        None => None,
+    };
+    let out = avx2::single::transposed(w, first, g, slope)?;
+    out.as_slice().try_into().ok()
 }
 
 /// The Q16.16 lane kernels are compiled in, unless a comparison build turns them off with

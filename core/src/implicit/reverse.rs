@@ -19,7 +19,7 @@ use super::guard;
 use super::layout::{MAX_HEIGHT, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
 use super::model::ImplicitModel;
 use super::width::{at_width, width};
-use crate::dense::{LayerInputs, forward, transposed, transposed_through_activation};
+use crate::dense::{LayerInputs, forward, forward_node, transposed, transposed_through_activation};
 use crate::scalar::{Scalar, ScalarKind};
 
 /// ∇Φ summed over the modules, per coordinate and lane, in the wide accumulator.
@@ -122,7 +122,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
             ModuleKind::Leaf => {
                 let pass = self.pass::<N, EXACT>(entry.offset, ModuleKind::Leaf);
                 let input = normalized_input(pass.params, points, self.input_shift);
-                let delta_a = pass.run::<L, N, EXACT>((&input, &[], &[]), gradient, above);
+                let delta_a = pass.run::<L, N, EXACT, false>((&input, &[], &[]), gradient, above);
                 let delta_a = delta_a.get(..pass.width).unwrap_or(&[]);
                 let hidden_a = &pass.layout.hidden_a;
                 let delta_input =
@@ -151,7 +151,7 @@ impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
                                     right.get(..width).unwrap_or(&[]),
                                 );
                                 let position = normalized_input(params, points, self.input_shift);
-                                let delta_a = pass.run::<L, N, EXACT>(
+                                let delta_a = pass.run::<L, N, EXACT, true>(
                                     (left, right, &position),
                                     gradient,
                                     &mut *above,
@@ -222,18 +222,23 @@ struct Pass<'p, S> {
 }
 
 impl<S: Scalar> Pass<'_, S> {
-    /// Forward through layers a and b on the concatenated `inputs` (see [`forward`]), `above`
-    /// for the rest, then back through b: returns ∂Φ/∂Hₐ, the gradient at layer a's
-    /// pre-activations (its transpose gives ∂Φ/∂inputs).
+    /// Forward through layers a and b on the concatenated `inputs` (see [`forward`]; a node's
+    /// layer a′ when `NODE`, see [`forward_node`]), `above` for the rest, then back through b:
+    /// returns ∂Φ/∂Hₐ, the gradient at layer a's pre-activations (its transpose gives
+    /// ∂Φ/∂inputs).
     #[inline(always)]
-    fn run<const L: usize, const N: usize, const EXACT: bool>(
+    fn run<const L: usize, const N: usize, const EXACT: bool, const NODE: bool>(
         &self,
         inputs: LayerInputs<'_, S, L>,
         gradient: &mut Gradient<S, L>,
         above: &mut Above<'_, S, L, N>,
     ) -> [[S; L]; N] {
         let (params, layout, width) = (self.params, &self.layout, self.width);
-        let a: [[S; L]; N] = forward(params, &layout.hidden_a, inputs);
+        let a: [[S; L]; N] = if NODE {
+            forward_node(params, &layout.hidden_a, inputs)
+        } else {
+            forward(params, &layout.hidden_a, inputs)
+        };
         let a = a.get(..width).unwrap_or(&[]);
         let b: [[S; L]; N] = forward(params, &layout.hidden_b, (a, &[], &[]));
         let delta_b = above(&b, gradient);
