@@ -17,7 +17,10 @@ use std::time::Instant;
 
 use neurosurf_core::implicit::{FieldGradient, ImplicitModel};
 use neurosurf_core::scalar::{Q16, Scalar};
-use neurosurf_trainer::implicit::from_blob;
+use neurosurf_trainer::demo::{TABLE5_TORUS, paper_points};
+use neurosurf_trainer::fidelity::median;
+use neurosurf_trainer::implicit::{self, FitRequest, ImplicitOptions, from_blob};
+use neurosurf_trainer::sample::sample_shape;
 
 const QUERIES: usize = 4096;
 /// Rounds over all evaluators.
@@ -88,6 +91,9 @@ fn main() {
     }
     println!("Field + gradient, {QUERIES} points, one core; ns per point (speed against JAX)\n");
     print!("{table}");
+    let training = training_table(&python);
+    println!("\nTable 5 training, one core; median seconds (iterations) over seeds {SEEDS:?}\n");
+    print!("{training}");
     let args: Vec<String> = std::env::args().collect();
     if let Some(path) = args
         .iter()
@@ -105,12 +111,165 @@ fn main() {
              (`fuzz/corpus/{{torus,head}}-f32.nsb`). The core's `f32` batches run the AVX2 \
              kernels of `core/avx2/` where the processor has AVX2; every result has the same \
              bits as the Cortex-M4F's. The machine is a shared 2-core virtual machine: compare \
-             ratios, not times.\n\n{table}"
+             ratios, not times.\n\n{table}\n## Training: Table 5\n\nThe trainer's \
+             Levenberg–Marquardt (`neurosurf_trainer::implicit::fit` with `ImplicitOptions::paper()` \
+             and no sign guards, as in `cargo bench --bench table5`) against the paper's LM loop for one \
+             leaf in numpy with JAX's exact Jacobian, float64 \
+             (`trainer/benches/peers/table5_lm_jax.py`: Table 1's objective and settings, the \
+             same damping schedule), on the same area-uniform torus points (R = 1, r = 0.4) and \
+             seeds {SEEDS:?}, one core each. Median seconds and iterations over the seeds; \
+             \"reached\" counts the runs that ended with E_s ≤ 10⁻⁵.\n\n\
+             {training}"
         );
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path);
         std::fs::write(&path, text).expect("write --out");
         eprintln!("wrote {}", path.display());
     }
+}
+
+/// Seeds of every Table 5 training run.
+const SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
+/// Iterations the peer's LM loop may take before it gives up.
+const PEER_ITERATIONS: usize = 500;
+
+/// Table 5's trainings through the trainer and through the numpy + JAX peer (when JAX is
+/// installed): a Markdown table of median times, iterations and the trainer's speed against
+/// the peer.
+fn training_table(python: &str) -> String {
+    let options = ImplicitOptions::paper();
+    let mut sets = Vec::new();
+    let mut ours = Vec::new();
+    for points in paper_points() {
+        let mut runs = Vec::new();
+        for seed in SEEDS {
+            let sample = sample_shape(&TABLE5_TORUS, points, seed).expect("torus samples");
+            let options = ImplicitOptions {
+                seed,
+                ..options.clone()
+            };
+            // The paper's procedure: no sign guards (nor off-surface or sign points).
+            let request = FitRequest {
+                unguarded: true,
+                ..FitRequest::default()
+            };
+            let start = Instant::now();
+            let trained =
+                implicit::fit(sample.clone(), &request, &options, &|_| {}).expect("training");
+            let seconds = start.elapsed().as_secs_f64();
+            let lm = &trained.summary.modules.first().expect("one leaf").lm;
+            runs.push((
+                seconds,
+                lm.iterations as f64,
+                lm.error <= options.lm.threshold,
+            ));
+            sets.push(serde_json::json!({
+                "seed": seed,
+                "points": sample.positions,
+                "normals": sample.normals,
+            }));
+        }
+        ours.push((points, runs));
+    }
+    let lm = &options.lm;
+    let request = serde_json::json!({
+        "settings": {
+            "width": options.width,
+            "slope": options.slope,
+            "gamma": options.gamma,
+            "lambda": lm.lambda,
+            "mu0": lm.mu0,
+            "theta": lm.theta,
+            "mu_max": lm.mu_max,
+            "threshold": lm.threshold,
+            "init_range": options.init_range,
+            "box_size": options.box_size,
+            "max_iterations": PEER_ITERATIONS,
+        },
+        "sets": sets,
+    });
+    let peer = run_peer(python, "table5_lm_jax.py", &request);
+    let mut table = String::from(
+        "| points | trainer s (iterations, reached) | numpy + JAX paper LM s (iterations, \
+         reached) | trainer vs peer |\n|---:|---:|---:|---:|\n",
+    );
+    for (points, runs) in &ours {
+        let (seconds, iterations, reached) = summarize(runs);
+        let theirs: Option<Vec<(f64, f64, bool)>> = peer.as_ref().map(|report| {
+            report["runs"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter(|run| run["points"].as_u64() == Some(*points as u64))
+                .map(|run| {
+                    let error = run["error"].as_f64().unwrap_or(f64::INFINITY);
+                    (
+                        run["seconds"].as_f64().unwrap_or(f64::NAN),
+                        run["iterations"].as_f64().unwrap_or(f64::NAN),
+                        error <= lm.threshold,
+                    )
+                })
+                .collect()
+        });
+        let (peer_cell, ratio) = match theirs.as_deref().map(summarize) {
+            Some((peer_seconds, peer_iterations, peer_reached)) => (
+                format!(
+                    "{peer_seconds:.3} ({peer_iterations:.0}, {peer_reached}/{})",
+                    SEEDS.len()
+                ),
+                format!("{:.1}×", peer_seconds / seconds),
+            ),
+            None => ("JAX not installed".into(), "—".into()),
+        };
+        table.push_str(&format!(
+            "| {points} | {seconds:.4} ({iterations:.0}, {reached}/{}) | {peer_cell} | {ratio} |\n",
+            SEEDS.len()
+        ));
+    }
+    table
+}
+
+/// Median seconds, median iterations and how many runs reached the threshold.
+fn summarize(runs: &[(f64, f64, bool)]) -> (f64, f64, usize) {
+    let mut seconds: Vec<f64> = runs.iter().map(|r| r.0).collect();
+    let mut iterations: Vec<f64> = runs.iter().map(|r| r.1).collect();
+    (
+        median(&mut seconds),
+        median(&mut iterations),
+        runs.iter().filter(|r| r.2).count(),
+    )
+}
+
+/// Runs a peer script of `benches/peers/` on `request` (handed over in a temporary JSON file)
+/// and returns its last line of output as JSON; `None` when Python or JAX is missing. Panics
+/// when the script fails.
+fn run_peer(python: &str, script: &str, request: &serde_json::Value) -> Option<serde_json::Value> {
+    let available = Command::new(python)
+        .args(["-c", "import jax"])
+        .output()
+        .is_ok_and(|out| out.status.success());
+    if !available {
+        return None;
+    }
+    let file: PathBuf = std::env::temp_dir().join(format!(
+        "neurosurf-peer-{}-{script}.json",
+        std::process::id()
+    ));
+    std::fs::write(&file, request.to_string()).expect("temporary file");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("benches/peers")
+        .join(script);
+    let out = Command::new(python)
+        .arg(script)
+        .arg(&file)
+        .output()
+        .expect("python runs");
+    let _ = std::fs::remove_file(&file);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(out.stdout.rsplit(|&b| b == b'\n').find(|l| !l.is_empty())?).ok()
 }
 
 /// Points spread over the cube [−1.5, 1.5]³ by a fixed xorshift sequence.
@@ -135,13 +294,6 @@ fn jax_time(
     points: &[[f32; 3]],
     blob: &[u8],
 ) -> Option<f64> {
-    let available = Command::new(python)
-        .args(["-c", "import jax"])
-        .output()
-        .is_ok_and(|out| out.status.success());
-    if !available {
-        return None;
-    }
     let kinds: Vec<&str> = network
         .kinds()
         .iter()
@@ -158,24 +310,7 @@ fn jax_time(
         "guards": guards,
         "points": points,
     });
-    let file: PathBuf =
-        std::env::temp_dir().join(format!("neurosurf-peer-{}.json", std::process::id()));
-    std::fs::write(&file, model.to_string()).expect("temporary file");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peers/implicit_jax.py");
-    let out = Command::new(python)
-        .arg(script)
-        .arg(&file)
-        .output()
-        .expect("python runs");
-    let _ = std::fs::remove_file(&file);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value =
-        serde_json::from_slice(out.stdout.rsplit(|&b| b == b'\n').find(|l| !l.is_empty())?)
-            .expect("the peer prints JSON");
+    let report = run_peer(python, "implicit_jax.py", &model)?;
     let model = ImplicitModel::<f32>::from_blob(blob).expect("core loads the blob");
     for (k, phi) in report["phi"].as_array()?.iter().enumerate() {
         let core = model.field_gradient(points[k]).value;

@@ -56,7 +56,8 @@ fn table5(out: &mut String, rows: &[Table5Row]) {
     let _ = write!(
         out,
         "<h2>The network against an RBF network (Table 5)</h2>\n<p>The torus R = 1, r = 0.4 \
-         learned from n control points by one network module (Table 1's settings) and by the \
+         learned from n control points by one network module (Table 1's settings; the paper's \
+         procedure alone, without off-surface or sign points) and by the \
          multiquadric RBF interpolant (two-sided off-surface points); seed {seeds}, one thread. The paper: a C program on a \
          1.7 GHz Pentium IV (in parentheses). Fidelity: median distance in % of the diameter \
          D = {TABLE5_DIAMETER} / median normal error on {TABLE5_HELD_OUT} held-out points of \

@@ -153,12 +153,13 @@ pub fn table5_row(points: usize, seeds: &[u64], held_out: &PointSet) -> Result<T
     };
     for &seed in seeds {
         let sample = sample_shape(&TABLE5_TORUS, points, seed)?;
+        // The paper's procedure alone: no off-surface or sign points, no sign guards (none of
+        // them is in the paper).
         let options = ImplicitOptions {
             seed,
-            ..ImplicitOptions::default()
+            ..ImplicitOptions::paper()
         };
         let start = Instant::now();
-        // The paper's procedure alone: sign guards (not in the paper) are left out.
         let request = FitRequest {
             unguarded: true,
             ..FitRequest::default()

@@ -64,6 +64,20 @@ fn default_node_stagnation_decrease() -> f64 {
     0.04
 }
 
+impl ImplicitOptions {
+    /// Carcenac's procedure alone: the defaults (Table 1's settings) without the off-surface
+    /// and sign points, which the paper does not have. Its Table 5 is measured with these,
+    /// so that the torus learns the paper's problem and a peer that implements the paper can
+    /// be compared on the same one.
+    pub fn paper() -> Self {
+        ImplicitOptions {
+            offset: 0.0,
+            sign_points: 0.0,
+            ..ImplicitOptions::default()
+        }
+    }
+}
+
 impl Default for ImplicitOptions {
     fn default() -> Self {
         ImplicitOptions {
