@@ -240,14 +240,18 @@ mod f32_kernels {
             checked += layer::<9, 9>("f32 layer 9x9", case, &mut draw)?;
             checked += layer::<3, 9>("f32 layer 9x3", case, &mut draw)?;
             checked += layer::<9, 1>("f32 layer 1x9", case, &mut draw)?;
-            checked += transposed::<9, 9>("f32 transposed 9x9", case, false, &mut draw)?;
-            checked += transposed::<3, 9>("f32 transposed 9x3", case, false, &mut draw)?;
-            checked += transposed::<9, 9>("f32 transposed_slope 9x9", case, true, &mut draw)?;
-            checked += transposed::<9, 1>("f32 transposed_slope 1x9", case, true, &mut draw)?;
+            let all = (0, false);
+            checked += transposed::<9, 9, 9>("f32 transposed 9x9", case, all, &mut draw)?;
+            checked += transposed::<3, 9, 3>("f32 transposed 9x3", case, all, &mut draw)?;
+            let slope = (0, true);
+            checked += transposed::<9, 9, 9>("f32 transposed_slope 9x9", case, slope, &mut draw)?;
+            checked += transposed::<9, 1, 9>("f32 transposed_slope 1x9", case, slope, &mut draw)?;
             // A node's layer a′ (2N + 3 inputs) and the chain rule onto each child's part.
             checked += layer::<21, 9>("f32 layer 9x21", case, &mut draw)?;
             for first in [0, 9, 12] {
-                checked += part::<21, 9>("f32 transposed_slope part 9x21", case, first, &mut draw)?;
+                let part = (first, true);
+                let name = "f32 transposed_slope part 9x21";
+                checked += transposed::<21, 9, 9>(name, case, part, &mut draw)?;
             }
         }
         Ok(checked)
@@ -285,42 +289,22 @@ mod f32_kernels {
         verdict(kernel, case, same(got, &want))
     }
 
-    /// Columns `first..first + 9` of a `COUNT`-column transpose with the chain rule.
-    fn part<const COUNT: usize, const OUT: usize>(
+    /// Columns `first..first + COLUMNS` of a transpose with rows of `COUNT` weights, with
+    /// the chain rule when `slope`: all columns through `transposed_kernel` or
+    /// `transposed_slope_kernel`, a part of them through `transposed_part_kernel`.
+    fn transposed<const COUNT: usize, const OUT: usize, const COLUMNS: usize>(
         kernel: &'static str,
         case: u32,
-        first: usize,
+        (first, slope): (usize, bool),
         draw: &mut dyn FnMut(f32) -> f32,
     ) -> Result<u32, KernelMismatch> {
         let w: [[f32; COUNT]; OUT] = core::array::from_fn(|_| core::array::from_fn(|_| draw(4.0)));
         let g: [f32; OUT] = core::array::from_fn(|_| draw(8.0));
-        let a: [f32; 9] = core::array::from_fn(|_| draw(1.7159));
-        let mut want = [f32::ZERO.to_acc(); 9];
+        // Activations lie within ±1.7159.
+        let a: [f32; COLUMNS] = core::array::from_fn(|_| draw(1.7159));
+        let mut want = [f32::ZERO.to_acc(); COLUMNS];
         for (row, &gj) in w.iter().zip(&g) {
             for (sum, &wi) in want.iter_mut().zip(row.iter().skip(first)) {
-                *sum = f32::mac(*sum, wi, gj);
-            }
-        }
-        for (out, &ai) in want.iter_mut().zip(&a) {
-            *out = f32::times_slope(f32::from_acc(*out), ai);
-        }
-        let got = <f32 as Kernels>::transposed_part_kernel(&w, first, &g, Some(&a));
-        verdict(kernel, case, same(got, &want))
-    }
-
-    fn transposed<const IN: usize, const OUT: usize>(
-        kernel: &'static str,
-        case: u32,
-        slope: bool,
-        draw: &mut dyn FnMut(f32) -> f32,
-    ) -> Result<u32, KernelMismatch> {
-        let w: [[f32; IN]; OUT] = core::array::from_fn(|_| core::array::from_fn(|_| draw(4.0)));
-        let g: [f32; OUT] = core::array::from_fn(|_| draw(8.0));
-        // Activations lie within ±1.7159.
-        let a: [f32; IN] = core::array::from_fn(|_| draw(1.7159));
-        let mut want = [f32::ZERO.to_acc(); IN];
-        for (row, &gj) in w.iter().zip(&g) {
-            for (sum, &wi) in want.iter_mut().zip(row) {
                 *sum = f32::mac(*sum, wi, gj);
             }
         }
@@ -330,10 +314,16 @@ mod f32_kernels {
                 *out = f32::times_slope(*out, ai);
             }
         }
-        let got = if slope {
-            <f32 as Kernels>::transposed_slope_kernel(&w, &g, &a)
+        let got = if first == 0 && COLUMNS == COUNT {
+            let all: Option<&[f32; COUNT]> = a.as_slice().try_into().ok();
+            let got = match (slope, all) {
+                (true, Some(a)) => <f32 as Kernels>::transposed_slope_kernel(&w, &g, a),
+                (true, None) => None,
+                (false, _) => <f32 as Kernels>::transposed_kernel(&w, &g),
+            };
+            got.and_then(|got| got.as_slice().try_into().ok())
         } else {
-            <f32 as Kernels>::transposed_kernel(&w, &g)
+            <f32 as Kernels>::transposed_part_kernel(&w, first, &g, slope.then_some(&a))
         };
         verdict(kernel, case, same(got, &want))
     }
