@@ -399,6 +399,8 @@ fn shapes(
                     "window" => options.lm.stagnation_window = v as usize,
                     "decrease" => options.lm.stagnation_decrease = v,
                     "node_decrease" => options.node_stagnation_decrease = v,
+                    "acceleration" => options.lm.acceleration = v != 0.0,
+                    "coarse" => options.coarse_start = v != 0.0,
                     other => panic!("unknown setting {other}"),
                 }
             }

@@ -58,6 +58,15 @@ pub struct ImplicitOptions {
     /// are parts that meet (a limb and a body), each learned on its own.
     #[serde(default)]
     pub seam_band: bool,
+    /// Whether a cold module of many control points first learns a thinned share of them
+    /// (true; see [`super::train`]'s `COARSE_FROM`). Not stored with the options (blob
+    /// metadata keeps its layout); read back, it is the default.
+    #[serde(skip, default = "default_coarse_start")]
+    pub coarse_start: bool,
+}
+
+fn default_coarse_start() -> bool {
+    true
 }
 
 fn default_node_stagnation_decrease() -> f64 {
@@ -100,6 +109,7 @@ impl Default for ImplicitOptions {
             sign_margin: 0.25,
             sign_weight: 0.1,
             seam_band: false,
+            coarse_start: true,
         }
     }
 }

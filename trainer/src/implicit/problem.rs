@@ -115,6 +115,27 @@ impl ModuleData {
         self.targets.is_empty() && self.goals.is_empty()
     }
 
+    /// Every `every`-th control point and every `every`-th value point (the first of each
+    /// kind included), with their weights and goals.
+    pub fn thinned(&self, every: usize) -> ModuleData {
+        let every = every.max(1);
+        let d = self.inputs;
+        let mut thin = ModuleData::new(d);
+        for i in (0..self.len()).step_by(every) {
+            let input = self.input(i);
+            thin.push_weighted(
+                input.values,
+                input.tangents,
+                self.targets[i],
+                self.weights[i],
+            );
+        }
+        for j in (0..self.value_len()).step_by(every) {
+            thin.push_value(&self.point_values[j * d..(j + 1) * d], self.goals[j]);
+        }
+        thin
+    }
+
     /// Inputs per point.
     pub fn inputs(&self) -> usize {
         self.inputs
@@ -392,15 +413,21 @@ impl<'a> ModuleProblem<'a> {
         let mut work = Self::jacobian_work(stride);
         for (group, out) in part.surface.chunks_mut(4 * LANES).enumerate() {
             // The group's rows go straight into the accumulator's block.
-            let (block, e) = normal.rows_mut(out.len());
             let first = part.surface_first + group * LANES;
+            normal.set_cursor(4 * first);
+            let (block, e) = normal.rows_mut(out.len());
             self.jacobian_group::<FMA>(params, first, out, &mut work, stride, block);
             e.copy_from_slice(out);
         }
-        let emit = &mut |rows: &[f64], residuals: &[f64], _: &[usize]| {
-            let (block, e) = normal.rows_mut(residuals.len());
-            block.copy_from_slice(rows);
-            e.copy_from_slice(residuals);
+        let value_residuals = 4 * self.data.len();
+        let emit = &mut |rows: &[f64], residuals: &[f64], points: &[usize]| {
+            let rows = rows.chunks_exact(stride).zip(residuals).zip(points);
+            for ((row, &residual), &point) in rows {
+                normal.set_cursor(value_residuals + point);
+                let (block, e) = normal.rows_mut(1);
+                block.copy_from_slice(row);
+                e[0] = residual;
+            }
         };
         self.value_rows::<FMA>(params, part.value_first, part.values, stride, emit);
     }
@@ -650,7 +677,7 @@ mod tests {
         let mut reference = NormalEquations::new(p);
         reference.add_jacobian(&j, &e);
         reference.finish();
-        let mut normal = NormalEquations::new(p);
+        let mut normal = NormalEquations::new(p).keeping_rows();
         let mut e2 = vec![0.0; m];
         problem.normal_equations(&params, &mut e2, &mut normal);
         normal.finish();
@@ -662,6 +689,60 @@ mod tests {
                 assert!((a - b).abs() <= 1e-10 * (1.0 + a.abs()), "{r} {c}: {a} {b}");
             }
         }
+        // The kept rows, from both halves and the value points, each carry its residual's
+        // index: Jᵀq for q_i = i + J_i·v is that of the whole J (f32 rows: to 10⁻⁵).
+        let kept = normal.kept_rows().expect("kept rows");
+        assert!(kept.is_complete());
+        let v: Vec<f64> = (0..p).map(|k| (k as f64 * 0.37).sin()).collect();
+        let mut got = vec![0.0; p];
+        kept.transpose_along(&v, |i, along| 1e-3 * i as f64 + along, &mut got);
+        let mut expected = vec![0.0; p];
+        for (i, row) in j.chunks_exact(p).enumerate() {
+            let along: f64 = row.iter().zip(&v).map(|(a, b)| a * b).sum();
+            for (x, &a) in expected.iter_mut().zip(row) {
+                *x += (1e-3 * i as f64 + along) * a;
+            }
+        }
+        let scale = expected.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (a, b) in got.iter().zip(&expected) {
+            assert!((a - b).abs() <= 1e-5 * scale, "{a} vs {b} (of {scale})");
+        }
+    }
+
+    /// A thinned data set keeps every k-th point of each kind, with its weight and goal.
+    #[test]
+    fn thinned_data_keeps_every_kth_point() {
+        let (mut data, params) = random_problem(3, 9, 10, 12);
+        for k in 0..7 {
+            let goal = ValueGoal {
+                value: 0.1 * f64::from(k),
+                weight: 1.0,
+                hinge: 0.0,
+            };
+            data.push_value(&[f64::from(k), 0.0, 0.0], goal);
+        }
+        let thin = data.thinned(4);
+        assert_eq!((thin.len(), thin.value_len()), (3, 2));
+        for (t, i) in [0, 4, 8].into_iter().enumerate() {
+            assert_eq!(thin.input(t).values, data.input(i).values);
+            assert_eq!(thin.input(t).tangents, data.input(i).tangents);
+            assert_eq!(
+                (thin.targets[t], thin.weights[t]),
+                (data.targets[i], data.weights[i])
+            );
+        }
+        assert_eq!(thin.goals, [data.goals[0], data.goals[4]]);
+        assert_eq!(thin.point_values, [0.0, 0.0, 0.0, 4.0, 0.0, 0.0]);
+        // Its residuals are the kept points' residuals of the whole set.
+        let problem = ModuleProblem::new(&data, 9, 0.05);
+        let mut whole = vec![0.0; problem.residual_count()];
+        problem.residuals(&params, &mut whole);
+        let thin_problem = ModuleProblem::new(&thin, 9, 0.05);
+        let mut part = vec![0.0; thin_problem.residual_count()];
+        thin_problem.residuals(&params, &mut part);
+        assert_eq!(part[4..8], whole[16..20]);
+        assert_eq!(part[12], whole[40]);
+        assert_eq!(part[13], whole[44]);
     }
 
     #[test]

@@ -8,6 +8,7 @@
 #[cfg(test)]
 use nalgebra::{DMatrix, DVector};
 
+use super::kept_rows::KeptRows;
 use super::lanes::{cpu_has_fma, madd};
 
 /// The LM system (A + μI)Δ = b for one A and b and a sequence of μ.
@@ -23,6 +24,10 @@ pub struct DampedSystem {
     system: Vec<f64>,
     rhs: Vec<f64>,
     step: Vec<f64>,
+    /// Right-hand side of [`Self::solve_again`] (padded to `n`).
+    second_rhs: Vec<f64>,
+    /// Whether `system` holds the factor of the last solve.
+    factored: bool,
     fma: bool,
 }
 
@@ -41,6 +46,8 @@ impl DampedSystem {
             system: vec![0.0; n * n],
             rhs: vec![0.0; n],
             step: vec![0.0; n],
+            second_rhs: vec![0.0; n],
+            factored: false,
             fma: cpu_has_fma(),
         }
     }
@@ -66,10 +73,24 @@ impl DampedSystem {
                 self.system[i * n + i] += mu;
             }
         }
+        self.factored = false;
         if !cholesky(&mut self.system, n, self.fma) {
             return None;
         }
         cholesky_solve(&self.system, n, &self.rhs, &mut self.step);
+        self.factored = true;
+        Some(&self.step[..p])
+    }
+
+    /// (A + μI)⁻¹·`rhs` (`p` entries) with the factor of the last successful [`Self::solve`]
+    /// (whose step it overwrites); `None` before any.
+    pub fn solve_again(&mut self, rhs: &[f64]) -> Option<&[f64]> {
+        if !self.factored {
+            return None;
+        }
+        let (p, n) = (self.p, self.n);
+        self.second_rhs[..p].copy_from_slice(&rhs[..p]);
+        cholesky_solve(&self.system, n, &self.second_rhs, &mut self.step);
         Some(&self.step[..p])
     }
 }
@@ -97,9 +118,14 @@ pub struct NormalEquations {
     gram: Vec<f64>,
     /// Σ Jᵀe.
     gradient: Vec<f64>,
-    /// Pending rows (`block_rows` × `stride`) and their residuals.
+    /// Pending rows (`block_rows` × `stride`), their residuals and the residuals' indices.
     block: Vec<f64>,
     block_residuals: Vec<f64>,
+    block_index: Vec<u32>,
+    /// Index of the next row's residual ([`Self::set_cursor`]).
+    cursor: usize,
+    /// Every row in f32, when asked for ([`Self::keeping_rows`]).
+    kept: Option<KeptRows>,
     block_rows: usize,
     /// The pending rows rounded to f32, for [`Self::single_precision`] sums.
     single: Option<Vec<f32>>,
@@ -139,11 +165,34 @@ impl NormalEquations {
             gradient: vec![0.0; stride],
             block: vec![0.0; block_rows * stride],
             block_residuals: vec![0.0; block_rows],
+            block_index: vec![0; block_rows],
+            cursor: 0,
+            kept: None,
             block_rows,
             single,
             pending: 0,
             fma: cpu_has_fma(),
         }
+    }
+
+    /// These sums, also keeping every row in f32 with its residual's index
+    /// ([`Self::kept_rows`]): J·v and Jᵀq then cost a pass over the kept rows. The rows are
+    /// rounded once and the f32 products of [`Self::single_precision`] read them where they
+    /// are kept.
+    pub fn keeping_rows(mut self) -> Self {
+        self.kept = Some(KeptRows::new(self.stride));
+        self
+    }
+
+    /// The rows since [`Self::clear`], once [`Self::finish`]ed, when they are kept.
+    pub fn kept_rows(&self) -> Option<&KeptRows> {
+        self.kept.as_ref()
+    }
+
+    /// The index of the next row's residual; rows handed out by [`Self::rows_mut`] follow
+    /// it (0 after [`Self::clear`]). Only [`Self::kept_rows`] reads it.
+    pub fn set_cursor(&mut self, residual: usize) {
+        self.cursor = residual;
     }
 
     /// Most rows [`Self::rows_mut`] hands out at once (32, or 64 for
@@ -167,6 +216,10 @@ impl NormalEquations {
         self.gram.fill(0.0);
         self.gradient.fill(0.0);
         self.pending = 0;
+        self.cursor = 0;
+        if let Some(kept) = &mut self.kept {
+            kept.clear();
+        }
     }
 
     /// Takes J's next `count` rows (at most [`Self::max_rows`]) and their residuals, to be
@@ -180,6 +233,13 @@ impl NormalEquations {
         }
         let start = self.pending;
         self.pending += count;
+        for (k, index) in self.block_index[start..start + count]
+            .iter_mut()
+            .enumerate()
+        {
+            *index = (self.cursor + k) as u32;
+        }
+        self.cursor += count;
         (
             &mut self.block[start * self.stride..(start + count) * self.stride],
             &mut self.block_residuals[start..start + count],
@@ -208,7 +268,11 @@ impl NormalEquations {
     /// Empty sums of the same size and precision.
     pub fn empty_like(&self) -> Self {
         let single = self.single.as_ref().map(|s| vec![0.0; s.len()]);
-        Self::with_block(self.p, self.block_rows, single)
+        let mut empty = Self::with_block(self.p, self.block_rows, single);
+        if self.kept.is_some() {
+            empty.kept = Some(KeptRows::new(self.stride));
+        }
+        empty
     }
 
     /// Adds another accumulator's finished sums to these (finished) sums.
@@ -219,6 +283,12 @@ impl NormalEquations {
         }
         for (a, b) in self.gradient.iter_mut().zip(&other.gradient) {
             *a += b;
+        }
+        if let Some(kept) = &mut self.kept {
+            match &other.kept {
+                Some(theirs) => kept.extend(theirs),
+                None => kept.mark_incomplete(),
+            }
         }
     }
 
@@ -246,12 +316,26 @@ impl NormalEquations {
         }
         let residuals = &self.block_residuals[..rows];
         let fma = self.fma;
-        if let Some(single) = self.single.as_mut().map(|s| &mut s[..rows * stride])
-            && narrow(fma, single, block)
-        {
-            gram_update(fma, &mut self.gram, stride, single);
-        } else {
-            gram_update(fma, &mut self.gram, stride, block);
+        let single_sums = self.single.is_some();
+        // The f32 rows: where they are kept, else in the block's own buffer.
+        let narrowed = match self.kept.as_mut() {
+            Some(kept) => Some(kept.push(&self.block_index[..rows])),
+            None => self.single.as_mut().map(|s| &mut s[..rows * stride]),
+        };
+        let mut in_range = true;
+        match narrowed {
+            Some(single) => {
+                in_range = narrow(fma, single, block);
+                if single_sums && in_range {
+                    gram_update(fma, &mut self.gram, stride, single);
+                } else {
+                    gram_update(fma, &mut self.gram, stride, block);
+                }
+            }
+            None => gram_update(fma, &mut self.gram, stride, block),
+        }
+        if !in_range && let Some(kept) = &mut self.kept {
+            kept.mark_incomplete();
         }
         gradient_update(self.fma, &mut self.gradient, stride, block, residuals);
     }
