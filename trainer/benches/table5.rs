@@ -31,16 +31,17 @@ fn main() {
     );
     println!();
     println!(
-        "| points | iterations (paper) | network time (paper) | RBF time (paper) | network fidelity | RBF fidelity | network ms / iteration |"
+        "| points | iterations (paper) + coarse | network time (paper) | RBF time (paper) | network fidelity | RBF fidelity | network outcome |"
     );
-    println!("|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---:|---:|---:|---:|---:|---:|---|");
     for row in table5(&paper_points(), seeds).expect("Table 5") {
         let paper = row.paper.expect("a paper row");
         println!(
-            "| {} | {:.0} ({}) | {} ({} s) | {} ({}) | {:.3} % / {:.2}° | {:.3} % / {:.2}° | {:.2}{} |",
+            "| {} | {:.0} ({}) + {:.0} | {} ({} s) | {} ({}) | {:.3} % / {:.2}° | {:.3} % / {:.2}° | {} |",
             row.points,
             row.iterations,
             paper.iterations,
+            row.coarse_iterations,
             seconds(row.network_seconds),
             paper.network_seconds,
             seconds(row.rbf_seconds),
@@ -49,12 +50,7 @@ fn main() {
             row.network_angle_degrees,
             row.rbf_distance_percent,
             row.rbf_angle_degrees,
-            1000.0 * row.network_seconds / row.iterations.max(1.0),
-            if row.outcome == neurosurf_trainer::implicit::Outcome::Converged {
-                String::new()
-            } else {
-                format!(" ({})", row.outcome)
-            },
+            row.outcome,
         );
     }
 

@@ -62,17 +62,18 @@ fn table5(out: &mut String, rows: &[Table5Row]) {
          1.7 GHz Pentium IV (in parentheses). Fidelity: median distance in % of the diameter \
          D = {TABLE5_DIAMETER} / median normal error on {TABLE5_HELD_OUT} held-out points of \
          the true torus (the paper gives none).</p>\n<table><tr><th>points</th>\
-         <th>network iterations</th><th>network time</th><th>RBF time</th>\
+         <th>network iterations (+ coarse)</th><th>network time</th><th>RBF time</th>\
          <th>network fidelity</th><th>RBF fidelity</th><th class=l>training</th></tr>\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "<tr><td>{}</td><td>{:.0}{}</td><td>{}{}</td><td>{}{}</td>\
+            "<tr><td>{}</td><td>{:.0}{} (+ {:.0})</td><td>{}{}</td><td>{}{}</td>\
              <td>{:.3} % / {:.2}°</td><td>{:.3} % / {:.2}°</td><td class=l>{}</td></tr>",
             r.points,
             r.iterations,
             r.beside_paper(|p| p.iterations.to_string()),
+            r.coarse_iterations,
             seconds(r.network_seconds),
             r.beside_paper(|p| seconds(p.network_seconds)),
             seconds(r.rbf_seconds),
