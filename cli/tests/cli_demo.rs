@@ -173,10 +173,11 @@ fn the_report_page_shows_existing_pictures(out: &std::path::Path, report: &serde
     // Table 5's rows: the measured numbers of the JSON report beside the paper's.
     for row in tour["table5"].as_array().unwrap() {
         let cells = format!(
-            "<tr><td>{}</td><td>{:.0} ({})</td>",
+            "<tr><td>{}</td><td>{:.0} ({}) (+ {:.0})</td>",
             row["points"],
             row["iterations"].as_f64().unwrap(),
-            row["paper"]["iterations"]
+            row["paper"]["iterations"],
+            row["coarse_iterations"].as_f64().unwrap()
         );
         assert!(page.contains(&cells), "{cells}");
         let fidelity = format!(
