@@ -16,9 +16,10 @@
 //! it. Q16.16 on a Cortex-M4F has them for the N = 9 shapes (`neurosurf-m4f`); `f32` on x86-64
 //! with AVX2 for the N = 9 layers with nine neurons and their transposes onto nine inputs, a
 //! node's three-part layer a′ included (`neurosurf-avx2`'s single-point kernels). For a lane
-//! group of [`LANES`] points, a scalar may bring lane kernels (`Kernels::forward_lanes_kernel`,
-//! `Kernels::transposed_lanes_kernel`, `Kernels::transposed_slope_lanes_kernel`): `f32` and
-//! Q16.16 on x86-64 with AVX2 (`neurosurf-avx2`). Every kernel computes the loops' exact bits,
+//! group of [`LANES`] points, or several such groups per neuron, a scalar may bring lane
+//! kernels (`Kernels::forward_lanes_kernel`, `Kernels::transposed_lanes_kernel`,
+//! `Kernels::transposed_slope_lanes_kernel`): `f32` and Q16.16 on x86-64 with AVX2
+//! (`neurosurf-avx2`; `f32` batches there run four groups per neuron). Every kernel computes the loops' exact bits,
 //! so which path ran never shows in a result.
 
 use crate::implicit::{DenseLayout, LANES};
@@ -65,10 +66,10 @@ pub(crate) fn forward<S: Scalar, const L: usize, const OUT: usize>(
     {
         return out;
     }
-    if S::LANE_KERNELS && L == LANES {
+    if S::LANE_KERNELS && L.is_multiple_of(LANES) {
         let mut out = unwritten::<S, L, OUT>();
         let parts = [inputs.0, inputs.1, inputs.2].map(lanes);
-        if S::forward_lanes_kernel(weights, biases, parts, lanes_mut(&mut out)) {
+        if S::forward_lanes_kernel(weights, biases, parts, L / LANES, lanes_mut(&mut out)) {
             return out;
         }
     }
@@ -270,13 +271,13 @@ pub(crate) fn transposed<S: Scalar, const L: usize, const K: usize, const EXACT:
     {
         return out;
     }
-    if S::LANE_KERNELS && L == LANES {
+    if S::LANE_KERNELS && L.is_multiple_of(LANES) {
         let mut out = unwritten::<S, L, K>();
         if S::transposed_lanes_kernel(
             weights,
             count,
             (first, columns),
-            lanes(g),
+            (lanes(g), L / LANES),
             lanes_mut(&mut out),
         ) {
             return out;
@@ -367,7 +368,7 @@ pub(crate) fn transposed_through_activation<
         return out;
     }
     if S::LANE_KERNELS
-        && L == LANES
+        && L.is_multiple_of(LANES)
         && let Some(out) =
             transposed_slope_by_lane_kernel(params, layout, (first, columns), g, outputs)
     {
@@ -437,15 +438,16 @@ fn transposed_slope_by_lane_kernel<S: Scalar, const L: usize, const K: usize>(
         weights,
         count,
         columns,
-        lanes(g.get(..rows)?),
+        (lanes(g.get(..rows)?), L / LANES),
         lanes(outputs),
         lanes_mut(&mut out),
     )
     .then_some(out)
 }
 
-/// Lanes of `L` points as lane groups of [`LANES`] (all of them when `L` is `LANES`, the
-/// only case the lane kernels are offered).
+/// Lanes of `L` points as lane groups of [`LANES`]: neuron k's `L / LANES` groups side by
+/// side (all of them when `L` is a multiple of `LANES`, the only case the lane kernels are
+/// offered).
 #[inline(always)]
 fn lanes<S, const L: usize>(x: &[[S; L]]) -> &[[S; LANES]] {
     x.as_flattened().as_chunks::<LANES>().0

@@ -534,7 +534,7 @@ fn normal_is_none_for_a_zero_gradient() {
     }
 }
 
-const BATCH_LENGTHS: [usize; 6] = [0, 1, 7, 8, 9, 33];
+const BATCH_LENGTHS: [usize; 9] = [0, 1, 7, 8, 9, 31, 32, 33, 65];
 
 fn batch_matches_single<S: Scalar>(model: &ImplicitModel<S>, points: &[[S; 3]]) {
     let views: Vec<_> = (0..model.module_count())
@@ -575,10 +575,12 @@ fn batch_matches_single<S: Scalar>(model: &ImplicitModel<S>, points: &[[S; 3]]) 
 fn batches_are_bit_identical_to_single_points() {
     for case in cases().iter().step_by(3) {
         let mut rng = Rng::new(17);
-        let mut points: Vec<[f64; 3]> = (0..33).map(|_| rng.point()).collect();
-        // Some points far outside the box (saturated neurons) in the mix.
+        let mut points: Vec<[f64; 3]> = (0..65).map(|_| rng.point()).collect();
+        // Some points far outside the box (saturated neurons) in the mix, in the first and
+        // in a later lane group of eight and of 32.
         points[5] = [40.0, -300.0, 7.5];
         points[20] = [-1000.0, 1000.0, 0.0];
+        points[47] = [3.0e4, 0.5, -2.0e4];
         let f32_points: Vec<[f32; 3]> = points.iter().map(|&p| f32_point(p)).collect();
         let mut f32_exact: Vec<[f32; 3]> = f32_points.clone();
         // Values not on the Q16.16 grid for f32.

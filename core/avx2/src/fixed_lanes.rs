@@ -252,7 +252,7 @@ pub fn fixed_transposed(
     slope: Option<(&[FixedLanes], &FixedSlope)>,
     out: &mut [FixedLanes],
 ) -> bool {
-    let fits = fits_transposed(weights, count, (first, columns), g, out.len())
+    let fits = fits_transposed(weights, count, (first, columns), (g, 1), out.len())
         && slope.is_none_or(|(outputs, _)| outputs.len() >= columns);
     if !fits || !available() {
         return false;

@@ -1,6 +1,8 @@
 //! # neurosurf-avx2
 //!
-//! The layers of `neurosurf-core`'s implicit modules for eight points at once, written with
+//! The layers of `neurosurf-core`'s implicit modules for eight points at once (in `f32` also
+//! for four such lane groups per neuron, 32 points, so that each weight serves four
+//! independent sums), written with
 //! x86-64 AVX2 intrinsics and chosen at run time, in `f32` (`lanes.rs`: the forward layer with
 //! its activation, the transposed layer, the transposed layer fused with the chain rule through
 //! the activation) and in Q16.16 (`fixed_lanes.rs`: the same three, with exact 64-bit sums and
@@ -41,6 +43,10 @@
 
 /// Points per lane group: one 256-bit register of `f32`.
 pub const LANES: usize = 8;
+
+/// Lane groups per neuron that the width-9 kernels are also compiled for: each neuron 32
+/// points, four groups of eight side by side.
+pub const WIDE_GROUPS: usize = 4;
 
 /// One neuron (or input) of eight points.
 pub type Lanes = [f32; LANES];

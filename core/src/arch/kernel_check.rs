@@ -425,6 +425,11 @@ mod lane_kernels {
     const ROWS: usize = 16;
     const INPUTS: usize = 35;
 
+    /// Lane groups per neuron checked: one, and the wide kernels' (`f32` only; Q16.16
+    /// declines them).
+    const GROUPS: [usize; 2] = [1, 4];
+    const MAX_GROUPS: usize = 4;
+
     /// (rows, the three input parts' lengths) of the forward layers checked.
     const FORWARD: [(usize, [usize; 3]); 8] = [
         (9, [3, 0, 0]),
@@ -458,12 +463,15 @@ mod lane_kernels {
         let [forward_name, transposed_name, slope_name] = S::NAMES;
         for case in 0..cases {
             let mut draw = |scale: f32| S::value(case, scale, &mut random);
-            for (rows, parts) in FORWARD {
-                checked += forward(forward_name, case, rows, parts, &mut draw)?;
-            }
-            for shape in TRANSPOSED {
-                checked += transposed(transposed_name, case, shape, false, &mut draw)?;
-                checked += transposed(slope_name, case, shape, true, &mut draw)?;
+            for groups in GROUPS {
+                for (rows, parts) in FORWARD {
+                    checked += forward(forward_name, case, (rows, parts, groups), &mut draw)?;
+                }
+                for shape in TRANSPOSED {
+                    let shape = (shape, groups);
+                    checked += transposed(transposed_name, case, shape, false, &mut draw)?;
+                    checked += transposed(slope_name, case, shape, true, &mut draw)?;
+                }
             }
         }
         Ok(checked)
@@ -480,42 +488,62 @@ mod lane_kernels {
             .all(|(&x, &y)| S::same(x, y))
     }
 
+    /// The neuron of a part of `groups` lane groups per neuron: entry `k·groups + group`.
+    fn neuron<S: Sample>(
+        part: &[Lanes<S>],
+        (k, groups, group): (usize, usize, usize),
+        lane: usize,
+    ) -> S {
+        part.get(k * groups + group)
+            .and_then(|lanes| lanes.get(lane))
+            .copied()
+            .unwrap_or(S::ZERO)
+    }
+
     fn forward<S: Sample>(
         kernel: &'static str,
         case: u32,
-        rows: usize,
-        parts: [usize; 3],
+        (rows, parts, groups): (usize, [usize; 3], usize),
         draw: &mut dyn FnMut(f32) -> S,
     ) -> Result<u32, KernelMismatch> {
         let count: usize = parts.iter().sum();
         let weights: [S; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
         let biases: [S; ROWS] = core::array::from_fn(|_| draw(4.0));
-        let x: [Lanes<S>; INPUTS] = core::array::from_fn(|_| lanes(draw, 2.0));
-        let mut want = [[S::ZERO; 8]; ROWS];
-        let mut got = [[S::ZERO; 8]; ROWS];
+        let x: [Lanes<S>; INPUTS * MAX_GROUPS] = core::array::from_fn(|_| lanes(draw, 2.0));
+        let mut want = [[S::ZERO; 8]; ROWS * MAX_GROUPS];
+        let mut got = [[S::ZERO; 8]; ROWS * MAX_GROUPS];
         let (Some(w), Some(b), Some(x), Some(want), Some(got)) = (
             weights.get(..rows * count),
             biases.get(..rows),
-            x.get(..count),
-            want.get_mut(..rows),
-            got.get_mut(..rows),
+            x.get(..count * groups),
+            want.get_mut(..rows * groups),
+            got.get_mut(..rows * groups),
         ) else {
             return Ok(0);
         };
-        let (x0, rest) = x.split_at_checked(parts[0]).unwrap_or((x, &[]));
-        let (x1, x2) = rest.split_at_checked(parts[1]).unwrap_or((rest, &[]));
-        for ((out, row), &bias) in want.iter_mut().zip(w.chunks_exact(count)).zip(b) {
-            for (lane, out) in out.iter_mut().enumerate() {
-                let acc = row
-                    .iter()
-                    .zip(x0.iter().chain(x1).chain(x2))
-                    .fold(bias.to_acc(), |acc, (&w, x)| {
-                        S::mac(acc, w, x.get(lane).copied().unwrap_or(S::ZERO))
-                    });
-                *out = S::activation_from_acc(acc);
+        let (x0, rest) = x.split_at_checked(parts[0] * groups).unwrap_or((x, &[]));
+        let (x1, x2) = rest
+            .split_at_checked(parts[1] * groups)
+            .unwrap_or((rest, &[]));
+        for (j, (row, &bias)) in w.chunks_exact(count).zip(b).enumerate() {
+            for group in 0..groups {
+                let Some(out) = want.get_mut(j * groups + group) else {
+                    return Ok(0);
+                };
+                for (lane, out) in out.iter_mut().enumerate() {
+                    let inputs = (0..parts[0]).map(|k| neuron(x0, (k, groups, group), lane));
+                    let inputs = inputs
+                        .chain((0..parts[1]).map(|k| neuron(x1, (k, groups, group), lane)))
+                        .chain((0..parts[2]).map(|k| neuron(x2, (k, groups, group), lane)));
+                    let acc = row
+                        .iter()
+                        .zip(inputs)
+                        .fold(bias.to_acc(), |acc, (&w, x)| S::mac(acc, w, x));
+                    *out = S::activation_from_acc(acc);
+                }
             }
         }
-        if !S::forward_lanes_kernel(w, b, [x0, x1, x2], got) {
+        if !S::forward_lanes_kernel(w, b, [x0, x1, x2], groups, got) {
             return Ok(0);
         }
         if same(got, want) {
@@ -528,44 +556,49 @@ mod lane_kernels {
     fn transposed<S: Sample>(
         kernel: &'static str,
         case: u32,
-        (rows, count, first, columns): (usize, usize, usize, usize),
+        ((rows, count, first, columns), groups): ((usize, usize, usize, usize), usize),
         slope: bool,
         draw: &mut dyn FnMut(f32) -> S,
     ) -> Result<u32, KernelMismatch> {
         let weights: [S; ROWS * INPUTS] = core::array::from_fn(|_| draw(4.0));
-        let g: [Lanes<S>; ROWS] = core::array::from_fn(|_| lanes(draw, 8.0));
+        let g: [Lanes<S>; ROWS * MAX_GROUPS] = core::array::from_fn(|_| lanes(draw, 8.0));
         // Activations lie within ±1.7159.
-        let a: [Lanes<S>; INPUTS] = core::array::from_fn(|_| lanes(draw, 1.7159));
-        let mut want = [[S::ZERO; 8]; INPUTS];
-        let mut got = [[S::ZERO; 8]; INPUTS];
+        let a: [Lanes<S>; INPUTS * MAX_GROUPS] = core::array::from_fn(|_| lanes(draw, 1.7159));
+        let mut want = [[S::ZERO; 8]; INPUTS * MAX_GROUPS];
+        let mut got = [[S::ZERO; 8]; INPUTS * MAX_GROUPS];
         let (Some(w), Some(g), Some(a), Some(want), Some(got)) = (
             weights.get(..rows * count),
-            g.get(..rows),
-            a.get(..columns),
-            want.get_mut(..columns),
-            got.get_mut(..columns),
+            g.get(..rows * groups),
+            a.get(..columns * groups),
+            want.get_mut(..columns * groups),
+            got.get_mut(..columns * groups),
         ) else {
             return Ok(0);
         };
-        for ((c, out), a) in want.iter_mut().enumerate().zip(a) {
-            for ((lane, out), &a) in out.iter_mut().enumerate().zip(a) {
-                let acc = w
-                    .chunks_exact(count)
-                    .zip(g)
-                    .fold(S::ZERO.to_acc(), |acc, (row, g)| {
-                        let w = row.get(first + c).copied().unwrap_or(S::ZERO);
-                        S::mac(acc, w, g.get(lane).copied().unwrap_or(S::ZERO))
-                    });
-                *out = S::from_acc(acc);
-                if slope {
-                    *out = S::times_slope(*out, a);
+        for c in 0..columns {
+            for group in 0..groups {
+                let Some(out) = want.get_mut(c * groups + group) else {
+                    return Ok(0);
+                };
+                for (lane, out) in out.iter_mut().enumerate() {
+                    let acc = w.chunks_exact(count).enumerate().fold(
+                        S::ZERO.to_acc(),
+                        |acc, (j, row)| {
+                            let w = row.get(first + c).copied().unwrap_or(S::ZERO);
+                            S::mac(acc, w, neuron(g, (j, groups, group), lane))
+                        },
+                    );
+                    *out = S::from_acc(acc);
+                    if slope {
+                        *out = S::times_slope(*out, neuron(a, (c, groups, group), lane));
+                    }
                 }
             }
         }
         let ran = if slope {
-            S::transposed_slope_lanes_kernel(w, count, (first, columns), g, a, got)
+            S::transposed_slope_lanes_kernel(w, count, (first, columns), (g, groups), a, got)
         } else {
-            S::transposed_lanes_kernel(w, count, (first, columns), g, got)
+            S::transposed_lanes_kernel(w, count, (first, columns), (g, groups), got)
         };
         if !ran {
             return Ok(0);
@@ -588,7 +621,8 @@ mod tests {
     #[test]
     fn the_host_kernels_match_their_contracts() {
         let runs = <f32 as Kernels>::LANE_KERNELS && neurosurf_avx2::available();
-        let expected = if runs { 64 * (8 + 2 * 8) } else { 0 };
+        // Every shape, for one lane group and for the wide ones.
+        let expected = if runs { 64 * 2 * (8 + 2 * 8) } else { 0 };
         assert_eq!(lane_kernels::check::<f32>(1, 64), Ok(expected));
         // One point's width-9 layers: the 9×9, 9×3 and 9×21 forward layers, the 9×9
         // transpose, both chain-rule transposes and three nine-column parts of a node's (the

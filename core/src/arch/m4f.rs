@@ -11,7 +11,7 @@
 use neurosurf_m4f as m4f;
 
 pub(super) use super::portable::{
-    F32_LANE_KERNELS, F32_TARGET_KERNELS, Q16_LANE_KERNELS, f32_forward_lanes, f32_layer,
+    F32_HOST_LANES, F32_LANE_KERNELS, F32_TARGET_KERNELS, Q16_LANE_KERNELS, f32_forward_lanes, f32_layer,
     f32_transposed, f32_transposed_lanes, f32_transposed_slope_lanes, q16_forward_lanes,
     q16_transposed_lanes,
 };

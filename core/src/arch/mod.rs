@@ -125,33 +125,36 @@ pub trait Kernels: Sized + Copy {
     }
 
     /// Whether this scalar has kernels for whole lane groups ([`crate::implicit::LANES`]
-    /// points in structure-of-arrays form) on the machine compiled for; the layer loops only
-    /// ask when it does.
+    /// points in structure-of-arrays form, or several such groups per neuron) on the machine
+    /// compiled for; the layer loops only ask when it does.
     const LANE_KERNELS: bool = false;
 
-    /// A forward layer for a lane group (W row-major, one row of the concatenated `inputs` per
-    /// output): output j is `activation_from_acc` of the bias accumulating `mac` over the
-    /// inputs in order, lane by lane; `false`, with `out` unwritten, means "use the portable
-    /// loop". (`f32` and Q16.16 on x86-64 with AVX2.)
+    /// A forward layer for `groups` lane groups (W row-major, one row of the concatenated
+    /// `inputs` per output; each neuron `groups` lane groups side by side): output j is
+    /// `activation_from_acc` of the bias accumulating `mac` over the inputs in order, lane by
+    /// lane; `false`, with `out` unwritten, means "use the portable loop". (`f32` and Q16.16
+    /// on x86-64 with AVX2; Q16.16 for one group only.)
     #[inline(always)]
     fn forward_lanes_kernel(
         weights: &[Self],
         biases: &[Self],
         inputs: [&[Lanes<Self>]; 3],
+        groups: usize,
         out: &mut [Lanes<Self>],
     ) -> bool {
-        let _ = (weights, biases, inputs, out);
+        let _ = (weights, biases, inputs, groups, out);
         false
     }
-    /// Columns `first..first + columns` of `Wᵀ·g` for a lane group (W has `count` columns, one
-    /// row per `g`): each output `from_acc` of `ZERO.to_acc()` accumulating `mac` over the rows
-    /// in order; `false`, with `out` unwritten, means "use the portable loop".
+    /// Columns `first..first + columns` of `Wᵀ·g` for `g.1` lane groups per neuron (W has
+    /// `count` columns, one row per neuron of `g.0`): each output `from_acc` of
+    /// `ZERO.to_acc()` accumulating `mac` over the rows in order; `false`, with `out`
+    /// unwritten, means "use the portable loop".
     #[inline(always)]
     fn transposed_lanes_kernel(
         weights: &[Self],
         count: usize,
         columns: (usize, usize),
-        g: &[Lanes<Self>],
+        g: (&[Lanes<Self>], usize),
         out: &mut [Lanes<Self>],
     ) -> bool {
         let _ = (weights, count, columns, g, out);
@@ -165,7 +168,7 @@ pub trait Kernels: Sized + Copy {
         weights: &[Self],
         count: usize,
         columns: (usize, usize),
-        g: &[Lanes<Self>],
+        g: (&[Lanes<Self>], usize),
         outputs: &[Lanes<Self>],
         out: &mut [Lanes<Self>],
     ) -> bool {
@@ -181,18 +184,19 @@ impl Kernels for f32 {
     const TARGET_KERNELS: bool = target::F32_TARGET_KERNELS;
     /// Eight `f32` accumulators (and their inputs) fit the FPU's 32 registers.
     const LANE_GROUP: usize = 8;
-    /// Eight on 64-bit hosts (the lanes vectorize); one on 32-bit targets: on the Cortex-M4F
+    /// On 64-bit hosts the lanes vectorize: 32 on x86-64 (four groups of eight per neuron,
+    /// see `x86_64.rs`), eight elsewhere. One on 32-bit targets: on the Cortex-M4F
     /// the backward pass's eight-lane layers (288 bytes each) are zeroed and copied in memory,
     /// and with N = 9 compiled in, point by point costs fewer estimated cycles (measured: 2 675
     /// vs 2 863 per point for the N = 9 leaf, 15 710 vs 17 510 for the three-leaf head) and
     /// less than half the stack. (At run-time widths eight lanes stay cheaper: width 16, 4356
     /// vs 6397 instructions.)
     const GRADIENT_LANE_GROUP: usize = if cfg!(target_pointer_width = "64") {
-        8
+        target::F32_HOST_LANES
     } else {
         1
     };
-    /// Eight on 64-bit hosts; one on 32-bit targets: on the Cortex-M4F eight lanes of the N = 9
+    /// As `GRADIENT_LANE_GROUP` on 64-bit hosts; one on 32-bit targets: on the Cortex-M4F eight lanes of the N = 9
     /// head cost more estimated cycles per point than one (11 084 against 10 780; the leaf
     /// alone is even, 1 859 against 1 862) and 5 KiB more stack.
     const KERNEL_WIDTH_LANE_GROUP: usize = Self::GRADIENT_LANE_GROUP;
@@ -204,16 +208,17 @@ impl Kernels for f32 {
         weights: &[f32],
         biases: &[f32],
         inputs: [&[Lanes]; 3],
+        groups: usize,
         out: &mut [Lanes],
     ) -> bool {
-        target::f32_forward_lanes(weights, biases, inputs, out)
+        target::f32_forward_lanes(weights, biases, inputs, groups, out)
     }
     #[inline(always)]
     fn transposed_lanes_kernel(
         weights: &[f32],
         count: usize,
         columns: (usize, usize),
-        g: &[Lanes],
+        g: (&[Lanes], usize),
         out: &mut [Lanes],
     ) -> bool {
         target::f32_transposed_lanes(weights, count, columns, g, out)
@@ -223,7 +228,7 @@ impl Kernels for f32 {
         weights: &[f32],
         count: usize,
         columns: (usize, usize),
-        g: &[Lanes],
+        g: (&[Lanes], usize),
         outputs: &[Lanes],
         out: &mut [Lanes],
     ) -> bool {
@@ -286,30 +291,31 @@ impl Kernels for Q16 {
         weights: &[Q16],
         biases: &[Q16],
         inputs: [&[Lanes<Q16>]; 3],
+        groups: usize,
         out: &mut [Lanes<Q16>],
     ) -> bool {
-        target::q16_forward_lanes(weights, biases, inputs, out)
+        groups == 1 && target::q16_forward_lanes(weights, biases, inputs, out)
     }
     #[inline(always)]
     fn transposed_lanes_kernel(
         weights: &[Q16],
         count: usize,
         columns: (usize, usize),
-        g: &[Lanes<Q16>],
+        (g, groups): (&[Lanes<Q16>], usize),
         out: &mut [Lanes<Q16>],
     ) -> bool {
-        target::q16_transposed_lanes(weights, count, columns, g, None, out)
+        groups == 1 && target::q16_transposed_lanes(weights, count, columns, g, None, out)
     }
     #[inline(always)]
     fn transposed_slope_lanes_kernel(
         weights: &[Q16],
         count: usize,
         columns: (usize, usize),
-        g: &[Lanes<Q16>],
+        (g, groups): (&[Lanes<Q16>], usize),
         outputs: &[Lanes<Q16>],
         out: &mut [Lanes<Q16>],
     ) -> bool {
-        target::q16_transposed_lanes(weights, count, columns, g, Some(outputs), out)
+        groups == 1 && target::q16_transposed_lanes(weights, count, columns, g, Some(outputs), out)
     }
 
     #[inline(always)]

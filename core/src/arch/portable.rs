@@ -68,8 +68,17 @@ pub(super) fn f32_transposed<const COUNT: usize, const OUT: usize, const COLUMNS
 /// No `f32` lane kernels.
 pub(super) const F32_LANE_KERNELS: bool = false;
 
+/// Without lane kernels, one lane group per neuron.
+pub(super) const F32_HOST_LANES: usize = crate::implicit::LANES;
+
 #[inline(always)]
-pub(super) fn f32_forward_lanes(_: &[f32], _: &[f32], _: [&[Lanes]; 3], _: &mut [Lanes]) -> bool {
+pub(super) fn f32_forward_lanes(
+    _: &[f32],
+    _: &[f32],
+    _: [&[Lanes]; 3],
+    _: usize,
+    _: &mut [Lanes],
+) -> bool {
     false
 }
 
@@ -78,7 +87,7 @@ pub(super) fn f32_transposed_lanes(
     _: &[f32],
     _: usize,
     _: (usize, usize),
-    _: &[Lanes],
+    _: (&[Lanes], usize),
     _: &mut [Lanes],
 ) -> bool {
     false
@@ -89,7 +98,7 @@ pub(super) fn f32_transposed_slope_lanes(
     _: &[f32],
     _: usize,
     _: (usize, usize),
-    _: &[Lanes],
+    _: (&[Lanes], usize),
     _: &[Lanes],
     _: &mut [Lanes],
 ) -> bool {

@@ -23,6 +23,12 @@ const _: () = assert!(avx2::LANES == crate::implicit::LANES);
 /// `--cfg neurosurf_portable="f32_lanes"`.
 pub(super) const F32_LANE_KERNELS: bool = !cfg!(neurosurf_portable = "f32_lanes");
 
+/// Points per lane group of the `f32` field-and-gradient batches: the wide kernels' four
+/// groups of eight per neuron. Four independent sums per weight hide the activation's latency
+/// (its division), and the layer loops' set-up is paid once per 32 points.
+pub(super) const F32_HOST_LANES: usize = avx2::WIDE_GROUPS * avx2::LANES;
+const _: () = assert!(F32_HOST_LANES == crate::implicit::WIDE_LANES);
+
 /// The core's `f32` activation constants (`scalar/activation_f32.rs`).
 const ACTIVATION: avx2::Activation = avx2::Activation {
     u_per_h: U_PER_H,
@@ -43,9 +49,10 @@ pub(super) fn f32_forward_lanes(
     weights: &[f32],
     biases: &[f32],
     inputs: [&[Lanes]; 3],
+    groups: usize,
     out: &mut [Lanes],
 ) -> bool {
-    avx2::forward(weights, biases, inputs, &ACTIVATION, out)
+    avx2::forward(weights, biases, inputs, groups, &ACTIVATION, out)
 }
 
 #[inline(always)]
@@ -53,7 +60,7 @@ pub(super) fn f32_transposed_lanes(
     weights: &[f32],
     count: usize,
     columns: (usize, usize),
-    g: &[Lanes],
+    g: (&[Lanes], usize),
     out: &mut [Lanes],
 ) -> bool {
     avx2::transposed(weights, count, columns, g, out)
@@ -64,7 +71,7 @@ pub(super) fn f32_transposed_slope_lanes(
     weights: &[f32],
     count: usize,
     columns: (usize, usize),
-    g: &[Lanes],
+    g: (&[Lanes], usize),
     outputs: &[Lanes],
     out: &mut [Lanes],
 ) -> bool {

@@ -20,6 +20,10 @@ use crate::scalar::Scalar;
 /// is 1: one at a time).
 pub const LANES: usize = 8;
 
+/// The wide lane group: four of [`LANES`] per neuron (`f32` on x86-64, see
+/// `Kernels::GRADIENT_LANE_GROUP`).
+pub(crate) const WIDE_LANES: usize = 4 * LANES;
+
 impl<S: Scalar, const P: usize, const M: usize> ImplicitModel<S, P, M> {
     /// Φ at every point of `points` into `out` (same length).
     ///
@@ -65,6 +69,10 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         };
         match group {
             1 => grouped::<S, S, 1>(points, out, |group| self.field_lanes(group)),
+            // Guarded by constants, so that scalars without the wide group compile no test.
+            WIDE_LANES if S::KERNEL_WIDTH_LANE_GROUP == WIDE_LANES => {
+                grouped::<S, S, WIDE_LANES>(points, out, |group| self.field_lanes(group))
+            }
             _ => grouped::<S, S, LANES>(points, out, |group| self.field_lanes(group)),
         }
         Ok(())
@@ -87,6 +95,9 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         };
         match group {
             1 => grouped::<S, _, 1>(points, out, |group| self.field_gradient_lanes(group)),
+            WIDE_LANES if S::GRADIENT_LANE_GROUP == WIDE_LANES => {
+                grouped::<S, _, WIDE_LANES>(points, out, |group| self.field_gradient_lanes(group))
+            }
             _ => grouped::<S, _, LANES>(points, out, |group| self.field_gradient_lanes(group)),
         }
         Ok(())

@@ -18,6 +18,7 @@ mod width;
 
 pub use activation::Activation;
 pub use batch::LANES;
+pub(crate) use batch::WIDE_LANES;
 pub use eval::{FieldGradient, ModuleView};
 pub use guard::{GUARD_CODE, GUARD_LEN, MAX_GUARDS};
 pub use layout::{DenseLayout, MAX_HEIGHT, MAX_WIDTH, ModuleKind, ModuleLayout, NORMALIZATION_LEN};
