@@ -71,7 +71,8 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
             1 => grouped::<S, S, 1>(points, out, |group| self.field_lanes(group)),
             // Guarded by constants, so that scalars without the wide group compile no test.
             WIDE_LANES if S::KERNEL_WIDTH_LANE_GROUP == WIDE_LANES => {
-                grouped::<S, S, WIDE_LANES>(points, out, |group| self.field_lanes(group))
+                let rest = grouped_wide(points, out, |group| self.field_lanes(group));
+                grouped::<S, S, LANES>(rest.0, rest.1, |group| self.field_lanes(group));
             }
             _ => grouped::<S, S, LANES>(points, out, |group| self.field_lanes(group)),
         }
@@ -96,7 +97,8 @@ impl<S: Scalar, const P: usize, const M: usize> ModuleView<'_, S, P, M> {
         match group {
             1 => grouped::<S, _, 1>(points, out, |group| self.field_gradient_lanes(group)),
             WIDE_LANES if S::GRADIENT_LANE_GROUP == WIDE_LANES => {
-                grouped::<S, _, WIDE_LANES>(points, out, |group| self.field_gradient_lanes(group))
+                let rest = grouped_wide(points, out, |group| self.field_gradient_lanes(group));
+                grouped::<S, _, LANES>(rest.0, rest.1, |group| self.field_gradient_lanes(group));
             }
             _ => grouped::<S, _, LANES>(points, out, |group| self.field_gradient_lanes(group)),
         }
@@ -126,6 +128,23 @@ fn grouped<S: Scalar, R: Copy, const G: usize>(
             *slot = result;
         }
     }
+}
+
+/// Evaluates the whole [`WIDE_LANES`] groups of `points` with `evaluate` into `out`; returns
+/// the points and outputs left (fewer than a wide group), for [`LANES`]-point groups: a short
+/// batch is padded to eight points, not to 32.
+#[inline(always)]
+fn grouped_wide<'p, 'o, S: Scalar, R: Copy>(
+    points: &'p [[S; 3]],
+    out: &'o mut [R],
+    evaluate: impl Fn(&[[S; 3]; WIDE_LANES]) -> [R; WIDE_LANES],
+) -> (&'p [[S; 3]], &'o mut [R]) {
+    let (groups, rest) = points.as_chunks::<WIDE_LANES>();
+    let (out_groups, out_rest) = out.as_chunks_mut::<WIDE_LANES>();
+    for (group, out) in groups.iter().zip(out_groups) {
+        *out = evaluate(group);
+    }
+    (rest, out_rest)
 }
 
 /// A full group of lanes: the chunk's points, the last one repeated into unused lanes.
