@@ -198,12 +198,51 @@ fn a_tube_is_fitted_closed_around_and_evaluates_identically_on_the_target() {
         let target = ok(&[&["sim"], &common[..]].concat());
         assert!(host == target, "{scalar}\n{host}\n---\n{target}");
     }
-    // A sheet has no two edges: named, and no blob written.
+    // Without --tube the two edges are found, and the tube fits far better than one patch.
+    let found = json(&ok(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--out",
+        s(&model),
+        "--json",
+    ]));
+    assert_eq!(found["tube"], true, "{found}");
+    let check = &found["tube_check"];
+    let (tube, patch) = (check["tube_rms"].as_f64(), check["patch_rms"].as_f64());
+    assert!(tube.unwrap() * 1.5 < patch.unwrap(), "{found}");
+    let text = ok(&["curve", "surface", s(&points), "--out", s(&model)]);
+    assert!(
+        text.contains("a tube") && text.contains("as one patch"),
+        "{text}"
+    );
+    // --patch keeps it one patch.
+    let forced = json(&ok(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--patch",
+        "--out",
+        s(&model),
+        "--json",
+    ]));
+    assert_eq!(forced["tube"], false, "{forced}");
+    assert!(forced["tube_check"].is_null(), "{forced}");
+    // A sheet has no two edges: named, and no blob written; by default it is one patch.
     let sheet = sheet_file(dir.path());
     let out = dir.path().join("sheet.nsb");
     let error = fails(&["curve", "surface", s(&sheet), "--tube", "--out", s(&out)]);
     assert!(error.contains("not a tube"), "{error}");
     assert!(!out.exists());
+    let patch = json(&ok(&[
+        "curve",
+        "surface",
+        s(&sheet),
+        "--out",
+        s(&out),
+        "--json",
+    ]));
+    assert_eq!(patch["tube"], false, "{patch}");
 }
 
 #[test]

@@ -10,9 +10,9 @@ use serde::Serialize;
 
 use neurosurf_trainer::curve::{
     BENCHMARK_SIZES, CurveOptions, CurvePoints, FitSummary, PlotLayers, PlotOptions, SampleCurve,
-    SampleOptions, SurfaceOptions, benchmark, curve_svg, curves_dxf, export_curve, export_surface,
-    fit_unrolled_surface, sample_curve, shaped_grid, surface_mesh, surface_to_blob, unroll,
-    write_plot,
+    SampleOptions, SurfaceOptions, TubeCheck, TubeMode, benchmark, curve_svg, curves_dxf,
+    export_curve, export_surface, fit_unrolled_surface, sample_curve, shaped_grid, surface_mesh,
+    surface_to_blob, unroll, write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
@@ -142,9 +142,14 @@ pub struct SurfaceArgs {
     #[arg(long, value_parser = comma_list::<usize, 2>)]
     control: Option<[usize; 2]>,
     /// The points are a tube (an open cylinder, a pipe): fit a surface closed around u, with
-    /// parameters from the two edges instead of a map
-    #[arg(long, conflicts_with = "map")]
+    /// parameters from the two edges instead of a map. Without `--tube` or `--patch`, points
+    /// with two separate edges are fitted both ways and the tube is kept unless one patch
+    /// fits them far better
+    #[arg(long, conflicts_with_all = ["map", "patch"])]
     tube: bool,
+    /// The points are one patch, never a tube
+    #[arg(long)]
+    patch: bool,
     /// Polynomial degree of the surface in both directions, 2 to 5.
     #[arg(long, default_value_t = 3)]
     degree: usize,
@@ -174,6 +179,9 @@ struct SurfaceReport<'a> {
     map_iterations: usize,
     /// Whether the points were fitted as a tube, closed around u.
     tube: bool,
+    /// When the points had two separate edges and neither `--tube` nor `--patch` was given:
+    /// the residual RMS as a tube and as one patch that decided.
+    tube_check: Option<TubeCheck>,
     mesh: Option<&'a Path>,
     #[serde(flatten)]
     fit: FitSummary,
@@ -216,7 +224,13 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         options.control_v = v;
     }
     options.map.seed = args.blob.seed;
-    options.tube = args.tube;
+    options.tube = match (args.tube, args.patch) {
+        (true, _) => TubeMode::Tube,
+        // A map is a patch's.
+        (false, true) | (false, false) if args.map.is_some() => TubeMode::Patch,
+        (false, true) => TubeMode::Patch,
+        (false, false) => TubeMode::Auto,
+    };
     options.degree = args.degree;
     let start = Instant::now();
     let fit = fit_unrolled_surface(&points, &options, unrolled.as_ref())
@@ -250,6 +264,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
             .as_ref()
             .map_or(0, |report| report.iterations),
         tube: fit.surface.closed_u,
+        tube_check: fit.tube_check,
         mesh: args.mesh.as_deref(),
         fit: summary,
     };
@@ -268,6 +283,19 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
             )
         }
         None => " → a tube, closed around u".to_string(),
+    };
+    let ordering = match fit.tube_check {
+        Some(TubeCheck {
+            tube_rms,
+            patch_rms: Some(patch_rms),
+        }) => format!(
+            "{ordering} (two separate edges: residual RMS {tube_rms:.3e} as a tube, \
+             {patch_rms:.3e} as one patch)"
+        ),
+        Some(TubeCheck {
+            patch_rms: None, ..
+        }) => format!("{ordering} (two separate edges; one patch could not be fitted)"),
+        None => ordering,
     };
     println!(
         "{} points{ordering} → {} × {} control points; residual RMS {:.3e}, max {:.3e}; {:.3} s",

@@ -2,25 +2,28 @@
 //! bottom. One open patch would be slit along the tube and overlap or gap at the slit; a
 //! surface closed around the tube has neither.
 //!
-//! The user says that points are a tube (`curve surface --tube`): two sides of a patch whose
-//! boundary breaks at its corners look like two edges too, and an S-shaped side even
-//! surrounds its centre.
+//! Two edges alone do not make a tube: two sides of a patch whose boundary breaks at its
+//! corners look like two edges too, and an S-shaped side even surrounds its centre. So
+//! `curve surface` fits points with two edges both ways and keeps the tube unless one patch
+//! fits far better (`TubeMode::Auto` in `surface.rs`); `--tube` and `--patch` decide instead.
 //!
-//! A tube is recognized by its two largest boundaries ([`boundaries`]): both at least
-//! [`CLOSED_BELOW`]·√n points, and farther apart than [`TUBE_GAP`] point spacings (the two
-//! ends of one boundary cut in two by noise lie next to each other). Smaller pieces of
-//! boundary within an eighth of that distance from one of them join its edge; one as large
-//! farther in is a third edge, and the points are no tube. Each point then gets
-//! coordinates:
+//! A tube is recognized by its boundaries ([`boundaries`]), which come in pieces where the
+//! edge points leave gaps. The largest piece starts the first edge and takes in every piece
+//! within two [`TUBE_GAP`]s of it, round after round, so that the pieces of one edge chain
+//! around it (and a patch's sides chain at its corners into one edge); the largest piece
+//! left starts the second edge the same way. Both edges need at least [`CLOSED_BELOW`]·√n
+//! points and must lie farther apart than [`TUBE_GAP`] point spacings. Smaller pieces within
+//! an eighth of that distance from an edge join it; one of √n/2 points or more farther in
+//! is a third edge, and the points are no tube. Each point then gets coordinates:
 //! - along the tube, v = d₀/(d₀ + d₁), d₀ and d₁ its path lengths through neighbours to each
 //!   edge (0 on the first edge, 1 on the second);
 //! - around it, u ∈ [0, 1): the angle about the tube's axis, the centroids of
 //!   [`TUBE_SLICES`] slices of equal v, from one reference direction made square to the
 //!   axis at each slice.
 //!
-//! Edges are found in pieces where the surface bends or thins out. The two largest pieces must
-//! each have 0.5·√n points, which long tubes miss: a cylinder of radius 1 and height 6–15 is
-//! refused on 6 of 18 point sets (500–8 000 points).
+//! Long tubes have few edge points for their √n: a cylinder of radius 1 and height 6–15 is
+//! refused on 3 of 9 point sets (500–8 000 points). A band much wider than it is tall (radius
+//! 1.5, height 0.8) has its edges found on some point sets only, and then fits poorly.
 //!
 //! The angle needs an axis that each slice surrounds and that never turns square to the
 //! reference direction: a pipe bent through less than a quarter turn works; a tube folded
@@ -38,15 +41,17 @@ pub const TUBE_SLICES: usize = 24;
 const TANGENT_REACH: usize = 3;
 /// Least distance between a tube's two edges, in median point spacings.
 pub const TUBE_GAP: f64 = 4.0;
+/// Gaps across which pieces of one edge chain, in [`TUBE_GAP`]s.
+const CHAIN: f64 = 2.0;
 
 /// Each point's (u, v) on the tube: u ∈ [0, 1) around it, v ∈ [0, 1] along it; `None` when the
 /// points have no two separate edges, or a third (see the module's documentation). A patch
 /// whose boundary breaks at its corners into two long sides passes too.
 pub fn tube_parameters(points: &[[f64; 3]]) -> Option<Vec<[f64; 2]>> {
     let n = points.len();
-    let found = boundaries(points);
+    let mut pieces = boundaries(points);
     let least = CLOSED_BELOW * (n as f64).sqrt();
-    if (found.get(1)?.len() as f64) < least {
+    if (pieces.first()?.len() as f64) < least {
         return None;
     }
     let graph = neighbour_graph(points, TUBE_NEIGHBOURS)?;
@@ -58,32 +63,45 @@ pub fn tube_parameters(points: &[[f64; 3]]) -> Option<Vec<[f64; 2]>> {
         .collect();
     spacing.sort_by(f64::total_cmp);
     let reach = TUBE_GAP * *spacing.get(spacing.len() / 2)?;
-    // An edge whose boundary points leave a gap comes in pieces: a piece within an eighth
-    // of the two largest pieces' distance from one of them belongs to its edge. A large
-    // piece nearer the middle is a third edge, and the points are no tube.
-    let (mut first, mut second) = (found[0].clone(), found[1].clone());
-    let (near_first, near_second) = (
-        shortest_paths(&graph, &first),
-        shortest_paths(&graph, &second),
-    );
-    let apart = second
-        .iter()
-        .map(|&i| near_first[i])
-        .fold(f64::INFINITY, f64::min);
-    if apart.is_nan() || apart <= reach || near_first.iter().any(|d| !d.is_finite()) {
+    // An edge whose boundary points leave gaps comes in pieces. The largest piece starts the
+    // first edge, which takes every piece within `chain` of it, round after round, so that
+    // the pieces of a wide edge chain around it (and a patch's sides chain at its corners
+    // into one edge); the largest piece left starts the second edge the same way.
+    // Gaps are bridged up to an eighth of the farthest point's distance from the largest
+    // piece, too: where points are few, `CHAIN · reach` reaches far into a tube.
+    let largest = pieces.remove(0);
+    let across = shortest_paths(&graph, &largest)
+        .into_iter()
+        .filter(|d| d.is_finite())
+        .fold(0.0, f64::max);
+    let chain = (CHAIN * reach).min(across / 8.0);
+    let first_edge = Edge::grow(largest, &mut pieces, &graph, chain);
+    if pieces.is_empty() {
         return None;
     }
-    for piece in &found[2..] {
-        let gap = |distance: &[f64]| {
-            piece
-                .iter()
-                .map(|&i| distance[i])
-                .fold(f64::INFINITY, f64::min)
-        };
-        let (a, b) = (gap(&near_first), gap(&near_second));
-        if a <= apart / 8.0 {
+    let second_edge = Edge::grow(pieces.remove(0), &mut pieces, &graph, chain);
+    let apart = second_edge
+        .points
+        .iter()
+        .map(|&i| first_edge.distance[i])
+        .fold(f64::INFINITY, f64::min);
+    if apart.is_nan()
+        || apart <= reach
+        || first_edge.distance.iter().any(|d| !d.is_finite())
+        || (first_edge.points.len().min(second_edge.points.len()) as f64) < least
+    {
+        return None;
+    }
+    // Then pieces within an eighth of the edges' distance join the nearer edge (in one pass:
+    // joined round after round, pieces of noise inside would creep towards the middle). A
+    // large piece left farther in is a third edge, and the points are no tube.
+    let (mut first, mut second) = (first_edge.points.clone(), second_edge.points.clone());
+    let join = apart / 8.0;
+    for piece in &pieces {
+        let (a, b) = (first_edge.gap(piece), second_edge.gap(piece));
+        if a <= join && a <= b {
             first.extend(piece);
-        } else if b <= apart / 8.0 {
+        } else if b <= join {
             second.extend(piece);
         } else if piece.len() as f64 >= least {
             return None;
@@ -104,6 +122,51 @@ pub fn tube_parameters(points: &[[f64; 3]]) -> Option<Vec<[f64; 2]>> {
             .map(|(&p, &v)| [axis.around(p, v), v])
             .collect(),
     )
+}
+
+/// One edge of a tube: its boundary points and every point's path length to them.
+struct Edge {
+    points: Vec<usize>,
+    distance: Vec<f64>,
+}
+
+impl Edge {
+    /// The edge of `start` and the `pieces` that chain to it, each within `reach` of the
+    /// edge grown so far (taken out of `pieces`).
+    fn grow(
+        start: Vec<usize>,
+        pieces: &mut Vec<Vec<usize>>,
+        graph: &[Vec<(usize, f64)>],
+        reach: f64,
+    ) -> Self {
+        let mut edge = Edge {
+            distance: shortest_paths(graph, &start),
+            points: start,
+        };
+        loop {
+            let before = edge.points.len();
+            pieces.retain(|piece| {
+                if edge.gap(piece) <= reach {
+                    edge.points.extend(piece.iter());
+                    false
+                } else {
+                    true
+                }
+            });
+            if edge.points.len() == before {
+                return edge;
+            }
+            edge.distance = shortest_paths(graph, &edge.points);
+        }
+    }
+
+    /// The shortest path length from the edge to any point of `piece`.
+    fn gap(&self, piece: &[usize]) -> f64 {
+        piece
+            .iter()
+            .map(|&i| self.distance.get(i).copied().unwrap_or(f64::INFINITY))
+            .fold(f64::INFINITY, f64::min)
+    }
 }
 
 /// The tube's axis: slice centroids and an untwisted frame at each.

@@ -511,7 +511,7 @@ fn an_open_cylinder_is_fitted_closed_around() {
             .collect();
         let points = CurvePoints::from_3d(&points).unwrap();
         let options = SurfaceOptions {
-            tube: true,
+            tube: TubeMode::Tube,
             ..SurfaceOptions::default()
         };
         let fit = fit_surface(&points, &options).unwrap();
@@ -535,14 +535,84 @@ fn an_open_cylinder_is_fitted_closed_around() {
         assert!((0.95..1.05).contains(&ratio), "{n}: area {ratio}");
         assert!(residual < 0.005, "{n}: residual {residual}");
     }
-    // A patch is no tube: named, not fitted closed.
+    // A patch is no tube: named with `TubeMode::Tube`, not fitted closed.
     let patch = CurvePoints::from_3d(&paraboloid(800, 0.0, 1).0).unwrap();
     let options = SurfaceOptions {
-        tube: true,
+        tube: TubeMode::Tube,
         ..SurfaceOptions::default()
     };
     let error = fit_surface(&patch, &options).unwrap_err().to_string();
     assert!(error.contains("not a tube"), "{error}");
+}
+
+#[test]
+fn tubes_are_found_without_being_named_and_patches_stay_patches() {
+    // Held out from the tube code's own tests: a cone frustum, a vase whose radius swells and
+    // narrows, a pipe bent through 80°, and a cylinder with 1 % noise; against a half
+    // cylinder and a C (three quarters of one), a saddle and a disc, whose boundaries also
+    // break into long pieces. Measured (seeds 21–28): a tube's residual is 0.06–1.4 times one
+    // patch's (once 8.4), a patch fits 9–108 times better than closed around.
+    let tau = std::f64::consts::TAU;
+    type Shape = fn(f64, f64) -> [f64; 3];
+    let shapes: [(&str, bool, Shape); 8] = [
+        ("cone", true, |a, h| {
+            let r = 1.5 - h;
+            [r * a.cos(), r * a.sin(), 2.0 * h]
+        }),
+        ("vase", true, |a, h| {
+            let r = 0.6 + 0.6 * (3.9 * h).sin().powi(2);
+            [1.3 * r * a.cos(), r * a.sin(), 3.0 * h]
+        }),
+        ("bent pipe", true, |a, h| {
+            let (bend, ring) = (80f64.to_radians() * h, 3.0 + 0.7 * a.cos());
+            [ring * bend.cos(), ring * bend.sin(), 0.7 * a.sin()]
+        }),
+        ("noisy cylinder", true, |a, h| {
+            let wobble = 0.01 * (37.0 * a + 91.0 * h).sin();
+            [(1.0 + wobble) * a.cos(), (1.0 - wobble) * a.sin(), 4.0 * h]
+        }),
+        ("half cylinder", false, |a, h| {
+            [(a / 2.0).cos(), (a / 2.0).sin(), 3.0 * h]
+        }),
+        ("C", false, |a, h| {
+            [(0.75 * a).cos(), (0.75 * a).sin(), 3.0 * h]
+        }),
+        ("saddle", false, |a, h| {
+            let (u, v) = (a / std::f64::consts::PI - 1.0, 2.0 * h - 1.0);
+            [u, v, u * u - v * v]
+        }),
+        ("disc", false, |a, h| {
+            let r = h.sqrt();
+            [r * a.cos(), r * a.sin(), 0.2 * h]
+        }),
+    ];
+    for (name, is_tube, shape) in shapes {
+        let mut found = 0;
+        for seed in 21..25 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let points: Vec<[f64; 3]> = (0..2_500)
+                .map(|_| shape(tau * rng.random::<f64>(), rng.random::<f64>()))
+                .collect();
+            let points = CurvePoints::from_3d(&points).unwrap();
+            let fit = fit_surface(&points, &SurfaceOptions::default()).unwrap();
+            println!("{name} {seed}: {:?}", fit.tube_check);
+            assert_eq!(fit.map.is_none(), fit.surface.closed_u, "{name} {seed}");
+            if fit.surface.closed_u {
+                // Both fits were made and compared.
+                let check = fit.tube_check.expect("compared");
+                assert!(check.patch_rms.is_some(), "{name} {seed}");
+                found += 1;
+            }
+        }
+        // Measured over seeds 21–28: the cone and the pipe are tubes 7 times in 8 (the
+        // cone's edges are missed once; once the pipe's tube fits 8 times worse than one
+        // patch), the vase and the noisy cylinder 8 in 8; no patch is taken for a tube.
+        if is_tube {
+            assert!(found >= 3, "{name}: a tube {found} times in 4");
+        } else {
+            assert_eq!(found, 0, "{name}: a tube {found} times in 4");
+        }
+    }
 }
 
 /// The largest distance of the `clean` samples from `fit`'s surface, each projected from its
