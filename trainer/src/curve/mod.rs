@@ -103,8 +103,9 @@ pub use refine::{RefineOptions, RefineReport, refine_order};
 pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sample_curve};
 pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS, check_degree};
 pub use surface::{
-    SETTLING_RADIUS, SETTLING_RATE, SurfaceFit, SurfaceOptions, TUBE_PREFERENCE, TubeCheck,
-    TubeMode, control_grid_surface, fit_surface, fit_unrolled_surface, map_parameters, shaped_grid,
+    SETTLING_RADIUS, SETTLING_RATE, SurfaceFit, SurfaceOptions, TUBE_AROUND, TUBE_PREFERENCE,
+    TubeCheck, TubeMode, control_grid_surface, fit_surface, fit_unrolled_surface, map_parameters,
+    shaped_grid,
 };
 pub use surface_boundary::{
     BOUNDARY_GAP, BOUNDARY_NEIGHBOURS, CLOSED_BELOW, boundaries, largest_boundary,

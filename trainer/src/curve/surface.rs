@@ -134,6 +134,10 @@ pub enum TubeMode {
 /// saddles, discs, S-sheets).
 pub const TUBE_PREFERENCE: f64 = 3.0;
 
+/// Fewest control points around a tube that [`TubeMode::Auto`] fits (a closed cubic through 8
+/// control points follows a circle within about 0.2 % of its radius).
+pub const TUBE_AROUND: usize = 8;
+
 /// What [`TubeMode::Auto`] compared, when the points had two separate edges.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct TubeCheck {
@@ -253,7 +257,13 @@ pub fn fit_unrolled_surface(
             let Some(parameters) = tube_parameters(points.points()) else {
                 return patch();
             };
-            let tube = fit_parameters(points, options, None, parameters);
+            // The options were shaped for a patch, whose short side along u is the tube's
+            // way around when it is one: keep enough control points for a circle there.
+            let around = SurfaceOptions {
+                control_u: options.control_u.max(TUBE_AROUND),
+                ..options.clone()
+            };
+            let tube = fit_parameters(points, &around, None, parameters);
             let Ok(mut tube) = tube else {
                 return patch();
             };
