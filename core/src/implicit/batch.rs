@@ -6,7 +6,10 @@
 //! Q16.16 (eight 64-bit accumulators do not fit its register file), not for the `f32` field and
 //! gradient at a width compiled as a constant (its eight-lane backward layers are zeroed and
 //! copied in memory), and not for the `f32` field at N = 9 (eight lanes cost more estimated
-//! cycles there): those batches run point by point.
+//! cycles there): those batches run point by point. On x86-64 the `f32` batches at the
+//! compiled widths take [`WIDE_LANES`] points at a time (four lane groups per neuron, so that
+//! each weight serves four independent sums), and their last fewer than 32 points
+//! [`LANES`] at a time.
 
 use super::eval::{FieldGradient, ModuleView};
 use super::model::ImplicitModel;
