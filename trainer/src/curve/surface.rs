@@ -130,7 +130,7 @@ pub enum TubeMode {
 /// take the tube. Measured on point sets with two edges found (2 500 points each, 8 seeds
 /// per shape): a tube's residual is 0.06–1.4 times its patch's (cylinders, cones, vases,
 /// bent pipes; once 8.4, a pipe whose tube fit went wrong and is kept as a patch), while a
-/// patch fits 5–108 times better than closed around (half and three-quarter cylinders,
+/// patch fits 9–108 times better than closed around (half and three-quarter cylinders,
 /// saddles, discs, S-sheets).
 pub const TUBE_PREFERENCE: f64 = 3.0;
 
@@ -259,8 +259,15 @@ pub fn fit_unrolled_surface(
             };
             // The options were shaped for a patch, whose short side along u is the tube's
             // way around when it is one: keep enough control points for a circle there.
+            // (Unless that grid would not fit in the core.)
+            let limit = neurosurf_core::curve::DEFAULT_SURFACE_POINTS;
+            let control_u = if TUBE_AROUND.saturating_mul(options.control_v) <= limit {
+                options.control_u.max(TUBE_AROUND)
+            } else {
+                options.control_u
+            };
             let around = SurfaceOptions {
-                control_u: options.control_u.max(TUBE_AROUND),
+                control_u,
                 ..options.clone()
             };
             let tube = fit_parameters(points, &around, None, parameters);
