@@ -134,8 +134,8 @@ pub enum TubeMode {
 /// saddles, discs, S-sheets).
 pub const TUBE_PREFERENCE: f64 = 2.0;
 
-/// Fewest control points around a tube that [`TubeMode::Auto`] fits (a closed cubic through 8
-/// control points follows a circle within about 0.2 % of its radius).
+/// Fewest control points around a tube that [`TubeMode::Auto`] fits (a closed uniform cubic
+/// of 8 control points fitted to a circle in least squares stays within 0.06 % of its radius).
 pub const TUBE_AROUND: usize = 8;
 
 /// Most parameter corrections of a tube's fit: after `parameter_corrections`, it goes on
