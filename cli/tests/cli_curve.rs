@@ -923,3 +923,57 @@ fn any_degree_de_boor(knots: &[f64], control: &[Vec<f64>], p: usize, t: f64) -> 
     }
     d[p].clone()
 }
+
+#[test]
+fn an_interpolating_surface_passes_through_every_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = sheet_file(dir.path());
+    let model = dir.path().join("through.nsb");
+    let fit = json(&ok(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--interpolate",
+        "--out",
+        s(&model),
+        "--json",
+    ]));
+    let report = &fit["interpolation"];
+    assert_eq!(report["exact"], true, "{fit}");
+    assert!(fit["max_residual"].as_f64().unwrap() < 1e-8, "{fit}");
+    let control = fit["control"].as_array().unwrap();
+    let count = control[0].as_u64().unwrap() * control[1].as_u64().unwrap();
+    assert!((600..=1024).contains(&count), "{fit}");
+    // The core loads it and evaluates it on the target as on the host.
+    let uv = dir.path().join("uv.txt");
+    fs::write(&uv, "0 0\n0.5 0.5\n0.25 0.75\n").unwrap();
+    host_equals_target(&model, &uv);
+    let text = ok(&[
+        "curve",
+        "surface",
+        s(&points),
+        "--interpolate",
+        "--out",
+        s(&model),
+    ]);
+    assert!(text.contains("through every point"), "{text}");
+    // More points than the core's control points allow: refused before training, no blob.
+    let mut many = fs::read_to_string(&points).unwrap();
+    for line in fs::read_to_string(&points).unwrap().lines() {
+        let p: Vec<f64> = line.split(' ').map(|x| x.parse().unwrap()).collect();
+        many.push_str(&format!("{} {} {}\n", p[0] + 2.5, p[1], p[2]));
+    }
+    let many_path = dir.path().join("many.txt");
+    fs::write(&many_path, many).unwrap();
+    let out = dir.path().join("many.nsb");
+    let error = fails(&[
+        "curve",
+        "surface",
+        s(&many_path),
+        "--interpolate",
+        "--out",
+        s(&out),
+    ]);
+    assert!(error.contains("at most 512 points"), "{error}");
+    assert!(!out.exists());
+}

@@ -9,10 +9,10 @@ use clap::{Subcommand, ValueEnum};
 use serde::Serialize;
 
 use neurosurf_trainer::curve::{
-    BENCHMARK_SIZES, CurveOptions, CurvePoints, FitSummary, PlotLayers, PlotOptions, SampleCurve,
-    SampleOptions, SurfaceOptions, TubeCheck, TubeMode, benchmark, curve_svg, curves_dxf,
-    export_curve, export_surface, fit_unrolled_surface, sample_curve, shaped_grid, surface_mesh,
-    surface_to_blob, unroll, write_plot,
+    BENCHMARK_SIZES, CurveOptions, CurvePoints, FitSummary, InterpolationReport, PlotLayers,
+    PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, TUBE_STRAY, TubeCheck, TubeMode,
+    benchmark, curve_svg, curves_dxf, export_curve, export_surface, fit_unrolled_surface,
+    sample_curve, shaped_grid, surface_mesh, surface_to_blob, unroll, write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::io::{read_scattered_points, write_atomic, write_mesh};
@@ -150,6 +150,12 @@ pub struct SurfaceArgs {
     /// The points are one patch, never a tube
     #[arg(long)]
     patch: bool,
+    /// Pass through every point: once the least-squares fit has settled each point's (u, v),
+    /// the smoothest surface through the points replaces it, on a grid of about two control
+    /// points per point (so at most 512 points for the core's 1024). Refused when it would
+    /// swing far from the fit between the points (noisy points)
+    #[arg(long, conflicts_with = "control")]
+    interpolate: bool,
     /// Polynomial degree of the surface in both directions, 2 to 5.
     #[arg(long, default_value_t = 3)]
     degree: usize,
@@ -182,6 +188,9 @@ struct SurfaceReport<'a> {
     /// When the points had two separate edges and neither `--tube` nor `--patch` was given:
     /// the residual RMS as a tube and as one patch that decided.
     tube_check: Option<TubeCheck>,
+    /// With `--interpolate`: the least-squares fit's residual RMS, the rounds taken and
+    /// whether every point was met.
+    interpolation: Option<InterpolationReport>,
     mesh: Option<&'a Path>,
     #[serde(flatten)]
     fit: FitSummary,
@@ -232,6 +241,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         (false, false) => TubeMode::Auto,
     };
     options.degree = args.degree;
+    options.interpolate = args.interpolate;
     let start = Instant::now();
     let fit = fit_unrolled_surface(&points, &options, unrolled.as_ref())
         .with_context(|| format!("cannot fit a surface to {}", args.points.display()))?;
@@ -265,6 +275,7 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
             .map_or(0, |report| report.iterations),
         tube: fit.surface.closed_u,
         tube_check: fit.tube_check,
+        interpolation: fit.interpolation,
         mesh: args.mesh.as_deref(),
         fit: summary,
     };
@@ -287,7 +298,17 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
     let ordering = match fit.tube_check {
         Some(TubeCheck {
             tube_rms,
+            stray,
             patch_rms: Some(patch_rms),
+        }) if stray > TUBE_STRAY => format!(
+            "{ordering} (two separate edges, but open around: closed around, the surface gets \
+             {stray:.1} point spacings from the points; residual RMS {tube_rms:.3e} as a tube, \
+             {patch_rms:.3e} as one patch)"
+        ),
+        Some(TubeCheck {
+            tube_rms,
+            patch_rms: Some(patch_rms),
+            ..
         }) => format!(
             "{ordering} (two separate edges: residual RMS {tube_rms:.3e} as a tube, \
              {patch_rms:.3e} as one patch)"
@@ -297,8 +318,15 @@ fn surface(args: &SurfaceArgs) -> Result<()> {
         }) => format!("{ordering} (two separate edges; one patch could not be fitted)"),
         None => ordering,
     };
+    let through = match fit.interpolation {
+        Some(InterpolationReport { swing, .. }) => format!(
+            " through every point (at most {swing:.3e} from the least-squares fit between them)"
+        ),
+        None => String::new(),
+    };
     println!(
-        "{} points{ordering} → {} × {} control points; residual RMS {:.3e}, max {:.3e}; {:.3} s",
+        "{} points{ordering} → {} × {} control points{through}; residual RMS {:.3e}, max \
+         {:.3e}; {:.3} s",
         report.fit.points,
         report.control[0],
         report.control[1],

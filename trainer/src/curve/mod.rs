@@ -63,7 +63,9 @@ mod surface;
 mod surface_boundary;
 mod surface_extent;
 mod surface_fit;
+mod surface_interpolate;
 mod surface_mesh;
+mod surface_stray;
 mod surface_tube;
 mod tour;
 mod tridiagonal;
@@ -103,7 +105,8 @@ pub use refine::{RefineOptions, RefineReport, refine_order};
 pub use samples::{CurveSample, SampleCurve, SampleOptions, TRUTH_VERTICES, sample_curve};
 pub use spline::{BSplineCurve, BSplineSurface, MIN_CONTROL_POINTS, check_degree};
 pub use surface::{
-    SETTLING_RADIUS, SETTLING_RATE, SurfaceFit, SurfaceOptions, TUBE_AROUND, TUBE_PREFERENCE,
+    INTERPOLATION_SWING, InterpolationReport, SETTLING_RADIUS, SETTLING_RATE, SurfaceFit,
+    SurfaceOptions, TUBE_AROUND, TUBE_MIDDLE, TUBE_PREFERENCE, TUBE_SETTLING, TUBE_STRAY,
     TubeCheck, TubeMode, control_grid_surface, fit_surface, fit_unrolled_surface, map_parameters,
     shaped_grid,
 };
@@ -116,7 +119,12 @@ pub use surface_extent::{
 pub use surface_fit::{
     MAX_SURFACE_CONTROL_POINTS, fit_surface_of_degree, fit_surface_to_parameters,
 };
+pub use surface_interpolate::{
+    CONTROL_PER_POINT, INTERPOLATION_ROUNDS, INTERPOLATION_TOLERANCE, SWING_CELLS,
+    SurfaceInterpolation, interpolate_surface, interpolation_grid, swing,
+};
 pub use surface_mesh::{MAX_MESH_VERTICES, SurfaceMesh, surface_mesh};
+pub use surface_stray::{SPACING_RANK, STRAY_SAMPLES, stray_distance};
 pub use surface_tube::{TUBE_GAP, TUBE_NEIGHBOURS, TUBE_SLICES, tube_parameters};
 
 #[cfg(test)]

@@ -51,6 +51,57 @@ pub fn fit_surface_of_degree(
     smoothing: f64,
     degree: usize,
 ) -> Result<BSplineSurface> {
+    check_grid(points, parameters, [count_u, count_v], degree)?;
+    if !(smoothing.is_finite() && smoothing >= 0.0) {
+        return Err(Error::invalid(format!(
+            "the smoothing weight must be finite and ≥ 0, got {smoothing}"
+        )));
+    }
+    let controls: Vec<Affine> = (0..count_u * count_v).map(Affine::unknown).collect();
+    let mut equations = NormalEquations::new(controls.len());
+    let segments = [
+        if closed_u { count_u } else { count_u - degree },
+        count_v - degree,
+    ];
+    let mut row: Vec<(f64, &Affine)> = Vec::with_capacity(36);
+    for (q, &p) in points.iter().zip(parameters) {
+        row.clear();
+        row.extend(
+            basis_row(p, segments, count_u, degree)
+                .into_iter()
+                .map(|(f, b)| (b, &controls[f])),
+        );
+        equations.add_row(&row, *q, 1.0);
+    }
+    let weight = smoothing * equations.mean_diagonal();
+    for differences in second_differences([count_u, count_v], closed_u) {
+        row.clear();
+        row.extend(differences.into_iter().map(|(f, c)| (c, &controls[f])));
+        equations.add_row(&row, [0.0; 3], weight);
+    }
+    let control = equations.solve().ok_or_else(|| {
+        Error::invalid(format!(
+            "the surface least-squares system for {count_u} × {count_v} control points over \
+             {} points is singular: use fewer control points or more smoothing",
+            points.len()
+        ))
+    })?;
+    Ok(open_along_v(closed_u, degree, [count_u, count_v], control))
+}
+
+/// Checks a grid of `count_u × count_v` control points of `degree` for a fit to `points` at
+/// `parameters`.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for a degree outside 2 to 5, counts below [`MIN_CONTROL_POINTS`]
+/// or not above the degree, a grid above [`MAX_SURFACE_CONTROL_POINTS`], mismatched lengths
+/// or non-finite parameters.
+pub(crate) fn check_grid(
+    points: &[[f64; 3]],
+    parameters: &[[f64; 2]],
+    [count_u, count_v]: [usize; 2],
+    degree: usize,
+) -> Result<()> {
     super::spline::check_degree(degree)?;
     if count_u < MIN_CONTROL_POINTS.max(degree + 1)
         || count_v < MIN_CONTROL_POINTS.max(degree + 1)
@@ -77,15 +128,18 @@ pub fn fit_surface_of_degree(
             parameters[i]
         )));
     }
-    if !(smoothing.is_finite() && smoothing >= 0.0) {
-        return Err(Error::invalid(format!(
-            "the smoothing weight must be finite and ≥ 0, got {smoothing}"
-        )));
-    }
-    let controls: Vec<Affine> = (0..count_u * count_v).map(Affine::unknown).collect();
-    let mut equations = NormalEquations::new(controls.len());
-    let segments_u = if closed_u { count_u } else { count_u - degree };
-    let segments_v = count_v - degree;
+    Ok(())
+}
+
+/// The (control index, weight) pairs of S(u, v) for `parameter`, on a grid `count_u` wide
+/// with `segments` = [along u, along v] (u wraps around when it has as many segments as
+/// control points).
+pub(crate) fn basis_row(
+    parameter: [f64; 2],
+    segments: [usize; 2],
+    count_u: usize,
+    degree: usize,
+) -> Vec<(usize, f64)> {
     let basis = |u: f64| {
         if degree == 3 {
             let c = cubic_basis(u);
@@ -94,48 +148,50 @@ pub fn fit_surface_of_degree(
             uniform_basis(degree, u)
         }
     };
-    let mut row: Vec<(f64, &Affine)> = Vec::with_capacity(36);
-    for (q, p) in points.iter().zip(parameters) {
-        let (i, lu) = locate(p[0], segments_u);
-        let (j, lv) = locate(p[1], segments_v);
-        let (bu, bv) = (basis(lu), basis(lv));
-        row.clear();
-        for b in 0..=degree {
-            for a in 0..=degree {
-                row.push((
-                    bu[a] * bv[b],
-                    &controls[(j + b) * count_u + (i + a) % count_u],
-                ));
-            }
+    let (i, lu) = locate(parameter[0], segments[0]);
+    let (j, lv) = locate(parameter[1], segments[1]);
+    let (bu, bv) = (basis(lu), basis(lv));
+    let mut row = Vec::with_capacity((degree + 1) * (degree + 1));
+    for b in 0..=degree {
+        for a in 0..=degree {
+            row.push(((j + b) * count_u + (i + a) % count_u, bu[a] * bv[b]));
         }
-        equations.add_row(&row, *q, 1.0);
     }
-    let weight = smoothing * equations.mean_diagonal();
+    row
+}
+
+/// The second differences of a `count_u × count_v` control grid along u (around, when
+/// `closed_u`) and along v, as (control index, coefficient) rows.
+pub(crate) fn second_differences(
+    [count_u, count_v]: [usize; 2],
+    closed_u: bool,
+) -> Vec<[(usize, f64); 3]> {
+    let at = |i: usize, j: usize| j * count_u + i;
+    let mut rows = Vec::with_capacity(2 * count_u * count_v);
     for j in 0..count_v {
         for i in 0..count_u {
-            let at = |i: usize, j: usize| &controls[j * count_u + i];
             if closed_u {
                 let (before, after) = ((i + count_u - 1) % count_u, (i + 1) % count_u);
-                let r = [(1.0, at(before, j)), (-2.0, at(i, j)), (1.0, at(after, j))];
-                equations.add_row(&r, [0.0; 3], weight);
+                rows.push([(at(before, j), 1.0), (at(i, j), -2.0), (at(after, j), 1.0)]);
             } else if i > 0 && i + 1 < count_u {
-                let r = [(1.0, at(i - 1, j)), (-2.0, at(i, j)), (1.0, at(i + 1, j))];
-                equations.add_row(&r, [0.0; 3], weight);
+                rows.push([(at(i - 1, j), 1.0), (at(i, j), -2.0), (at(i + 1, j), 1.0)]);
             }
             if j > 0 && j + 1 < count_v {
-                let r = [(1.0, at(i, j - 1)), (-2.0, at(i, j)), (1.0, at(i, j + 1))];
-                equations.add_row(&r, [0.0; 3], weight);
+                rows.push([(at(i, j - 1), 1.0), (at(i, j), -2.0), (at(i, j + 1), 1.0)]);
             }
         }
     }
-    let control = equations.solve().ok_or_else(|| {
-        Error::invalid(format!(
-            "the surface least-squares system for {count_u} × {count_v} control points over \
-             {} points is singular: use fewer control points or more smoothing",
-            points.len()
-        ))
-    })?;
-    Ok(BSplineSurface {
+    rows
+}
+
+/// The fitted surfaces' shape: open along v, open or closed around u, of `degree` both ways.
+pub(crate) fn open_along_v(
+    closed_u: bool,
+    degree: usize,
+    [count_u, count_v]: [usize; 2],
+    control: Vec<[f64; 3]>,
+) -> BSplineSurface {
+    BSplineSurface {
         closed_u,
         closed_v: false,
         degree_u: degree,
@@ -143,5 +199,5 @@ pub fn fit_surface_of_degree(
         count_u,
         count_v,
         control,
-    })
+    }
 }
