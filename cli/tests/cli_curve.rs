@@ -487,8 +487,32 @@ fn dxf_spline(text: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
     (knots, control)
 }
 
-/// The exported knots and control points (JSON and DXF, by de Boor's algorithm) and the SVG
-/// path's cubic Béziers reproduce `eval` to 10⁻⁶ of the curve's size.
+/// The knots and control points of the first IGES entity 126 in `text`.
+fn iges_curve(text: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let data: String = text
+        .lines()
+        .filter(|l| l.len() == 80 && l.as_bytes()[72] == b'P')
+        .map(|l| &l[..64])
+        .collect();
+    let p: Vec<f64> = data
+        .split(';')
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|t| t.trim().parse().unwrap())
+        .collect();
+    assert_eq!(p[0], 126.0);
+    let (k, m) = (p[1] as usize, p[2] as usize);
+    let knots = p[7..7 + k + m + 2].to_vec();
+    let at = 7 + k + m + 2 + k + 1;
+    let control = (0..=k)
+        .map(|i| p[at + 3 * i..at + 3 * i + 3].to_vec())
+        .collect();
+    (knots, control)
+}
+
+/// The exported knots and control points (JSON, DXF and IGES, by de Boor's algorithm) and
+/// the SVG path's cubic Béziers reproduce `eval` to 10⁻⁶ of the curve's size.
 #[test]
 fn exports_reproduce_eval() {
     let dir = tempfile::tempdir().unwrap();
@@ -510,7 +534,7 @@ fn exports_reproduce_eval() {
         }
         ok(&fit);
         let (json_path, svg_path) = (dir.path().join("c.json"), dir.path().join("c.svg"));
-        let dxf_path = dir.path().join("c.dxf");
+        let (dxf_path, iges_path) = (dir.path().join("c.dxf"), dir.path().join("c.igs"));
         ok(&[
             "curve",
             "export",
@@ -521,7 +545,10 @@ fn exports_reproduce_eval() {
             s(&svg_path),
             "--dxf",
             s(&dxf_path),
+            "--iges",
+            s(&iges_path),
         ]);
+        let (iges_knots, iges_control) = iges_curve(&fs::read_to_string(&iges_path).unwrap());
         let (dxf_knots, dxf_control) = dxf_spline(&fs::read_to_string(&dxf_path).unwrap());
         assert_eq!(dxf_knots.len(), dxf_control.len() + 4);
         assert_eq!(dxf_knots[..4], [0.0; 4], "clamped");
@@ -571,6 +598,7 @@ fn exports_reproduce_eval() {
             // de Boor on the exported knots.
             let p = de_boor(&knots, &control, t);
             let from_dxf = de_boor(&dxf_knots, &dxf_control, t);
+            let from_iges = de_boor(&iges_knots, &iges_control, t);
             // The Bézier segment holding t.
             let st = t * segments as f64;
             let i = (st.floor() as usize).min(segments - 1);
@@ -586,6 +614,10 @@ fn exports_reproduce_eval() {
                 assert!(
                     (from_dxf[c] - want[c]).abs() < 1e-6,
                     "DXF at {t}: {from_dxf:?} {want:?}"
+                );
+                assert!(
+                    (from_iges[c] - want[c]).abs() < 1e-6,
+                    "IGES at {t}: {from_iges:?} {want:?}"
                 );
                 assert!(
                     (bezier - want[c]).abs() < 1e-6,

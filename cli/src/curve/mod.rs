@@ -11,7 +11,7 @@ use serde::Serialize;
 use neurosurf_trainer::curve::{
     BENCHMARK_SIZES, CurveOptions, CurvePoints, FitSummary, InterpolationReport, PlotLayers,
     PlotOptions, SampleCurve, SampleOptions, SurfaceOptions, TUBE_STRAY, TubeCheck, TubeMode,
-    benchmark, curve_svg, curves_dxf, export_curve, export_surface, fit_unrolled_surface,
+    benchmark, curve_svg, curves_dxf, export_curve, export_surface, fit_unrolled_surface, iges,
     sample_curve, shaped_grid, surface_mesh, surface_to_blob, unroll, write_plot,
 };
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
@@ -354,17 +354,25 @@ pub struct ExportArgs {
     /// parameter range [0, 1], in the model's coordinates.
     #[arg(long, value_name = "FILE")]
     dxf: Option<PathBuf>,
+    /// Write a curve or a spline surface as IGES 5.3: a B-spline curve (entity 126, clamped
+    /// knots over [0, 1]) or surface (entity 128, over [0, 1]²), in the model's coordinates
+    /// taken as millimetres.
+    #[arg(long, value_name = "FILE")]
+    iges: Option<PathBuf>,
 }
 
 fn export(args: &ExportArgs) -> Result<()> {
-    if args.json.is_none() && args.svg.is_none() && args.dxf.is_none() {
-        anyhow::bail!("nothing to export: give --json FILE, --svg FILE, --dxf FILE or several");
+    let outputs = [&args.json, &args.svg, &args.dxf, &args.iges];
+    if outputs.iter().all(|o| o.is_none()) {
+        anyhow::bail!(
+            "nothing to export: give --json FILE, --svg FILE, --dxf FILE, --iges FILE or several"
+        );
     }
-    for path in [&args.json, &args.svg, &args.dxf].into_iter().flatten() {
+    for path in outputs.into_iter().flatten() {
         neurosurf_trainer::io::check_output(path)?;
     }
     let model = LoadedModel::read(&args.model)?;
-    let (json, svg, dxf) = match &model {
+    let (json, svg, dxf, iges) = match &model {
         LoadedModel::Curve { decoded, .. } => {
             let json = serde_json::to_string_pretty(&export_curve(&decoded.curve)?)?;
             let svg = match &args.svg {
@@ -375,7 +383,8 @@ fn export(args: &ExportArgs) -> Result<()> {
                 Some(_) => Some(curves_dxf(std::slice::from_ref(&decoded.curve))?),
                 None => None,
             };
-            (json, svg, dxf)
+            let iges = iges(std::slice::from_ref(&decoded.curve), &[])?;
+            (json, svg, dxf, iges)
         }
         LoadedModel::SplineSurface { decoded, .. } => {
             for (given, form) in [(&args.svg, "SVG"), (&args.dxf, "DXF")] {
@@ -390,6 +399,7 @@ fn export(args: &ExportArgs) -> Result<()> {
                 serde_json::to_string_pretty(&export_surface(&decoded.surface)?)?,
                 None,
                 None,
+                iges(&[], std::slice::from_ref(&decoded.surface))?,
             )
         }
         other => anyhow::bail!(
@@ -408,6 +418,10 @@ fn export(args: &ExportArgs) -> Result<()> {
     }
     if let (Some(path), Some(dxf)) = (&args.dxf, dxf) {
         write_atomic(path, &dxf)?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.iges {
+        write_atomic(path, &iges)?;
         println!("wrote {}", path.display());
     }
     Ok(())

@@ -44,6 +44,7 @@ mod fit;
 mod grid;
 mod grid_map;
 mod groups;
+mod iges;
 mod kohonen;
 mod least_squares;
 mod metrics;
@@ -90,6 +91,7 @@ pub use fit::{
 };
 pub use grid_map::{KohonenMap, KohonenMapOptions, MapReport, train_map, train_map_from};
 pub use groups::{GROUP_NEIGHBOURS, GROUP_REACH, point_groups};
+pub use iges::iges;
 pub use kohonen::{
     KohonenChain, KohonenOptions, MAX_NEURONS, Topology, TrainingReport, train_chain,
 };
