@@ -1100,9 +1100,9 @@ fn fit_noisy(
 
 /// Noise of σ = 5 % of the diagonal (a band some 40 spacings wide): the fit follows the
 /// band, within 5 % of the true curve both ways, closed or open (the open ends where the
-/// band thins out). Measured on seeds 1–3: the epitrochoid 2.4–3.3 %, the sine 3.3–4.1 %.
+/// band thins out). Measured on seeds 1–3: the epitrochoid 2.4–3.3 %, the sine 2.8–4.4 %.
 /// A 3-D arc, with noise in all three coordinates (a band √2 times as wide across), gets 6 %
-/// (measured 2.4–4.8 %, the worst at an end).
+/// (measured 2.5–4.5 %, the worst at an end).
 #[test]
 fn a_band_five_percent_wide_is_followed() {
     let tau = std::f64::consts::TAU;
