@@ -139,11 +139,12 @@ pub enum TubeMode {
 }
 
 /// How much larger a tube's residual RMS may be than one patch's for [`TubeMode::Auto`] to
-/// take the tube. Measured on point sets with two edges found (2 500 points each, 8 seeds
-/// per shape): a tube's residual is 0.04–0.71 times its patch's (cylinders, cones, vases,
-/// bent pipes; once 3.8, a pipe whose tube fit went wrong and is kept as a patch), while a
-/// patch fits 5–109 times better than closed around (half and three-quarter cylinders,
-/// saddles, discs, S-sheets).
+/// take the tube. Measured on point sets with two edges found (2 500 points each, seeds
+/// 21–24 of the tube test): a tube's residual is 0.07–0.67 times its patch's (cones, vases,
+/// bent pipes, noisy cylinders), while half cylinders and discs fit 8–10 times better as a
+/// patch. A C shape (three quarters of a cylinder), closed around, fits 0.55–15 times as
+/// well as its patch: the residual cannot see the surface bridging its opening, which
+/// [`TUBE_STRAY`] does.
 pub const TUBE_PREFERENCE: f64 = 2.0;
 
 /// Fewest control points around a tube that [`TubeMode::Auto`] fits (a closed uniform cubic
