@@ -142,8 +142,8 @@ pub enum TubeMode {
 /// take the tube. Measured on point sets with two edges found (2 500 points each, seeds
 /// 21–24 of the tube test): a tube's residual is 0.07–0.67 times its patch's (cones, vases,
 /// bent pipes, noisy cylinders), while half cylinders and discs fit 8–10 times better as a
-/// patch. A C shape (three quarters of a cylinder), closed around, fits 0.55–15 times as
-/// well as its patch: the residual cannot see the surface bridging its opening, which
+/// patch. A C shape (three quarters of a cylinder) closed around has 0.55–15 times its
+/// patch's residual: the residual cannot see the surface bridging its opening, which
 /// [`TUBE_STRAY`] does.
 pub const TUBE_PREFERENCE: f64 = 2.0;
 
