@@ -51,6 +51,14 @@ pub(crate) struct Followed {
 /// have: then some points lie far off, in a part of the band that fit skipped.
 const FARTHER: f64 = 1.5;
 
+/// [`follow_either`] keeps the shorter of two fits only while it measures at most this many
+/// times the longer's noise. A longer fit folded in two lays two strands along the band and
+/// measures its noise from the nearer: two strands placed anywhere across Gaussian noise
+/// bring the median distance down by at most 1.8 times across a 2-D curve (measured: strands
+/// at ±0.6σ) and 1.3 times across a 3-D one. A shorter fit that measures more cannot be
+/// blamed on a fold of the other: it misses the band.
+const FOLDED_NOISE: f64 = 2.0;
+
 /// [`fit_band`] from two starts, keeping the better fit: the chain's order at `band`'s
 /// parameters, and the order along the band through the graph of nearest points
 /// ([`geodesic_order`] when open, [`ring_order`] when closed). Each start can fail where
@@ -61,13 +69,12 @@ const FARTHER: f64 = 1.5;
 /// points the lower noise it measures then asks for) brings it 5–35 % closer. So the
 /// shorter curve wins unless its distances have a tail that noise does not explain
 /// ([`FARTHER`]): a start that skipped part of the band, whose points then lie as far off
-/// as that part is long. Nor does it win when it measures more than [`FARTHER`] times the
-/// other's noise: both fit the same points, a wandering curve measures less noise, not more,
-/// and a curve that cuts across the band's turns (a stiff start that took points of one arm
-/// of a spiral for the other's) puts so many points far off that the median it measures its
-/// noise by grows with them, and its tail no longer shows. On a 1.5-turn spiral at σ = 1 %
-/// (8 seeds) such a cut fitted one seed at 13 % of the diagonal; the graph's start, 6 times
-/// closer to the points, gives 1.5 %.
+/// as that part is long. Nor does it win when it measures more than [`FOLDED_NOISE`] times
+/// the other's noise: a curve that cuts across the band's turns (a stiff start that took
+/// points of one arm of a spiral for the other's) puts so many points far off that the
+/// median it measures its noise by grows with them, and its tail no longer shows. On a
+/// 1.5-turn spiral at σ = 1 % (8 seeds) such a cut fitted one seed at 13 % of the diagonal,
+/// measuring 5.7 times the graph start's noise; that start gives 1.5 %.
 ///
 /// # Errors
 /// As [`approximate_at`].
@@ -109,7 +116,7 @@ pub(crate) fn follow_either(
     // Gaussian noise across a curve in d dimensions has an RMS of √(d − 1) deviations.
     let across = (dimension as f64 - 1.0).sqrt();
     let gaussian = |f: &Followed| f.approximation.rms_residual <= FARTHER * across * f.noise;
-    let alike = shorter.noise <= FARTHER * longer.noise;
+    let alike = shorter.noise <= FOLDED_NOISE * longer.noise;
     Ok(if gaussian(&shorter) && alike {
         shorter
     } else {
