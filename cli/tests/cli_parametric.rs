@@ -253,6 +253,7 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         (Some(1), Some(true))
     );
     assert!(report["new_vertices"].as_u64().unwrap() > 5, "{report}");
+    assert_eq!(report["faired"], true, "{report}");
     // The punched triangles' inner vertices are gone from the output, not left unused.
     assert!(
         report["removed_unused_vertices"].as_u64().unwrap() > 0,
@@ -274,6 +275,23 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
     ]));
     assert_eq!(report["tutte_embeddings"], 1, "{report}");
     assert_eq!(report["watertight"], true, "{report}");
+    // The network's surface, kept as it is across the crease.
+    let report = json(&ok(&[
+        "parametric",
+        "fill-hole",
+        s(&fandisk),
+        "--punch",
+        "1444,3",
+        "--no-fairing",
+        "--out",
+        s(&filled),
+        "--json",
+    ]));
+    assert_eq!(
+        (report["faired"].as_bool(), report["watertight"].as_bool()),
+        (Some(false), Some(true)),
+        "{report}"
+    );
 
     // Best effort on a real scan: the bunny's 5 holes, one of whose outlines crosses itself
     // in every plane; the others are filled, the open one is named, and the command succeeds.

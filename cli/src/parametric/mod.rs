@@ -644,6 +644,10 @@ pub struct FillHoleArgs {
     /// Also write the holed mesh (with --punch).
     #[arg(long, value_name = "FILE")]
     holed: Option<PathBuf>,
+    /// Keep the network's surface in the hole instead of fairing it: closer across a sharp
+    /// crease (a machined part), more prone to bulges on a smooth one.
+    #[arg(long)]
+    no_fairing: bool,
     /// Output mesh (`.obj`, `.ply` or `.stl`).
     #[arg(long)]
     out: PathBuf,
@@ -665,6 +669,8 @@ struct FillReport<'a> {
     region_vertices: usize,
     /// Holes whose region LLE folded, embedded by Tutte's method instead.
     tutte_embeddings: usize,
+    /// Whether the new vertices were faired (off with `--no-fairing`).
+    faired: bool,
     /// Vertices no triangle used (left by a punched hole or in the input), removed.
     removed_unused_vertices: usize,
 }
@@ -692,6 +698,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
     }
     let options = HoleOptions {
         rings: args.rings,
+        fairing: !args.no_fairing,
         ..HoleOptions::default()
     };
     let holes = boundary_loops(&mesh.triangles)?;
@@ -754,17 +761,23 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
         new_triangles,
         region_vertices,
         tutte_embeddings,
+        faired: options.fairing,
         removed_unused_vertices,
     };
     if args.json {
         return output::json(&report);
     }
     println!(
-        "filled {} of {} hole(s): {} new vertices, {} new triangles, networks trained on {} \
-         vertices; {} unused vertices removed",
+        "filled {} of {} hole(s): {} new vertices ({}), {} new triangles, networks trained on \
+         {} vertices; {} unused vertices removed",
         report.filled,
         report.holes,
         report.new_vertices,
+        if report.faired {
+            "faired"
+        } else {
+            "on the networks, not faired"
+        },
         report.new_triangles,
         report.region_vertices,
         report.removed_unused_vertices

@@ -2,7 +2,10 @@
 //! network is trained on them alone, new vertices are placed on a grid inside the hole's
 //! boundary in the parameter plane, the boundary and the new vertices are triangulated by
 //! constrained Delaunay there, and the new vertices go through the network. The boundary
-//! keeps its vertices, so the filled mesh is watertight when the rest of it was.
+//! keeps its vertices, so the filled mesh is watertight when the rest of it was. The new
+//! vertices are then faired ([`fair_new_vertices`]): a network trained on the ring around a
+//! hole extrapolates into it and may bulge out, where the least-bending fill continues the
+//! surface around it.
 //!
 //! The region is every vertex within [`HoleOptions::rings`] edges of the hole boundary. The
 //! grid step in the parameter plane is the mean parameter-plane length of the region's
@@ -16,6 +19,7 @@
 use std::collections::VecDeque;
 
 use super::embedding::{LleOptions, embed_mesh};
+use super::fairing::fair_new_vertices;
 use super::fit::{SurfaceFit, fit_network};
 use super::grid::grid_inside;
 use super::planar::triangulate_polygon;
@@ -34,6 +38,14 @@ pub struct HoleOptions {
     pub embedding: LleOptions,
     /// Regression ([`TopologyOptions::from_random_starts`]: the network extrapolates).
     pub topology: TopologyOptions,
+    /// Fair the new vertices after the network placed them ([`fair_new_vertices`]): on by
+    /// default; off keeps the network's surface, which follows a sharp crease more closely.
+    #[serde(default = "faired")]
+    pub fairing: bool,
+}
+
+fn faired() -> bool {
+    true
 }
 
 impl Default for HoleOptions {
@@ -42,6 +54,7 @@ impl Default for HoleOptions {
             rings: 4,
             embedding: LleOptions::default(),
             topology: TopologyOptions::from_random_starts(),
+            fairing: true,
         }
     }
 }
@@ -179,6 +192,9 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
     }
     let new_triangles = fill.len();
     out.triangles.extend(fill);
+    if options.fairing {
+        fair_new_vertices(&mut out, &new_vertices)?;
+    }
     Ok(HoleFill {
         mesh: out,
         new_vertices,

@@ -50,6 +50,7 @@ mod compare;
 mod coons;
 mod eigen;
 mod embedding;
+mod fairing;
 mod fit;
 mod folds;
 mod grid;
@@ -96,6 +97,7 @@ pub use eigen::{Eigenpairs, MAX_EIGEN_ITERATIONS, smallest_nonconstant};
 pub use embedding::{
     Embedding, LleOptions, OTHER_NEIGHBORS, embed_mesh, embed_points, embed_with_neighbors,
 };
+pub use fairing::{FAIRING_ROUNDS, fair_new_vertices};
 pub use fit::{MIN_FIT_POINTS, SurfaceFit, fit_network};
 pub use folds::{
     COLLAPSE_RATIO, FoldReport, MAX_COLLAPSE_FRACTION, MAX_FLIP_FRACTION, check_flat, fold_report,
