@@ -238,16 +238,16 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         return;
     };
     let filled = dir.path().join("filled.obj");
-    let report = json(&ok(&[
-        "parametric",
-        "fill-hole",
-        s(&fandisk),
-        "--punch",
-        "1000,3",
-        "--out",
-        s(&filled),
-        "--json",
-    ]));
+    let punched = |punch: &str, more: &[&str]| {
+        let args = [
+            &["parametric", "fill-hole", s(&fandisk), "--punch", punch][..],
+            more,
+            &["--out", s(&filled), "--json"],
+        ]
+        .concat();
+        json(&ok(&args))
+    };
+    let report = punched("1000,3", &[]);
     assert_eq!(
         (report["holes"].as_u64(), report["watertight"].as_bool()),
         (Some(1), Some(true))
@@ -263,30 +263,11 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
     let e = fails(&["parametric", "fill-hole", s(&fandisk), "--out", s(&filled)]);
     assert!(e.contains("has no holes"), "{e}");
     // A hole across fandisk's crease: LLE folds its region, Tutte's embedding fills it.
-    let report = json(&ok(&[
-        "parametric",
-        "fill-hole",
-        s(&fandisk),
-        "--punch",
-        "1444,3",
-        "--out",
-        s(&filled),
-        "--json",
-    ]));
+    let report = punched("1444,3", &[]);
     assert_eq!(report["tutte_embeddings"], 1, "{report}");
     assert_eq!(report["watertight"], true, "{report}");
     // The network's surface, kept as it is across the crease.
-    let report = json(&ok(&[
-        "parametric",
-        "fill-hole",
-        s(&fandisk),
-        "--punch",
-        "1444,3",
-        "--no-fairing",
-        "--out",
-        s(&filled),
-        "--json",
-    ]));
+    let report = punched("1444,3", &["--no-fairing"]);
     assert_eq!(
         (report["faired"].as_bool(), report["watertight"].as_bool()),
         (Some(false), Some(true)),
