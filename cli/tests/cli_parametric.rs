@@ -253,7 +253,8 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
         (Some(1), Some(true))
     );
     assert!(report["new_vertices"].as_u64().unwrap() > 5, "{report}");
-    assert_eq!(report["faired"], true, "{report}");
+    // Sharp creases run through the region: the network's surface is kept.
+    assert_eq!(report["faired"], 0, "{report}");
     // The punched triangles' inner vertices are gone from the output, not left unused.
     assert!(
         report["removed_unused_vertices"].as_u64().unwrap() > 0,
@@ -266,13 +267,22 @@ fn stitched_patches_are_watertight_and_a_punched_fandisk_is_filled() {
     let report = punched("1444,3", &[]);
     assert_eq!(report["tutte_embeddings"], 1, "{report}");
     assert_eq!(report["watertight"], true, "{report}");
-    // The network's surface, kept as it is across the crease.
-    let report = punched("1444,3", &["--no-fairing"]);
-    assert_eq!(
-        (report["faired"].as_bool(), report["watertight"].as_bool()),
-        (Some(false), Some(true)),
-        "{report}"
-    );
+    // A smooth surface: the fill is faired, unless --no-fairing keeps the network's.
+    let spot = neurosurf_trainer::io::data_file("spot.obj").unwrap();
+    for (more, faired) in [(&[][..], 1), (&["--no-fairing"][..], 0)] {
+        let args = [
+            &["parametric", "fill-hole", s(&spot), "--punch", "100,3"][..],
+            more,
+            &["--out", s(&filled), "--json"],
+        ]
+        .concat();
+        let report = json(&ok(&args));
+        assert_eq!(
+            (report["faired"].as_u64(), report["watertight"].as_bool()),
+            (Some(faired), Some(true)),
+            "{report}"
+        );
+    }
 
     // Best effort on a real scan: the bunny's 5 holes, one of whose outlines crosses itself
     // in every plane; the others are filled, the open one is named, and the command succeeds.

@@ -644,8 +644,8 @@ pub struct FillHoleArgs {
     /// Also write the holed mesh (with --punch).
     #[arg(long, value_name = "FILE")]
     holed: Option<PathBuf>,
-    /// Keep the network's surface in the hole instead of fairing it: closer across a sharp
-    /// crease (a machined part), more prone to bulges on a smooth one.
+    /// Keep the network's surface in every hole instead of fairing it (holes a sharp crease
+    /// runs through keep it anyway).
     #[arg(long)]
     no_fairing: bool,
     /// Output mesh (`.obj`, `.ply` or `.stl`).
@@ -669,8 +669,9 @@ struct FillReport<'a> {
     region_vertices: usize,
     /// Holes whose region LLE folded, embedded by Tutte's method instead.
     tutte_embeddings: usize,
-    /// Whether the new vertices were faired (off with `--no-fairing`).
-    faired: bool,
+    /// Holes whose new vertices were faired: all but those a sharp crease runs through (none
+    /// with `--no-fairing`).
+    faired: usize,
     /// Vertices no triangle used (left by a punched hole or in the input), removed.
     removed_unused_vertices: usize,
 }
@@ -707,6 +708,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
     }
     let (mut new_vertices, mut new_triangles, mut region_vertices) = (0, 0, 0);
     let mut tutte_embeddings = 0;
+    let mut faired = 0;
     let mut unfilled = Vec::new();
     for (index, hole) in holes.iter().enumerate() {
         // Filling appends vertices and triangles, so the other loops keep their indices.
@@ -716,6 +718,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
                 new_triangles += filled.new_triangles;
                 region_vertices += filled.region_vertices;
                 tutte_embeddings += usize::from(filled.tutte);
+                faired += usize::from(filled.faired);
                 mesh = filled.mesh;
             }
             Err(e) => {
@@ -761,23 +764,19 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
         new_triangles,
         region_vertices,
         tutte_embeddings,
-        faired: options.fairing,
+        faired,
         removed_unused_vertices,
     };
     if args.json {
         return output::json(&report);
     }
     println!(
-        "filled {} of {} hole(s): {} new vertices ({}), {} new triangles, networks trained on \
-         {} vertices; {} unused vertices removed",
+        "filled {} of {} hole(s) ({} faired, the others on their networks): {} new vertices, \
+         {} new triangles, networks trained on {} vertices; {} unused vertices removed",
         report.filled,
         report.holes,
+        report.faired,
         report.new_vertices,
-        if report.faired {
-            "faired"
-        } else {
-            "on the networks, not faired"
-        },
         report.new_triangles,
         report.region_vertices,
         report.removed_unused_vertices

@@ -160,3 +160,59 @@ pub fn drop_unused_vertices(mesh: &Mesh) -> (Mesh, usize) {
         removed,
     )
 }
+
+/// The angle between the normals of the two triangles on each edge two triangles share
+/// (radians, 0 where the surface is flat across the edge, π where it folds back).
+pub fn dihedral_angles(mesh: &Mesh) -> Vec<f64> {
+    use crate::geometry::vector::{cross, dot, norm, sub};
+    let normal = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        let length = norm(n);
+        if length > 0.0 {
+            n.map(|x| x / length)
+        } else {
+            [0.0; 3]
+        }
+    };
+    let mut faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (t, triangle) in mesh.triangles.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (triangle[e], triangle[(e + 1) % 3]);
+            faces.entry((a.min(b), a.max(b))).or_default().push(t);
+        }
+    }
+    faces
+        .values()
+        .filter(|f| f.len() == 2)
+        .map(|f| {
+            let (n, m) = (normal(&mesh.triangles[f[0]]), normal(&mesh.triangles[f[1]]));
+            dot(n, m).clamp(-1.0, 1.0).acos()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles on the edge (1, 0, 0)–(0, 1, 0), the second with its free corner at `d`.
+    fn hinge(d: [f64; 3]) -> Vec<f64> {
+        dihedral_angles(&Mesh {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], d],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+        })
+    }
+
+    #[test]
+    fn dihedral_angles_are_zero_across_a_flat_edge_and_a_right_angle_across_an_upright_one() {
+        let flat = hinge([1.0, 1.0, 0.0]);
+        assert!(flat.len() == 1 && flat[0].abs() < 1e-12, "{flat:?}");
+        // Upright on the edge: its normal is (1, 1, 0)/√2, square to the first's (0, 0, 1).
+        let upright = hinge([0.5, 0.5, 1.0]);
+        assert!(
+            upright.len() == 1 && (upright[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+            "{upright:?}"
+        );
+    }
+}

@@ -125,30 +125,10 @@ pub fn compare_methods(
 
 /// Variance of the angles between the normals of triangles sharing an edge (radians²).
 pub fn dihedral_variance(mesh: &Mesh) -> f64 {
-    let normal = |t: &[u32; 3]| {
-        let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
-        super::network::unit_cross(
-            [0, 1, 2].map(|k| b[k] - a[k]),
-            [0, 1, 2].map(|k| c[k] - a[k]),
-        )
-    };
-    let mut faces: std::collections::HashMap<(u32, u32), Vec<usize>> = Default::default();
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (tri[e], tri[(e + 1) % 3]);
-            faces.entry((a.min(b), a.max(b))).or_default().push(t);
-        }
-    }
-    let angles: Vec<f64> = faces
-        .values()
-        .filter(|l| l.len() == 2)
-        .map(|l| {
-            let (n, m) = (normal(&mesh.triangles[l[0]]), normal(&mesh.triangles[l[1]]));
-            (n[0] * m[0] + n[1] * m[1] + n[2] * m[2])
-                .abs()
-                .clamp(0.0, 1.0)
-                .acos()
-        })
+    // Folded to [0, π/2]: a triangle turned over counts as flat, not as a fold.
+    let angles: Vec<f64> = crate::geometry::mesh_graph::dihedral_angles(mesh)
+        .into_iter()
+        .map(|a| a.min(std::f64::consts::PI - a))
         .collect();
     if angles.is_empty() {
         return 0.0;

@@ -10,8 +10,8 @@
 //! flat and out, is faired back to within 0.004 of the sphere (its sag is 0.045).
 //!
 //! Measured on 40 holes punched 3 rings deep at spread-out vertices of `spot.obj`,
-//! `fandisk.obj` and `stanford-bunny.obj` (network fill → faired), in % of the hole's
-//! diameter:
+//! `fandisk.obj` and `stanford-bunny.obj`, with every hole faired (network fill → faired), in %
+//! of the hole's diameter:
 //!
 //! | | spot | fandisk | bunny |
 //! |---|---|---|---|
@@ -20,7 +20,8 @@
 //! | median distance from the removed surface, either side | 3.3 → 1.6 | 1.8 → 3.7 | 2.5 → 1.3 |
 //!
 //! Across fandisk's sharp creases the faired fill rounds the crease off and lies inside the
-//! removed surface; `HoleOptions::fairing` off keeps the network's surface there.
+//! removed surface, so [`fill_hole`](super::fill_hole) fairs only holes with no crease in the
+//! region around them.
 
 use crate::error::{Error, Result};
 use crate::geometry::mesh_graph::one_rings;

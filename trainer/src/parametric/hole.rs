@@ -26,7 +26,7 @@ use super::planar::triangulate_polygon;
 use super::topology::TopologyOptions;
 use super::tutte::tutte_disk;
 use crate::error::{Error, Result};
-use crate::geometry::mesh_graph::{boundary_loops, one_rings};
+use crate::geometry::mesh_graph::{boundary_loops, dihedral_angles, one_rings};
 use crate::io::Mesh;
 
 /// Hole-filling settings.
@@ -38,8 +38,9 @@ pub struct HoleOptions {
     pub embedding: LleOptions,
     /// Regression ([`TopologyOptions::from_random_starts`]: the network extrapolates).
     pub topology: TopologyOptions,
-    /// Fair the new vertices after the network placed them ([`fair_new_vertices`]): on by
-    /// default; off keeps the network's surface, which follows a sharp crease more closely.
+    /// Fair the new vertices after the network placed them ([`fair_new_vertices`]) unless a
+    /// sharp crease runs through the region around the hole: on by default; off keeps the
+    /// network's surface everywhere.
     #[serde(default = "faired")]
     pub fairing: bool,
 }
@@ -74,6 +75,8 @@ pub struct HoleFill {
     pub fit: SurfaceFit,
     /// Whether the region was embedded by Tutte's method because LLE folded it.
     pub tutte: bool,
+    /// Whether the new vertices were faired: asked for, and no crease runs through the region.
+    pub faired: bool,
 }
 
 /// Fills the hole bounded by `hole` (a boundary loop of `mesh`, as [`boundary_loops`]
@@ -192,7 +195,8 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
     }
     let new_triangles = fill.len();
     out.triangles.extend(fill);
-    if options.fairing {
+    let faired = options.fairing && !creased(&region);
+    if faired {
         fair_new_vertices(&mut out, &new_vertices)?;
     }
     Ok(HoleFill {
@@ -202,7 +206,23 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
         region_vertices: region.positions.len(),
         fit,
         tutte,
+        faired,
     })
+}
+
+/// An edge whose two triangles turn by more than this (60°) is sharp.
+const SHARP_EDGE: f64 = std::f64::consts::FRAC_PI_3;
+/// A region with this many sharp edges holds a crease (a machined part's edge), which the
+/// network's surface follows and fairing would round off.
+const CREASE_EDGES: usize = 3;
+
+/// Whether a sharp crease runs through `region` ([`SHARP_EDGE`], [`CREASE_EDGES`]).
+fn creased(region: &Mesh) -> bool {
+    dihedral_angles(region)
+        .into_iter()
+        .filter(|&a| a > SHARP_EDGE)
+        .count()
+        >= CREASE_EDGES
 }
 
 /// Tutte's embedding of an annulus around `hole`: the hole closed by a fan around a new

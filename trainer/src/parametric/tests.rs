@@ -369,6 +369,8 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
     let (lo, hi) =
         crate::parametric::fit::bounds(original.positions.iter().map(|p| p.as_slice()), 3);
     let diagonal = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt();
+    // A machined part: creases run through the regions of all seeds but 100, whose fills
+    // therefore keep the network's surface.
     // Measured over seeds 100, 500, …, 6000: 8 of 11 holes filled by LLE, all watertight,
     // worst new vertex 0.0196 from the removed triangles (0.26 % of the 7.62 diagonal); 1500,
     // 2000 and 4000 lie across sharp creases whose rings fold in LLE and are filled through
@@ -377,18 +379,7 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
         let (holed, removed) = punch_hole(&original, seed, 3).unwrap();
         let hole = boundary_loops(&holed.triangles).unwrap();
         assert_eq!(hole.len(), 1);
-        // A machined part: its sharp creases are followed by the network's surface, which
-        // fairing would round off (faired, the worst vertex is checked at the end).
-        let network = HoleOptions {
-            fairing: false,
-            ..HoleOptions::default()
-        };
-        let filled = fill_hole(&holed, &hole[0], &network).unwrap();
-        let faired = fill_hole(&holed, &hole[0], &HoleOptions::default()).unwrap();
-        assert!(edge_report(&faired.mesh).is_watertight());
-        let deviation = hole_deviation(&original, &hole[0], &removed, &faired);
-        eprintln!("seed {seed} faired: {deviation:.4?}");
-        assert!(deviation.1 < 0.1, "seed {seed}: {deviation:?}");
+        let filled = fill_hole(&holed, &hole[0], &HoleOptions::default()).unwrap();
         let report = edge_report(&filled.mesh);
         let worst = filled
             .new_vertices
@@ -414,6 +405,8 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
         assert!(!filled.new_vertices.is_empty());
         let crease = [1500, 2000, 4000].contains(&seed);
         assert_eq!(filled.tutte, crease, "seed {seed}");
+        // Fairing would round a crease off: the network's surface stays where one runs.
+        assert!(!(crease && filled.faired), "seed {seed}");
         let bound = if crease { 0.01 } else { 0.005 };
         assert!(worst < bound * diagonal, "seed {seed}: {worst}");
     }
