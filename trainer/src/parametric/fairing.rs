@@ -135,8 +135,8 @@ fn unanchored(
     new_vertices.iter().copied().find(|&v| !held[v as usize])
 }
 
-/// Rows of the uniform Laplacian scaled to unit area: (vertex, coefficient) terms of
-/// x_r − mean of the neighbours, the vertex itself first.
+/// Rows of the uniform Laplacian: (vertex, coefficient) terms of x_r less the mean of its
+/// neighbours, the vertex itself first.
 fn uniform_laplacian(rings: &[Vec<usize>]) -> Vec<Vec<(usize, f64)>> {
     rings
         .iter()

@@ -195,10 +195,9 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
     }
     let new_triangles = fill.len();
     out.triangles.extend(fill);
-    let faired = options.fairing && !creased(&region);
-    if faired {
-        fair_new_vertices(&mut out, &new_vertices)?;
-    }
+    // Fairing that cannot be solved leaves the network's fill, which is whole already.
+    let faired =
+        options.fairing && !creased(&region) && fair_new_vertices(&mut out, &new_vertices).is_ok();
     Ok(HoleFill {
         mesh: out,
         new_vertices,
