@@ -10,6 +10,9 @@
 //! `x y z` lines, `--markdown FILE` to write the table as well
 //! (`docs/performance/curve-bands.md`).
 
+mod arguments;
+use arguments::{given, in_workspace, option};
+
 use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;
 
@@ -202,20 +205,6 @@ fn measure(
     Ok(hausdorff_distance(&polyline, &truth) / diagonal)
 }
 
-/// `path` relative to the workspace root (cargo runs benches in the package's folder).
-fn in_workspace(path: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(path)
-}
-
-fn option<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .map(String::as_str)
-}
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let sizes: Vec<usize> = option(&args, "--points")
@@ -290,12 +279,7 @@ fn main() {
              coordinate), points at random along each curve, seeds 1–{seeds}, default options; \
              the Hausdorff distance both ways between the fitted and the true curve, % of the \
              diagonal.\n\n{table}",
-            args.iter()
-                .skip(1)
-                .filter(|a| *a != "--bench")
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(" "),
+            given(&args),
             100.0 * noise
         );
         std::fs::write(in_workspace(path), text).expect("the markdown file");

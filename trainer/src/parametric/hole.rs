@@ -224,6 +224,55 @@ fn creased(region: &Mesh) -> bool {
         >= CREASE_EDGES
 }
 
+/// How far a filled hole's new vertices lie from the surface that was removed (a punched
+/// hole's triangles, [`punch_hole`]), in the mesh's units.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct FillDeviation {
+    /// The farthest a new vertex lies outwards (on the side the removed triangles face).
+    pub outwards: f64,
+    /// The farthest either way.
+    pub either: f64,
+    /// The hole's diameter: the largest distance between two of its boundary vertices.
+    pub diameter: f64,
+}
+
+/// Measures `filled` (a fill of `hole` in `original` less `removed`) against `removed`.
+pub fn fill_deviation(
+    original: &Mesh,
+    hole: &[u32],
+    removed: &[[u32; 3]],
+    filled: &HoleFill,
+) -> FillDeviation {
+    use crate::geometry::vector::{cross, distance, dot, sub};
+    let at = |v: u32| original.positions[v as usize];
+    let diameter = hole
+        .iter()
+        .flat_map(|&a| hole.iter().map(move |&b| distance(at(a), at(b))))
+        .fold(0.0, f64::max);
+    let (mut outwards, mut either): (f64, f64) = (0.0, 0.0);
+    for &v in &filled.new_vertices {
+        let p = filled.mesh.positions[v as usize];
+        let (d, t) = removed
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(at);
+                (point_triangle_distance(p, a, b, c), [a, b, c])
+            })
+            .fold((f64::INFINITY, [[0.0; 3]; 3]), |x, y| {
+                if y.0 < x.0 { y } else { x }
+            });
+        if dot(sub(p, t[0]), cross(sub(t[1], t[0]), sub(t[2], t[0]))) > 0.0 {
+            outwards = outwards.max(d);
+        }
+        either = either.max(d);
+    }
+    FillDeviation {
+        outwards,
+        either,
+        diameter,
+    }
+}
+
 /// Tutte's embedding of an annulus around `hole`: the hole closed by a fan around a new
 /// centre, the outer loop on the circle; scaled like LLE's (mean 0, unit variance per
 /// coordinate on average).

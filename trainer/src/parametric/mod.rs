@@ -103,7 +103,10 @@ pub use folds::{
     COLLAPSE_RATIO, FoldReport, MAX_COLLAPSE_FRACTION, MAX_FLIP_FRACTION, check_flat, fold_report,
 };
 pub use grid::{delaunay_grid, fill_polygon, grid_inside};
-pub use hole::{HoleFill, HoleOptions, fill_hole, point_triangle_distance, punch_hole};
+pub use hole::{
+    FillDeviation, HoleFill, HoleOptions, fill_deviation, fill_hole, point_triangle_distance,
+    punch_hole,
+};
 pub use laplacian::cotangent_laplacian;
 pub use neighbors::{DUPLICATE_TOLERANCE, LINE_TOLERANCE, check_points, nearest_neighbors};
 pub use network::{Layer, SurfaceNetwork, SurfacePoint, unit_cross};

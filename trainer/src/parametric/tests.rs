@@ -381,7 +381,7 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
         assert_eq!(hole.len(), 1);
         let filled = fill_hole(&holed, &hole[0], &HoleOptions::default()).unwrap();
         let report = edge_report(&filled.mesh);
-        let worst = hole_deviation(&original, &hole[0], &removed, &filled).either;
+        let worst = fill_deviation(&original, &hole[0], &removed, &filled).either;
         eprintln!(
             "seed {seed}: {} new vertices, {} new triangles, region {}, {report:?}, worst {worst:.4}",
             filled.new_vertices.len(),
@@ -404,52 +404,6 @@ fn fills_a_hole_in_the_fandisk_watertight_and_on_the_surface() {
     assert!(e.contains("not a boundary loop"), "{e}");
 }
 
-/// How far a filled hole's new vertices lie from the removed triangles.
-struct Deviation {
-    /// The farthest outwards (on the side the removed triangles face).
-    outwards: f64,
-    /// The farthest either way.
-    either: f64,
-    /// The hole's diameter: the largest distance between two of its boundary vertices.
-    diameter: f64,
-}
-
-fn hole_deviation(
-    original: &io::Mesh,
-    hole: &[u32],
-    removed: &[[u32; 3]],
-    filled: &HoleFill,
-) -> Deviation {
-    use crate::geometry::vector::{cross, distance, dot, sub};
-    let at = |v: u32| original.positions[v as usize];
-    let diameter = hole
-        .iter()
-        .flat_map(|&a| hole.iter().map(move |&b| distance(at(a), at(b))))
-        .fold(0.0, f64::max);
-    let (mut outwards, mut either): (f64, f64) = (0.0, 0.0);
-    for &v in &filled.new_vertices {
-        let p = filled.mesh.positions[v as usize];
-        let (d, t) = removed
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(at);
-                (point_triangle_distance(p, a, b, c), [a, b, c])
-            })
-            .fold((f64::INFINITY, [[0.0; 3]; 3]), |x, y| {
-                if y.0 < x.0 { y } else { x }
-            });
-        if dot(sub(p, t[0]), cross(sub(t[1], t[0]), sub(t[2], t[0]))) > 0.0 {
-            outwards = outwards.max(d);
-        }
-        either = either.max(d);
-    }
-    Deviation {
-        outwards,
-        either,
-        diameter,
-    }
-}
-
 /// Holes punched in spot (vertices other than those the fairing was measured on): the faired
 /// fill bulges out less than the network's and lies closer to the removed surface.
 #[test]
@@ -469,7 +423,7 @@ fn faired_hole_fills_bulge_less_than_the_network() {
             };
             let filled = fill_hole(&holed, &hole, &options).unwrap();
             assert!(edge_report(&filled.mesh).is_watertight());
-            let d = hole_deviation(&original, &hole, &removed, &filled);
+            let d = fill_deviation(&original, &hole, &removed, &filled);
             into.push((d.outwards / d.diameter, d.either / d.diameter));
         }
     }
