@@ -16,7 +16,7 @@
 //!    (`activation`); the stratified 85/10/5 split (`split`); Levenberg–Marquardt with early
 //!    stopping (`train`); the topology search (`topology`); [`fit_network`] (`fit`) ties them.
 //! 3. **Tessellation** (§5.3): the boundary loop of the parameter points (`boundary`, a carved
-//!    Delaunay triangulation), the Coons quad grid between four Bézier sides (`coons`) or the
+//!    Delaunay triangulation), the Coons quad grid between four stretches of it (`coons`) or the
 //!    resampled loop filled with grid points and triangulated by constrained Delaunay (`grid`,
 //!    `planar` on `spade`). **Synthesis** (§5.4, `synthesis`): the grid through the network.
 //!    [`reconstruct`] (`pipeline`) runs 1–3.
@@ -91,7 +91,8 @@ pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
 pub use capacity::{check_capacity, largest_parameter_count};
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
-    Bezier, CoonsBoundary, bezier_point, coons_boundary, coons_grid, coons_point, fit_bezier,
+    CoonsBoundary, SIDE_SMOOTHING_ROUNDS, UNTANGLE_ROUNDS, coons_boundary, coons_grid,
+    folded_triangles, polyline_point,
 };
 pub use eigen::{Eigenpairs, MAX_EIGEN_ITERATIONS, smallest_nonconstant};
 pub use embedding::{

@@ -5,6 +5,7 @@ use super::coons::{coons_boundary, coons_grid};
 use super::embedding::{Embedding, LleOptions, embed_points};
 use super::fit::{SurfaceFit, fit_network};
 use super::grid::delaunay_grid;
+use super::planar::PlanarMesh;
 use super::synthesis::{SynthesizedSurface, synthesize};
 use super::topology::TopologyOptions;
 use crate::error::Result;
@@ -55,6 +56,8 @@ pub struct Reconstruction {
     pub embedding: Embedding,
     /// The network and its search.
     pub fit: SurfaceFit,
+    /// The tessellation in the parameter plane.
+    pub grid: PlanarMesh,
     /// The mesh and normals.
     pub surface: SynthesizedSurface,
 }
@@ -79,6 +82,7 @@ pub fn reconstruct(points: &[[f64; 3]], options: &ReconstructOptions) -> Result<
     Ok(Reconstruction {
         embedding,
         fit,
+        grid,
         surface,
     })
 }
