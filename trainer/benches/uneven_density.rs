@@ -13,17 +13,22 @@
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench uneven_density`, with after `--`:
 //! `--points 2000`, `--seeds 4`, `--markdown FILE` to write the table as well
-//! (`docs/performance/uneven-density.md`).
+//! (`docs/performance/uneven-density.md`), `--pictures DIR` to draw every mesh with its points
+//! and every parameter-plane grid with the points' parameters (PNG).
 
 mod arguments;
 use arguments::{given, in_workspace, option};
 
 use std::fmt::Write as _;
 
+use std::path::Path;
+
 use neurosurf_trainer::io::Mesh;
 use neurosurf_trainer::parametric::{
-    PlanarMesh, ReconstructOptions, Tessellation, reconstruct, signed_area,
+    Parameterization, PlanarMesh, ReconstructOptions, Tessellation, reconstruct, signed_area,
+    wireframe,
 };
+use neurosurf_trainer::plot::write_picture;
 use neurosurf_trainer::quality::Truth;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -72,6 +77,24 @@ fn surfaces() -> Vec<Surface> {
             },
             inside: square,
             density: |s, _| if s < 2.0 / 3.0 { 1.0 } else { 0.1 },
+        },
+        Surface {
+            name: "C-shaped sheet, one arm 10× sparser",
+            position: |s, t| {
+                let (a, r) = (1.5 * std::f64::consts::PI * s, 0.5 + 0.5 * t);
+                [r * a.cos(), r * a.sin(), 0.3 * r * r]
+            },
+            inside: square,
+            density: |s, _| if s > 0.6 { 0.1 } else { 1.0 },
+        },
+        Surface {
+            name: "saddle, even (control)",
+            position: |s, t| {
+                let (x, y) = (2.0 * s - 1.0, 2.0 * t - 1.0);
+                [x, y, x * y]
+            },
+            inside: square,
+            density: |_, _| 1.0,
         },
         Surface {
             name: "paraboloid disc, one quadrant 10× sparser",
@@ -199,6 +222,18 @@ fn far_share(from: &Mesh, to: &Truth, tolerance: f64) -> f64 {
     if total > 0.0 { far / total } else { 1.0 }
 }
 
+/// A point of the parameter plane placed in space so that [`wireframe`]'s oblique view shows
+/// the plane from straight above.
+fn seen_from_above(p: &[f64; 2]) -> [f64; 3] {
+    let (turn, tilt) = (30f64.to_radians(), 55f64.to_radians());
+    let (x, y) = (p[0], p[1] * tilt.cos());
+    [
+        x * turn.cos() + y * turn.sin(),
+        -x * turn.sin() + y * turn.cos(),
+        p[1] * tilt.sin(),
+    ]
+}
+
 fn folded(grid: &PlanarMesh) -> usize {
     grid.triangles
         .iter()
@@ -206,13 +241,14 @@ fn folded(grid: &PlanarMesh) -> usize {
         .count()
 }
 
-/// (uncovered, stray, folded) of one reconstruction, or the error.
+/// One reconstruction measured, or the error.
 fn measure(
     surface: &Surface,
     (points, parameters): (&[[f64; 3]], &[[f64; 2]]),
     tessellation: Tessellation,
     seed: u64,
-) -> Result<(f64, f64, usize), String> {
+    pictures: Option<&str>,
+) -> Result<Outcome, String> {
     let mut options = ReconstructOptions {
         tessellation,
         ..ReconstructOptions::default()
@@ -224,12 +260,49 @@ fn measure(
     let reach = truth(surface, 200, Some(&convex_hull(parameters)));
     let tolerance = TOLERANCE * true_surface.diagonal();
     let mesh = &result.surface.mesh;
+    if let Some(dir) = pictures {
+        let name = format!(
+            "{dir}/{}-{}-{seed}",
+            surface.name.split([',', ' ']).next().unwrap_or("surface"),
+            match tessellation {
+                Tessellation::Coons { .. } => "coons",
+                Tessellation::Delaunay { .. } => "delaunay",
+            }
+        );
+        let flat = Mesh {
+            positions: result.grid.vertices.iter().map(seen_from_above).collect(),
+            triangles: result.grid.triangles.clone(),
+        };
+        let uv: Vec<[f64; 3]> = result
+            .embedding
+            .parameters
+            .iter()
+            .map(seen_from_above)
+            .collect();
+        for (suffix, scene) in [
+            ("", wireframe(mesh, points, 640)),
+            ("-parameters", wireframe(&flat, &uv, 640)),
+        ] {
+            write_picture(Path::new(&format!("{name}{suffix}.png")), &scene)
+                .map_err(|e| e.to_string())?;
+        }
+    }
     let model = Truth::from_mesh(mesh).map_err(|e| e.to_string())?;
-    Ok((
-        far_share(&reach, &model, tolerance),
-        far_share(mesh, &true_surface, tolerance),
-        folded(&result.grid),
-    ))
+    Ok(Outcome {
+        uncovered: far_share(&reach, &model, tolerance),
+        stray: far_share(mesh, &true_surface, tolerance),
+        folded: folded(&result.grid),
+        unrolled: result.embedding.parameterization == Parameterization::Unrolled,
+    })
+}
+
+/// One reconstruction measured.
+#[derive(Clone)]
+struct Outcome {
+    uncovered: f64,
+    stray: f64,
+    folded: usize,
+    unrolled: bool,
 }
 
 fn main() {
@@ -242,34 +315,40 @@ fn main() {
         .unwrap_or("4")
         .parse()
         .expect("--seeds: a count");
+    let pictures = option(&args, "--pictures");
     let mut table = String::from(
-        "| surface | tessellation | uncovered | stray | folded triangles | failed seeds |\n\
-         |---|---|---:|---:|---:|---:|\n",
+        "| surface | tessellation | uncovered | stray | folded triangles | seeds unrolled | failed \
+         seeds |\n|---|---|---:|---:|---:|---:|---:|\n",
     );
     for surface in surfaces() {
         for (label, tessellation) in [
             ("Coons 30 × 30", Tessellation::Coons { resolution: 30 }),
             ("Delaunay ~900", Tessellation::Delaunay { vertices: 900 }),
         ] {
-            let results: Vec<Result<(f64, f64, usize), String>> = (1..=seeds)
+            let results: Vec<Result<Outcome, String>> = (1..=seeds)
                 .map(|seed| {
                     let (points, parameters) = sample(&surface, count, seed);
-                    measure(&surface, (&points, &parameters), tessellation, seed)
+                    measure(
+                        &surface,
+                        (&points, &parameters),
+                        tessellation,
+                        seed,
+                        pictures,
+                    )
                 })
                 .collect();
-            let ok: Vec<(f64, f64, usize)> =
-                results.iter().filter_map(|r| r.clone().ok()).collect();
+            let ok: Vec<Outcome> = results.iter().filter_map(|r| r.clone().ok()).collect();
             for e in results.iter().filter_map(|r| r.as_ref().err()) {
                 eprintln!("{}, {label}: {e}", surface.name);
             }
-            let worst_uncovered = ok.iter().map(|r| r.0).fold(0.0, f64::max);
-            let worst_stray = ok.iter().map(|r| r.1).fold(0.0, f64::max);
-            let worst_folded = ok.iter().map(|r| r.2).max().unwrap_or(0);
+            let worst = |f: fn(&Outcome) -> f64| ok.iter().map(f).fold(0.0, f64::max);
             let row = format!(
-                "| {} | {label} | {:.1} % | {:.1} % | {worst_folded} | {} |",
+                "| {} | {label} | {:.1} % | {:.1} % | {} | {} | {} |",
                 surface.name,
-                100.0 * worst_uncovered,
-                100.0 * worst_stray,
+                100.0 * worst(|o| o.uncovered),
+                100.0 * worst(|o| o.stray),
+                ok.iter().map(|o| o.folded).max().unwrap_or(0),
+                ok.iter().filter(|o| o.unrolled).count(),
                 results.len() - ok.len()
             );
             println!("{row}");
@@ -284,7 +363,8 @@ fn main() {
              {seeds} seeds. Uncovered: the share of the true surface farther than {} % of the \
              diagonal from the mesh; stray: the share of the mesh's area farther than that \
              from the true surface; folded: triangles of the parameter-plane tessellation \
-             turned over.\n\n{table}",
+             turned over; seeds unrolled: how many seeds' patches were unrolled rather than \
+             embedded by LLE (their sampling density changes).\n\n{table}",
             given(&args),
             100.0 * TOLERANCE
         );

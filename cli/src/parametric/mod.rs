@@ -19,10 +19,10 @@ use neurosurf_trainer::io::{
 };
 use neurosurf_trainer::parametric::{
     Activation, BACK_SEED, BENCHMARK_SIZES, BoundaryOptions, HoleOptions, LleOptions,
-    NetworkSummary, OutlierOptions, SampleSurface, SurfaceNetwork, TopologyOptions, benchmark,
-    boundary_loops, boundary_seam, coons_boundary, coons_grid, delaunay_grid, edge_report,
-    embed_points, fill_hole, fit_robustly, network_to_blob, punch_hole, sample_surface, stitch,
-    synthesize, wireframe,
+    NetworkSummary, OutlierOptions, Parameterization, SampleSurface, SurfaceNetwork,
+    TopologyOptions, benchmark, boundary_loops, boundary_seam, coons_boundary, coons_grid,
+    delaunay_grid, edge_report, embed_points, fill_hole, fit_robustly, network_to_blob, punch_hole,
+    sample_surface, stitch, synthesize, wireframe,
 };
 use neurosurf_trainer::plot::write_picture;
 use neurosurf_trainer::table::{Align, Table};
@@ -243,6 +243,8 @@ struct EmbedReport<'a> {
     out: &'a Path,
     points: usize,
     neighbors: usize,
+    /// `lle`, or `unrolled` where the sampling density changes.
+    parameterization: Parameterization,
     eigenvalues: [f64; 2],
     eigen_iterations: usize,
     flipped_fraction: f64,
@@ -261,6 +263,7 @@ fn embed(args: &EmbedArgs) -> Result<()> {
         out: &args.out,
         points: points.len(),
         neighbors: embedding.neighbors,
+        parameterization: embedding.parameterization,
         eigenvalues: embedding.eigenvalues,
         eigen_iterations: embedding.iterations,
         flipped_fraction: embedding.folds.flipped_pairs,
@@ -270,16 +273,25 @@ fn embed(args: &EmbedArgs) -> Result<()> {
     if args.json {
         return output::json(&report);
     }
-    println!(
-        "embedded {} points (k = {}) in {seconds:.3} s: λ₂ = {:.3e}, λ₃ = {:.3e}, {} iterations, \
-         {:.2} % of neighbour pairs flipped",
-        report.points,
-        report.neighbors,
-        report.eigenvalues[0],
-        report.eigenvalues[1],
-        report.eigen_iterations,
-        100.0 * report.flipped_fraction
-    );
+    match report.parameterization {
+        Parameterization::Lle => println!(
+            "embedded {} points (k = {}) in {seconds:.3} s: λ₂ = {:.3e}, λ₃ = {:.3e}, {} \
+             iterations, {:.2} % of neighbour pairs flipped",
+            report.points,
+            report.neighbors,
+            report.eigenvalues[0],
+            report.eigenvalues[1],
+            report.eigen_iterations,
+            100.0 * report.flipped_fraction
+        ),
+        Parameterization::Unrolled => println!(
+            "unrolled {} points (k = {}) in {seconds:.3} s: their density changes, so LLE \
+             would squeeze the sparse part; {:.2} % of neighbour pairs flipped",
+            report.points,
+            report.neighbors,
+            100.0 * report.flipped_fraction
+        ),
+    }
     println!("wrote {}", args.out.display());
     Ok(())
 }
@@ -327,6 +339,9 @@ struct FitReport<'a> {
     /// Points left out: off their neighbours' planes, or isolated.
     outliers: usize,
     embedded: bool,
+    /// `lle` or `unrolled` when the points were embedded.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    parameterization: Option<Parameterization>,
     embedding_seconds: f64,
     fitting_seconds: f64,
     hidden_layers: Vec<usize>,
@@ -376,6 +391,7 @@ fn fit(args: &FitArgs) -> Result<()> {
         points: points.len(),
         outliers: robust.off_surface.len(),
         embedded: args.parameters.is_none(),
+        parameterization: robust.parameterization,
         embedding_seconds,
         fitting_seconds,
         hidden_layers: fit.network.hidden_sizes(),
@@ -396,7 +412,11 @@ fn fit(args: &FitArgs) -> Result<()> {
             0 => String::new(),
             n => format!(" less {n} off the surface (--keep-outliers fits them)"),
         },
-        if report.embedded { " embedded" } else { "" },
+        match report.parameterization {
+            Some(Parameterization::Unrolled) => " unrolled (their density changes)",
+            Some(Parameterization::Lle) => " embedded",
+            None => "",
+        },
         report.hidden_layers,
         report.activation,
         report.parameters,

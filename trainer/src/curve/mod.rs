@@ -115,6 +115,7 @@ pub use surface::{
 pub use surface_boundary::{
     BOUNDARY_GAP, BOUNDARY_NEIGHBOURS, CLOSED_BELOW, boundaries, largest_boundary,
 };
+pub(crate) use surface_extent::unroll_graph;
 pub use surface_extent::{
     EXTENT_LANDMARKS, EXTENT_NEIGHBOURS, EXTENT_SAMPLE, Unrolled, patch_aspect, unroll,
 };

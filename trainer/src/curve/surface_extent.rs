@@ -64,25 +64,7 @@ pub fn unroll(points: &[[f64; 3]]) -> Option<Unrolled> {
         points.to_vec()
     };
     let graph = neighbour_graph(&sample, EXTENT_NEIGHBOURS)?;
-    let n = sample.len();
-    // Farthest-first landmarks: each new one is the point farthest along the patch from
-    // those chosen. The first is the farthest from point 0, an end of the patch.
-    let from_zero = shortest_paths(&graph, &[0]);
-    if from_zero.iter().any(|d| !d.is_finite()) {
-        return None;
-    }
-    let mut nearest_landmark = vec![f64::INFINITY; n];
-    let mut next = farthest(&from_zero);
-    let mut paths: Vec<Vec<f64>> = Vec::with_capacity(EXTENT_LANDMARKS);
-    for _ in 0..EXTENT_LANDMARKS.min(n) {
-        let distances = shortest_paths(&graph, &[next]);
-        for (m, &d) in nearest_landmark.iter_mut().zip(&distances) {
-            *m = m.min(d);
-        }
-        paths.push(distances);
-        next = farthest(&nearest_landmark);
-    }
-    let plane = landmark_mds(&paths)?;
+    let plane = unroll_graph(&graph, EXTENT_LANDMARKS)?;
     let spreads = principal_spreads(&plane)?;
     let aspect = (spreads[0] / spreads[1]).sqrt();
     if !aspect.is_finite() {
@@ -251,6 +233,32 @@ fn smallest_rectangle_frame(plane: &[[f64; 2]]) -> Vec<[f64; 2]> {
         best + std::f64::consts::FRAC_PI_2
     };
     plane.iter().map(turned(angle)).collect()
+}
+
+/// Every point of `graph` (each point's neighbours with their distances, listed both ways)
+/// unrolled into the plane by landmark MDS of path lengths through it, with `landmarks`
+/// landmarks picked farthest-first; `None` when the graph falls apart in pieces or the
+/// landmarks span no plane.
+pub(crate) fn unroll_graph(graph: &[Vec<(usize, f64)>], landmarks: usize) -> Option<Vec<[f64; 2]>> {
+    let n = graph.len();
+    let from_zero = shortest_paths(graph, &[0]);
+    if n == 0 || from_zero.iter().any(|d| !d.is_finite()) {
+        return None;
+    }
+    // Farthest-first landmarks: each new one is the point farthest along the patch from
+    // those chosen. The first is the farthest from point 0, an end of the patch.
+    let mut nearest_landmark = vec![f64::INFINITY; n];
+    let mut next = farthest(&from_zero);
+    let mut paths: Vec<Vec<f64>> = Vec::with_capacity(landmarks);
+    for _ in 0..landmarks.min(n) {
+        let distances = shortest_paths(graph, &[next]);
+        for (m, &d) in nearest_landmark.iter_mut().zip(&distances) {
+            *m = m.min(d);
+        }
+        paths.push(distances);
+        next = farthest(&nearest_landmark);
+    }
+    landmark_mds(&paths)
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@
 use super::eigen::smallest_nonconstant;
 use super::folds::{FoldReport, check_flat, fold_report};
 use super::neighbors::{check_points, nearest_neighbors};
+use super::unrolling::{UNEVEN_AREA_SHARE, sparse_area_share, unrolled_parameters};
 use super::weights::{embedding_matrix, reconstruction_weights};
 use crate::error::{Error, Result};
 use crate::geometry::mesh_graph::one_rings;
@@ -34,6 +35,26 @@ pub struct LleOptions {
     /// than the noise. Off when the user chose k.
     #[serde(default)]
     pub more_neighbors: bool,
+    /// Unroll a patch whose sampling density changes instead of taking LLE's embedding
+    /// (true; see [`unrolled_parameters`] and [`sparse_area_share`]). Off, every patch gets
+    /// Roweis & Saul's LLE.
+    #[serde(default = "unrolled_when_uneven")]
+    pub unroll_uneven: bool,
+}
+
+fn unrolled_when_uneven() -> bool {
+    true
+}
+
+/// How a patch was parameterized.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Parameterization {
+    /// LLE's two smallest non-constant eigenvectors (§4).
+    Lle,
+    /// Unrolled along the patch and smoothed by the LLE matrix ([`unrolled_parameters`]):
+    /// the sampling density changes.
+    Unrolled,
 }
 
 impl Default for LleOptions {
@@ -43,6 +64,7 @@ impl Default for LleOptions {
             regularization: 1e-3,
             check_folds: true,
             more_neighbors: true,
+            unroll_uneven: true,
         }
     }
 }
@@ -52,15 +74,21 @@ impl Default for LleOptions {
 pub struct Embedding {
     /// (u, v) of every point, mean 0, unit covariance.
     pub parameters: Vec<[f64; 2]>,
-    /// The eigenvalues of M that u and v belong to (λ₂, λ₃).
+    /// The eigenvalues of M that u and v belong to (λ₂, λ₃); for an unrolled patch, the LLE
+    /// cost uᵀMu / uᵀu of each coordinate.
     pub eigenvalues: [f64; 2],
-    /// Subspace iterations of the eigen solver.
+    /// Subspace iterations of the eigen solver (0 for an unrolled patch).
     pub iterations: usize,
     /// Flip and collapse fractions of the result.
     pub folds: FoldReport,
     /// Neighbours per point k the embedding used (for a mesh, whose one-rings are the
     /// neighbourhoods, the option it was given).
     pub neighbors: usize,
+    /// LLE's, or unrolled where the density changes.
+    pub parameterization: Parameterization,
+    /// The share of the patch's area sampled at more than twice its median spacing
+    /// ([`sparse_area_share`]; 0 when [`LleOptions::unroll_uneven`] is off).
+    pub sparse_area: f64,
 }
 
 /// LLE of an unstructured point set with k nearest neighbours; with
@@ -144,6 +172,28 @@ pub fn embed_with_neighbors(
     }
     let weights = reconstruction_weights(points, neighbors, options.regularization)?;
     let m = embedding_matrix(neighbors, &weights);
+    let sparse_area = if options.unroll_uneven {
+        sparse_area_share(points, neighbors)
+    } else {
+        0.0
+    };
+    if sparse_area >= UNEVEN_AREA_SHARE {
+        // Unrolled unless that folds or fails; then LLE's, as for an even patch.
+        if let Ok((parameters, costs)) = unrolled_parameters(points, neighbors, &m) {
+            let folds = fold_report(points, &parameters, neighbors);
+            if !options.check_folds || check_flat(&folds).is_ok() {
+                return Ok(Embedding {
+                    parameters,
+                    eigenvalues: costs,
+                    iterations: 0,
+                    folds,
+                    neighbors: options.neighbors,
+                    parameterization: Parameterization::Unrolled,
+                    sparse_area,
+                });
+            }
+        }
+    }
     let eigen = smallest_nonconstant(&m, 2)?;
     let scale = (points.len() as f64).sqrt();
     let parameters: Vec<[f64; 2]> = (0..points.len())
@@ -159,5 +209,7 @@ pub fn embed_with_neighbors(
         iterations: eigen.iterations,
         folds,
         neighbors: options.neighbors,
+        parameterization: Parameterization::Lle,
+        sparse_area,
     })
 }

@@ -10,7 +10,8 @@
 //!    2nd and 3rd smallest eigenvectors by shift-and-invert subspace iteration on a `faer`
 //!    sparse Cholesky (`eigen`, `sparse`); [`embed_mesh`] uses mesh one-rings instead (§4.2).
 //!    `folds` rejects embeddings that fold or collapse; `quality` scores one against a known
-//!    parameterization.
+//!    parameterization. A patch whose sampling density changes is unrolled instead
+//!    (`unrolling`: Isomap smoothed by the LLE matrix), since LLE squeezes its sparse part.
 //! 2. **Regression** (§5.1–5.2): [`SurfaceNetwork`] (`network`: the exact forward formula, the
 //!    `f64` reference with ∂p/∂u, ∂p/∂v and the normal) with the four activations
 //!    (`activation`); the stratified 85/10/5 split (`split`); Levenberg–Marquardt with early
@@ -77,6 +78,7 @@ mod thin_plate;
 mod topology;
 mod train;
 mod tutte;
+mod unrolling;
 mod weights;
 
 pub use crate::geometry::mesh_graph::{
@@ -96,7 +98,8 @@ pub use coons::{
 };
 pub use eigen::{Eigenpairs, MAX_EIGEN_ITERATIONS, smallest_nonconstant};
 pub use embedding::{
-    Embedding, LleOptions, OTHER_NEIGHBORS, embed_mesh, embed_points, embed_with_neighbors,
+    Embedding, LleOptions, OTHER_NEIGHBORS, Parameterization, embed_mesh, embed_points,
+    embed_with_neighbors,
 };
 pub use fairing::{FAIRING_ROUNDS, fair_new_vertices};
 pub use fit::{MIN_FIT_POINTS, SurfaceFit, fit_network};
@@ -133,6 +136,10 @@ pub use topology::{Candidate, TopologyOptions, TopologySearch};
 pub use train::{Samples, TrainReport, TrainSettings, mean_square, randomize, train};
 pub use tutte::tutte_disk;
 pub(crate) use tutte::weighted_means;
+pub use unrolling::{
+    SMOOTHING_ANCHOR, UNEVEN_AREA_SHARE, UNROLL_LANDMARKS, local_spacing, sparse_area_share,
+    unrolled_parameters,
+};
 pub use weights::{embedding_matrix, reconstruction_weights};
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use super::embedding::{LleOptions, embed_points};
+use super::embedding::{LleOptions, Parameterization, embed_points};
 use super::fit::{SurfaceFit, fit_network};
 use super::outliers::{OutlierOptions, Outliers, find_outliers};
 use super::topology::TopologyOptions;
@@ -18,6 +18,8 @@ pub struct RobustFit {
     pub parameters: Vec<[f64; 2]>,
     /// Neighbours per point k of the embedding (`None` when parameters were given).
     pub neighbors: Option<usize>,
+    /// How the points were parameterized (`None` when parameters were given).
+    pub parameterization: Option<Parameterization>,
     /// Points removed before the embedding: off their neighbours' planes, or isolated.
     pub off_surface: Vec<usize>,
     /// The final fit.
@@ -60,11 +62,15 @@ pub fn fit_robustly(
     };
     let kept = first.kept;
     let chosen: Vec<[f64; 3]> = kept.iter().map(|&i| points[i]).collect();
-    let (uv, neighbors) = match parameters {
-        Some(given) => (kept.iter().map(|&i| given[i]).collect::<Vec<_>>(), None),
+    let (uv, neighbors, parameterization) = match parameters {
+        Some(given) => (
+            kept.iter().map(|&i| given[i]).collect::<Vec<_>>(),
+            None,
+            None,
+        ),
         None => {
             let e = embed_points(&chosen, embedding)?;
-            (e.parameters, Some(e.neighbors))
+            (e.parameters, Some(e.neighbors), Some(e.parameterization))
         }
     };
     let embedding_seconds = start.elapsed().as_secs_f64();
@@ -75,6 +81,7 @@ pub fn fit_robustly(
         kept,
         parameters: uv,
         neighbors,
+        parameterization,
         off_surface: first.removed,
         fit,
         embedding_seconds,
