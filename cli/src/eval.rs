@@ -43,6 +43,23 @@ pub fn run(args: &Args) -> Result<()> {
     let model = LoadedModel::read(&args.model)?;
     if let Some(columns) = model.geometry_columns() {
         let parameters = read_parameters(&args.points, model.query_arity())?;
+        if let LoadedModel::SurfaceNetwork { decoded, .. } = &model
+            && let Some(summary) = &decoded.summary
+        {
+            let outside = parameters
+                .iter()
+                .filter(|p| !summary.covers(p[0], p[1]))
+                .count();
+            if outside > 0 {
+                eprintln!(
+                    "warning: {outside} of {} parameter points lie outside the region the \
+                     network was fitted on ({} corners, stored in {}): there it extrapolates",
+                    parameters.len(),
+                    summary.region.len(),
+                    args.model.display()
+                );
+            }
+        }
         let rows = model
             .evaluate_geometry(&parameters, args.scalar)
             .with_context(|| format!("cannot evaluate {}", args.model.display()))?;

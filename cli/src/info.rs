@@ -154,6 +154,12 @@ fn print(path: &std::path::Path, info: &Info<'_>) {
             "  fit          {} points, {} configurations tried, RMS error {:.3e} ({:.2e} of the diagonal)",
             fit.points, fit.candidates, fit.rms_error, fit.relative_rms_error
         );
+        if !fit.region.is_empty() {
+            println!(
+                "  region       {} corners of the (u, v) plane: the points' boundary",
+                fit.region.len()
+            );
+        }
     }
     if let Some(centers) = info.centers {
         println!("  centers      {centers}");

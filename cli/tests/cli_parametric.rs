@@ -486,3 +486,73 @@ fn fit_leaves_out_points_off_the_surface_and_says_so() {
     let kept = json(&ok(&[&args[..], &["--json", "--keep-outliers"]].concat()));
     assert_eq!(kept["outliers"], 0, "{kept}");
 }
+
+#[test]
+fn the_blob_keeps_the_points_region_for_tessellate_and_eval() {
+    // A saddle whose half x > 0 is sampled ten times more sparsely (a fixed pseudo-random
+    // sequence, so the file is the same on every machine).
+    let dir = tempfile::tempdir().unwrap();
+    let (points, blob) = (dir.path().join("saddle.txt"), dir.path().join("saddle.nsb"));
+    let mut text = String::new();
+    let mut state = 0x2545_f491_u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut count = 0;
+    while count < 1_500 {
+        let (x, y, keep) = (2.0 * next() - 1.0, 2.0 * next() - 1.0, next());
+        if x < 0.0 || keep < 0.1 {
+            text.push_str(&format!("{x} {y} {}\n", x * y));
+            count += 1;
+        }
+    }
+    fs::write(&points, text).unwrap();
+    let fitted = json(&ok(&[
+        "parametric",
+        "fit",
+        s(&points),
+        "--out",
+        s(&blob),
+        "--json",
+    ]));
+    assert_eq!(fitted["parameterization"], "unrolled");
+    let corners = fitted["region_corners"].as_u64().unwrap();
+    assert!(corners >= 20, "{fitted}");
+    assert!(ok(&["info", s(&blob)]).contains(&format!("region       {corners} corners")));
+    // Without --parameters, both tessellations mesh the stored region: every vertex lies on
+    // the saddle within the points' square (the trained box's corners lie far outside it).
+    for method in ["coons", "delaunay"] {
+        let mesh = dir.path().join(format!("{method}.obj"));
+        ok(&[
+            "parametric",
+            "tessellate",
+            s(&blob),
+            "--method",
+            method,
+            "--out",
+            s(&mesh),
+        ]);
+        let obj = fs::read_to_string(&mesh).unwrap();
+        for line in obj.lines().filter(|l| l.starts_with("v ")) {
+            let v: Vec<f64> = line[2..]
+                .split_whitespace()
+                .map(|t| t.parse().unwrap())
+                .collect();
+            assert!(v[0].abs() < 1.05 && v[1].abs() < 1.05, "{method}: {v:?}");
+            assert!((v[2] - v[0] * v[1]).abs() < 0.07, "{method}: {v:?}");
+        }
+    }
+    // eval warns about parameters outside the region, and only about those.
+    let query = dir.path().join("uv.txt");
+    fs::write(&query, "0 0\n40 40\n").unwrap();
+    let out = common::neurosurf(&["eval", s(&blob), "--points", s(&query)]);
+    assert!(out.status.success());
+    let warning = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        warning.contains("1 of 2 parameter points lie outside the region"),
+        "{warning}"
+    );
+}

@@ -20,9 +20,10 @@ use neurosurf_trainer::io::{
 use neurosurf_trainer::parametric::{
     Activation, BACK_SEED, BENCHMARK_SIZES, BoundaryOptions, HoleOptions, LleOptions,
     NetworkSummary, OutlierOptions, Parameterization, SampleSurface, SurfaceNetwork,
-    TopologyOptions, benchmark, boundary_loops, boundary_seam, coons_boundary, coons_grid,
-    delaunay_grid, edge_report, embed_points, fill_hole, fit_robustly, network_to_blob, punch_hole,
-    sample_surface, stitch, synthesize, wireframe,
+    TopologyOptions, benchmark, boundary_loops, boundary_seam, coons_boundary,
+    coons_boundary_of_polygon, coons_grid, delaunay_grid, edge_report, embed_points, fill_hole,
+    fill_polygon, fit_robustly, network_to_blob, parameter_region, punch_hole, sample_surface,
+    stitch, synthesize, wireframe,
 };
 use neurosurf_trainer::plot::write_picture;
 use neurosurf_trainer::table::{Align, Table};
@@ -350,6 +351,8 @@ struct FitReport<'a> {
     candidates: usize,
     rms_error: f64,
     relative_rms_error: f64,
+    /// Corners of the parameter region stored in the blob (0: none could be traced).
+    region_corners: usize,
 }
 
 fn fit(args: &FitArgs) -> Result<()> {
@@ -378,7 +381,11 @@ fn fit(args: &FitArgs) -> Result<()> {
     .with_context(|| format!("cannot fit a network to {}", args.points.display()))?;
     let fit = &robust.fit;
     let (embedding_seconds, fitting_seconds) = (robust.embedding_seconds, robust.fitting_seconds);
-    let summary = NetworkSummary::of(fit, robust.kept.len(), embedding_seconds + fitting_seconds);
+    let mut summary =
+        NetworkSummary::of(fit, robust.kept.len(), embedding_seconds + fitting_seconds);
+    // The region the points cover, for `tessellate` and `eval`; a point set whose boundary
+    // cannot be traced keeps the whole trained box.
+    summary.region = parameter_region(&robust.parameters).unwrap_or_default();
     let bytes = network_to_blob(&fit.network, Some(&summary), scalar)?;
     neurosurf_trainer::blob::write_checked(&args.out, &bytes)?;
     if let Some(path) = &args.parameters_out {
@@ -400,6 +407,7 @@ fn fit(args: &FitArgs) -> Result<()> {
         candidates: summary.candidates,
         rms_error: fit.rms_error,
         relative_rms_error: fit.relative_rms_error,
+        region_corners: summary.region.len(),
     };
     if args.json {
         return output::json(&report);
@@ -440,7 +448,9 @@ pub struct TessellateArgs {
     /// A surface-network blob.
     model: PathBuf,
     /// The parameters of the points the network was fitted to (`u v` per line): their
-    /// boundary bounds the tessellated region. Without it, the network's trained (u, v) box.
+    /// boundary bounds the tessellated region. Without it, the region stored in the blob
+    /// (the boundary of the points `fit` saw), or for a blob without one, the network's
+    /// trained (u, v) box.
     #[arg(long, value_name = "FILE")]
     parameters: Option<PathBuf>,
     /// Coons quad grid or Delaunay.
@@ -511,22 +521,32 @@ fn tessellate(args: &TessellateArgs) -> Result<()> {
     if args.resolution < 2 {
         bail!("--resolution must be at least 2");
     }
-    let parameters = match &args.parameters {
-        Some(path) => read_parameters(path, 2)?
-            .into_iter()
-            .map(|p| [p[0], p[1]])
-            .collect(),
-        None => box_samples(&decoded.network),
-    };
+    let stored = decoded
+        .summary
+        .as_ref()
+        .map(|s| s.region.clone())
+        .filter(|r| r.len() >= 4);
     let boundary = BoundaryOptions::default();
-    let grid = match args.method {
-        MethodArg::Coons => coons_grid(
-            &coons_boundary(&parameters, &boundary)?,
-            args.resolution,
-            args.resolution,
-        )?,
-        MethodArg::Delaunay => {
-            delaunay_grid(&parameters, args.resolution * args.resolution, &boundary)?
+    let (columns, vertices) = (args.resolution, args.resolution * args.resolution);
+    let grid = match (&args.parameters, stored) {
+        (None, Some(region)) => match args.method {
+            MethodArg::Coons => coons_grid(&coons_boundary_of_polygon(&region)?, columns, columns)?,
+            MethodArg::Delaunay => fill_polygon(&region, vertices)?,
+        },
+        (given, _) => {
+            let parameters: Vec<[f64; 2]> = match given {
+                Some(path) => read_parameters(path, 2)?
+                    .into_iter()
+                    .map(|p| [p[0], p[1]])
+                    .collect(),
+                None => box_samples(&decoded.network),
+            };
+            match args.method {
+                MethodArg::Coons => {
+                    coons_grid(&coons_boundary(&parameters, &boundary)?, columns, columns)?
+                }
+                MethodArg::Delaunay => delaunay_grid(&parameters, vertices, &boundary)?,
+            }
         }
     };
     let surface = synthesize(&decoded.network, &grid);

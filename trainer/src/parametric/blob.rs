@@ -35,10 +35,27 @@ pub struct NetworkSummary {
     pub relative_rms_error: f64,
     /// Wall-clock seconds of the fit (0 in a blob: blobs store no wall time).
     pub seconds: f64,
+    /// The region of the parameter plane the points cover: their boundary loop, at most
+    /// [`MAX_REGION_VERTICES`] corners, counter-clockwise (empty when unknown, as in blobs
+    /// written before it was stored). Outside it the network extrapolates.
+    pub region: Vec<[f64; 2]>,
 }
 
+/// The summary as blobs stored it before the region.
+#[derive(Deserialize)]
+struct SummaryWithoutRegion {
+    points: usize,
+    candidates: usize,
+    rms_error: f64,
+    relative_rms_error: f64,
+    seconds: f64,
+}
+
+/// Most corners of a stored parameter region.
+pub const MAX_REGION_VERTICES: usize = 256;
+
 impl NetworkSummary {
-    /// The summary of a fit that took `seconds`.
+    /// The summary of a fit that took `seconds`, with no region.
     pub fn of(fit: &SurfaceFit, points: usize, seconds: f64) -> Self {
         NetworkSummary {
             points,
@@ -46,8 +63,45 @@ impl NetworkSummary {
             rms_error: fit.rms_error,
             relative_rms_error: fit.relative_rms_error,
             seconds,
+            region: Vec::new(),
         }
     }
+
+    /// The summary stored in a blob's metadata, in either layout; `None` for other bytes.
+    pub fn decode(metadata: &[u8]) -> Option<Self> {
+        postcard::from_bytes(metadata).ok().or_else(|| {
+            let old: SummaryWithoutRegion = postcard::from_bytes(metadata).ok()?;
+            Some(NetworkSummary {
+                points: old.points,
+                candidates: old.candidates,
+                rms_error: old.rms_error,
+                relative_rms_error: old.relative_rms_error,
+                seconds: old.seconds,
+                region: Vec::new(),
+            })
+        })
+    }
+
+    /// Whether (u, v) lies in the stored region (always, when none is stored).
+    pub fn covers(&self, u: f64, v: f64) -> bool {
+        self.region.len() < 3 || super::planar::inside_polygon([u, v], &self.region)
+    }
+}
+
+/// The region of the parameter plane that `parameters` cover: their boundary loop
+/// ([`super::boundary_loop`] with the default options), every k-th corner kept when it has
+/// more than [`MAX_REGION_VERTICES`].
+///
+/// # Errors
+/// As [`super::boundary_loop`].
+pub fn parameter_region(parameters: &[[f64; 2]]) -> Result<Vec<[f64; 2]>> {
+    let cycle = super::boundary_loop(parameters, &super::BoundaryOptions::default())?;
+    let step = cycle.len().div_ceil(MAX_REGION_VERTICES).max(1);
+    Ok(cycle
+        .iter()
+        .step_by(step)
+        .map(|&i| parameters[i as usize])
+        .collect())
 }
 
 /// A surface-network blob read back into `f64`.
@@ -221,7 +275,7 @@ pub fn network_from_blob(bytes: &[u8], path: &Path) -> Result<DecodedNetwork> {
     network.set_parameters(&words[4..n - 4])?;
     Ok(DecodedNetwork {
         network,
-        summary: postcard::from_bytes(payload.metadata).ok(),
+        summary: NetworkSummary::decode(payload.metadata),
         stored_as: header.scalar,
     })
 }

@@ -57,6 +57,27 @@ pub struct CoonsBoundary {
 /// anchor (fewer than four distinct corners).
 pub fn coons_boundary(parameters: &[[f64; 2]], options: &BoundaryOptions) -> Result<CoonsBoundary> {
     let cycle = boundary_loop(parameters, options)?;
+    sides_along(parameters, &cycle)
+}
+
+/// Anchors and sides of a region given as its boundary polygon, counter-clockwise (a stored
+/// parameter region); the anchors come from the polygon's corners alone.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for fewer than 4 corners, or as [`coons_boundary`].
+pub fn coons_boundary_of_polygon(polygon: &[[f64; 2]]) -> Result<CoonsBoundary> {
+    if polygon.len() < 4 {
+        return Err(Error::invalid(
+            "a region needs at least 4 corners for a Coons grid",
+        ));
+    }
+    let cycle: Vec<u32> = (0..polygon.len() as u32).collect();
+    sides_along(polygon, &cycle)
+}
+
+/// The anchors of `parameters` (PCA quadrants, see the module docs) on the loop `cycle`, and
+/// the loop's stretches between them.
+fn sides_along(parameters: &[[f64; 2]], cycle: &[u32]) -> Result<CoonsBoundary> {
     let n = parameters.len() as f64;
     let mean = [0, 1].map(|a| parameters.iter().map(|p| p[a]).sum::<f64>() / n);
     let mut cov = Matrix2::zeros();

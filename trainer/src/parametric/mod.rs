@@ -88,13 +88,16 @@ pub use activation::Activation;
 pub use bench::{
     BACK_SEED, BENCHMARK_SIZES, BenchmarkRow, PATCH_VERTICES, back_patch_points, benchmark,
 };
-pub use blob::{DecodedNetwork, NetworkSummary, network_from_blob, network_to_blob};
+pub use blob::{
+    DecodedNetwork, MAX_REGION_VERTICES, NetworkSummary, network_from_blob, network_to_blob,
+    parameter_region,
+};
 pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
 pub use capacity::{check_capacity, largest_parameter_count};
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
-    CoonsBoundary, SIDE_SMOOTHING_ROUNDS, UNTANGLE_ROUNDS, coons_boundary, coons_grid,
-    folded_triangles, polyline_point,
+    CoonsBoundary, SIDE_SMOOTHING_ROUNDS, UNTANGLE_ROUNDS, WINSLOW_MIN_ROUNDS, coons_boundary,
+    coons_boundary_of_polygon, coons_grid, folded_triangles, polyline_point,
 };
 pub use eigen::{Eigenpairs, MAX_EIGEN_ITERATIONS, smallest_nonconstant};
 pub use embedding::{

@@ -504,6 +504,7 @@ fn blobs_round_trip_and_the_core_evaluates_what_the_trainer_does() {
             rms_error: 0.5,
             relative_rms_error: 0.1,
             seconds: 0.0,
+            region: vec![[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]],
         };
         for (scalar, storage) in [(ScalarKind::F32, 1e-5), (ScalarKind::Q16_16, 5e-3)] {
             let bytes = network_to_blob(&net, Some(&summary), scalar).unwrap();
