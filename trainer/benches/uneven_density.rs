@@ -1,8 +1,9 @@
 //! Patches whose sampling density changes 10:1, reconstructed end to end (embedding, network,
 //! both tessellations of §5.3) and measured both ways against the true surface:
 //!
-//! - **uncovered**: the share of the true surface (a dense grid of its parameters) farther than
-//!   1 % of the diagonal from the mesh;
+//! - **uncovered**: the share of the true surface within the samples' reach (the convex hull
+//!   of their true parameters, triangulated on a 200 × 200 grid) farther than 1 % of the
+//!   diagonal from the mesh;
 //! - **stray**: the share of the mesh's area farther than 1 % of the diagonal from the true
 //!   surface;
 //! - **folded**: triangles of the parameter-plane tessellation turned over (a folded Coons
@@ -360,8 +361,9 @@ fn main() {
             "# Uneven density\n\nWritten by `cargo bench -p neurosurf-trainer --bench \
              uneven_density -- {}`: patches sampled at {count} points whose density changes \
              10:1, reconstructed with the default options and both tessellations, worst of \
-             {seeds} seeds. Uncovered: the share of the true surface farther than {} % of the \
-             diagonal from the mesh; stray: the share of the mesh's area farther than that \
+             {seeds} seeds. Uncovered: the share of the true surface within the samples' reach \
+             (the convex hull of their true parameters) farther than {} % of the diagonal \
+             from the mesh; stray: the share of the mesh's area farther than that \
              from the true surface; folded: triangles of the parameter-plane tessellation \
              turned over; seeds unrolled: how many seeds' patches were unrolled rather than \
              embedded by LLE (their sampling density changes).\n\n{table}",
