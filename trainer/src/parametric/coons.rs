@@ -14,20 +14,20 @@
 //!    grid's topology (vertex (i, j) at index j·columns + i).
 //! 4. Where the region is far from convex, Eq. 13 folds the grid over, or lays it across an
 //!    inner corner, outside the region. Then the inner grid points are moved by Winslow's
-//!    smoothing (Winslow 1967; the grid as an inverse harmonic map, which stays inside any
-//!    simply connected region without folding, unlike the plain mean of the four neighbours)
-//!    until no triangle is turned over and no point is outside, for at most
-//!    [`UNTANGLE_ROUNDS`] rounds.
+//!    smoothing (Winslow 1967: the grid as an inverse harmonic map, which in the limit stays
+//!    inside any simply connected region without folding, unlike the plain mean of the four
+//!    neighbours) until no triangle is turned over and no point is outside, or, after
+//!    [`WINSLOW_MIN_ROUNDS`], until none is turned over; at most [`UNTANGLE_ROUNDS`] rounds.
+//!    An L-shaped region's grid ends 0.022 outside the L at its inner corner (a step is
+//!    0.069); plain averaging left it 0.46 outside.
 //!    A side that turns inwards within one grid step (sparse, jagged boundary points) folds
 //!    the cell on it whatever the inside does: the sides' samples are then smoothed, ¼–½–¼,
 //!    for at most [`SIDE_SMOOTHING_ROUNDS`] rounds.
 
 use nalgebra::{Matrix2, SymmetricEigen, Vector2};
 
-use super::planar::{inside_polygon, signed_area};
-
 use super::boundary::{BoundaryOptions, boundary_loop};
-use super::planar::PlanarMesh;
+use super::planar::{PlanarMesh, inside_polygon, signed_area};
 use crate::error::{Error, Result};
 
 /// Most Winslow smoothing rounds that untangle a folded grid or bring it inside its region.
