@@ -51,13 +51,14 @@ fn surfaces() -> Vec<Surface> {
     fn square(_: f64, _: f64) -> bool {
         true
     }
+    fn saddle(s: f64, t: f64) -> [f64; 3] {
+        let (x, y) = (2.0 * s - 1.0, 2.0 * t - 1.0);
+        [x, y, x * y]
+    }
     vec![
         Surface {
             name: "saddle, one half 10× sparser",
-            position: |s, t| {
-                let (x, y) = (2.0 * s - 1.0, 2.0 * t - 1.0);
-                [x, y, x * y]
-            },
+            position: saddle,
             inside: square,
             density: |s, _| if s < 0.5 { 1.0 } else { 0.1 },
         },
@@ -90,10 +91,7 @@ fn surfaces() -> Vec<Surface> {
         },
         Surface {
             name: "saddle, even (control)",
-            position: |s, t| {
-                let (x, y) = (2.0 * s - 1.0, 2.0 * t - 1.0);
-                [x, y, x * y]
-            },
+            position: saddle,
             inside: square,
             density: |_, _| 1.0,
         },

@@ -100,6 +100,7 @@ pub use metrics::{
 };
 pub use noise::BandReport;
 pub use ordering::{LongSteps, Ordering, order_points};
+pub(crate) use path_graph::list_both_ways;
 pub use pipeline::{CurveOptions, CurveReconstruction, reconstruct_curve};
 pub use plot::{PlotLayers, PlotOptions, Projection, plot_scene, render_svg, write_plot};
 pub use points::{CurvePoints, DUPLICATE_TOLERANCE, MAX_POINTS, MIN_POINTS};

@@ -15,6 +15,12 @@ use super::groups::nearest;
 pub(crate) fn neighbour_graph(points: &[[f64; 3]], count: usize) -> Option<Vec<Vec<(usize, f64)>>> {
     let tree = ImmutableKdTree::<f64, 3>::new_from_slice(points).ok()?;
     let mut graph = nearest(&tree, points, NonZeroUsize::new(count + 1)?);
+    list_both_ways(&mut graph);
+    Some(graph)
+}
+
+/// Adds (i, d) to j's list wherever i lists (j, d) and j does not list i.
+pub(crate) fn list_both_ways(graph: &mut [Vec<(usize, f64)>]) {
     for i in 0..graph.len() {
         for k in 0..graph[i].len() {
             let (j, d) = graph[i][k];
@@ -23,7 +29,6 @@ pub(crate) fn neighbour_graph(points: &[[f64; 3]], count: usize) -> Option<Vec<V
             }
         }
     }
-    Some(graph)
 }
 
 /// Path lengths through `graph` from the nearest of `sources` to every point; ∞ where no

@@ -21,8 +21,9 @@
 //! every patch.
 
 use super::sparse::SymmetricMatrix;
-use crate::curve::unroll_graph;
+use crate::curve::{list_both_ways, unroll_graph};
 use crate::error::{Error, Result};
+use crate::geometry::vector::{norm, sub};
 
 /// Landmarks of the unrolling.
 pub const UNROLL_LANDMARKS: usize = 48;
@@ -98,14 +99,7 @@ pub fn unrolled_parameters(
                 .collect()
         })
         .collect();
-    for i in 0..graph.len() {
-        for k in 0..graph[i].len() {
-            let (j, d) = graph[i][k];
-            if !graph[j].iter().any(|&(m, _)| m == i) {
-                graph[j].push((i, d));
-            }
-        }
-    }
+    list_both_ways(&mut graph);
     let start = unroll_graph(&graph, UNROLL_LANDMARKS).ok_or_else(|| {
         Error::invalid(
             "the points cannot be unrolled: their neighbourhoods fall apart in pieces or \
@@ -143,5 +137,5 @@ pub fn unrolled_parameters(
 }
 
 fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    norm(sub(a, b))
 }
