@@ -556,3 +556,125 @@ fn the_blob_keeps_the_points_region_for_tessellate_and_eval() {
         "{warning}"
     );
 }
+
+/// Writes an OBJ of the triangles of an `n × m` grid over (u, v) ∈ [0, 1]² mapped by `at`,
+/// optionally wrapping u around (the last column is the first).
+fn grid_obj(path: &Path, n: usize, m: usize, wrap: bool, at: impl Fn(f64, f64) -> [f64; 3]) {
+    let columns = if wrap { n } else { n + 1 };
+    let mut text = String::new();
+    for j in 0..=m {
+        for i in 0..columns {
+            let p = at(i as f64 / n as f64, j as f64 / m as f64);
+            text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        }
+    }
+    let id = |i: usize, j: usize| j * columns + i % columns + 1;
+    for j in 0..m {
+        for i in 0..n {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+        }
+    }
+    fs::write(path, text).unwrap();
+}
+
+#[test]
+fn a_can_of_three_patches_and_a_box_of_six_are_stitched_without_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let (r, h) = (0.5, 1.5);
+    let tau = std::f64::consts::TAU;
+    // The side wraps around: one column of vertices is both its first and its last.
+    grid_obj(&path("side.obj"), 40, 8, true, |u, v| {
+        [r * (tau * u).cos(), r * (tau * u).sin(), h * v]
+    });
+    for (name, z, sectors) in [("bottom.obj", 0.0, 30), ("top.obj", h, 52)] {
+        // A disc: rings from radius r down to 0.02 r, the innermost ring closed by a polygon
+        // fan written by hand.
+        let rings = 5;
+        let mut text = String::new();
+        for ring in 0..=rings {
+            let rho = r * (1.0 - 0.98 * ring as f64 / rings as f64);
+            for s in 0..sectors {
+                let a = tau * s as f64 / sectors as f64;
+                text += &format!("v {} {} {z}\n", rho * a.cos(), rho * a.sin());
+            }
+        }
+        text += &format!("v 0 0 {z}\n");
+        let id = |ring: usize, s: usize| ring * sectors + s % sectors + 1;
+        for ring in 0..rings {
+            for s in 0..sectors {
+                let (a, b, c, d) = (
+                    id(ring, s),
+                    id(ring, s + 1),
+                    id(ring + 1, s + 1),
+                    id(ring + 1, s),
+                );
+                text += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+            }
+        }
+        let centre = (rings + 1) * sectors + 1;
+        for s in 0..sectors {
+            text += &format!("f {} {} {centre}\n", id(rings, s), id(rings, s + 1));
+        }
+        fs::write(path(name), text).unwrap();
+    }
+    let report = json(&ok(&[
+        "parametric",
+        "stitch",
+        s(&path("bottom.obj")),
+        s(&path("side.obj")),
+        s(&path("top.obj")),
+        "--out",
+        s(&path("can.ply")),
+        "--json",
+    ]));
+    assert_eq!(report["watertight"], true, "{report}");
+    assert_eq!(
+        (report["seams"].as_u64(), report["partial_seams"].as_u64()),
+        (Some(2), Some(0))
+    );
+    assert_eq!(report["boundary_loops"], 0);
+
+    // A box whose six faces have six different grids: twelve partial seams.
+    let corner = [-1.0, -1.0, -1.0];
+    let faces: [([f64; 3], [f64; 3], [f64; 3]); 6] = [
+        (corner, [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
+        ([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
+        (corner, [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
+        ([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
+        (corner, [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
+        ([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
+    ];
+    let mut args: Vec<String> = vec!["parametric".into(), "stitch".into()];
+    for (f, (o, du, dv)) in faces.iter().enumerate() {
+        let file = path(&format!("face{f}.obj"));
+        grid_obj(&file, 3 + f, 9 - f, false, |u, v| {
+            [0, 1, 2].map(|c| o[c] + u * du[c] + v * dv[c])
+        });
+        args.push(s(&file).to_string());
+    }
+    args.extend([
+        "--out".into(),
+        s(&path("box.obj")).to_string(),
+        "--json".into(),
+    ]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let report = json(&ok(&args));
+    assert_eq!(report["watertight"], true, "{report}");
+    assert_eq!(
+        (report["seams"].as_u64(), report["partial_seams"].as_u64()),
+        (Some(12), Some(12))
+    );
+    // Two of the faces only, far apart: refused, nothing written.
+    let e = fails(&[
+        "parametric",
+        "stitch",
+        args[2],
+        args[3],
+        "--out",
+        s(&path("pair.obj")),
+    ]);
+    assert!(e.contains("do not meet"), "{e}");
+    assert!(!path("pair.obj").exists());
+}

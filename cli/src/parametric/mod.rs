@@ -19,11 +19,11 @@ use neurosurf_trainer::io::{
 };
 use neurosurf_trainer::parametric::{
     Activation, BACK_SEED, BENCHMARK_SIZES, BoundaryOptions, HoleOptions, LleOptions,
-    NetworkSummary, OutlierOptions, Parameterization, SampleSurface, SurfaceNetwork,
+    NetworkSummary, OutlierOptions, Parameterization, SampleSurface, Seam, SurfaceNetwork,
     TopologyOptions, benchmark, boundary_loops, boundary_seam, coons_boundary,
     coons_boundary_of_polygon, coons_grid, delaunay_grid, edge_report, embed_points, fill_hole,
-    fill_polygon, fit_robustly, network_to_blob, parameter_region, punch_hole, sample_surface,
-    stitch, synthesize, wireframe,
+    fill_polygon, find_seams, fit_robustly, network_to_blob, parameter_region, punch_hole,
+    sample_surface, stitch, synthesize, wireframe,
 };
 use neurosurf_trainer::plot::write_picture;
 use neurosurf_trainer::table::{Align, Table};
@@ -582,13 +582,17 @@ fn box_samples(network: &SurfaceNetwork) -> Vec<[f64; 2]> {
 
 #[derive(Debug, clap::Args)]
 pub struct StitchArgs {
-    /// Two or more open patches (OBJ or PLY), each with exactly one boundary loop.
+    /// Two or more open patches (OBJ or PLY).
     #[arg(required = true, num_args = 2..)]
     patches: Vec<PathBuf>,
-    /// A seam between patches A and B (0-based, in argument order): `A,B`. Repeat for more;
-    /// two patches are seamed together by default.
+    /// Seam only patches A and B (0-based, in argument order): `A,B`. Repeat for more. By
+    /// default every pair whose boundaries meet is seamed, along whole loops or stretches.
     #[arg(long = "seam", value_parser = super::output::comma_list::<usize, 2>)]
     seams: Vec<[usize; 2]>,
+    /// The largest gap a seam closes [default: the longer of the two boundaries' median
+    /// edges, at most 25 % of the smaller patch].
+    #[arg(long)]
+    reach: Option<f64>,
     /// Output mesh (`.obj`, `.ply` or `.stl`).
     #[arg(long)]
     out: PathBuf,
@@ -602,6 +606,9 @@ struct StitchReport<'a> {
     #[serde(flatten)]
     mesh: MeshReport<'a>,
     seams: usize,
+    /// Seams along a stretch of a boundary loop rather than all of it.
+    partial_seams: usize,
+    boundary_loops: usize,
     gap_before: f64,
     gap_solved: f64,
     gap_after: f64,
@@ -615,51 +622,80 @@ fn stitch_patches(args: &StitchArgs) -> Result<()> {
         .iter()
         .map(|p| read_mesh(p))
         .collect::<neurosurf_trainer::Result<Vec<Mesh>>>()?;
-    let pairs = if args.seams.is_empty() {
-        if patches.len() != 2 {
+    let before: Vec<usize> = patches.iter().map(|p| p.positions.len()).collect();
+    let mut seams = find_seams(&mut patches, &args.seams, args.reach)?;
+    // A named pair whose boundaries are farther apart than the reach: align their whole loops
+    // (up to 25 % of the smaller patch apart), or say why not.
+    for &[a, b] in &args.seams {
+        let joined =
+            |s: &Seam| (s.patch_a, s.patch_b) == (a, b) || (s.patch_a, s.patch_b) == (b, a);
+        if !seams.iter().any(joined) {
+            let seam = boundary_seam(&mut patches, a, b).with_context(|| {
+                format!(
+                    "cannot seam patch {a} ({}) to patch {b} ({})",
+                    name(&args.patches, a),
+                    name(&args.patches, b)
+                )
+            })?;
+            seams.push(seam);
+        }
+    }
+    if seams.is_empty() {
+        if patches.len() == 2 {
+            // Two patches: their whole loops, or the reason they do not meet.
+            seams.push(boundary_seam(&mut patches, 0, 1).with_context(|| {
+                format!(
+                    "no boundary stretch of {} lies within reach of {}",
+                    name(&args.patches, 0),
+                    name(&args.patches, 1)
+                )
+            })?);
+        } else {
             bail!(
-                "{} patches: say which to join with --seam A,B",
+                "the {} patches' boundaries do not meet: no stretch of one lies within reach of \
+                 another; pass a larger --reach, or name the pairs to seam with --seam A,B",
                 patches.len()
             );
         }
-        vec![[0, 1]]
-    } else {
-        args.seams.clone()
-    };
-    let mut seams = Vec::new();
-    for [a, b] in pairs {
-        let seam = boundary_seam(&mut patches, a, b).with_context(|| {
-            format!(
-                "cannot seam patch {a} ({}) to patch {b} ({})",
-                name(&args.patches, a),
-                name(&args.patches, b)
-            )
-        })?;
-        seams.push(seam);
     }
+    let partial_seams = seams.iter().filter(|s| !s.whole_loop).count();
     let stitched = stitch(&patches, &seams)?;
     write_mesh(&args.out, &stitched.mesh, None)?;
     let report = StitchReport {
         mesh: MeshReport::of(&args.out, &stitched.mesh),
         seams: seams.len(),
+        partial_seams,
+        boundary_loops: boundary_loops(&stitched.mesh.triangles).map_or(0, |l| l.len()),
         gap_before: stitched.gap_before,
         gap_solved: stitched.gap_solved,
         gap_after: stitched.gap_after,
         max_displacement: stitched.max_displacement,
         flipped_triangles: stitched.flipped_triangles,
     };
+    let added: usize = patches
+        .iter()
+        .zip(&before)
+        .map(|(p, n)| p.positions.len() - n)
+        .sum();
     if args.json {
         return output::json(&report);
     }
     println!(
-        "{} seams: gap {:.3e} before, {:.3e} after the solve, {} welded; vertices moved at \
-         most {:.3e}",
+        "{} seams ({} along stretches of a loop, {added} vertices added to pair them): gap \
+         {:.3e} before, {:.3e} after the solve, {} after welding; vertices moved at most {:.3e}",
         report.seams,
+        report.partial_seams,
         report.gap_before,
         report.gap_solved,
         report.gap_after,
         report.max_displacement
     );
+    if report.boundary_loops > 0 {
+        println!(
+            "{} boundary loops are left open (no patch meets them)",
+            report.boundary_loops
+        );
+    }
     report.mesh.print();
     Ok(())
 }

@@ -70,6 +70,7 @@ mod planar;
 mod quality;
 mod robust;
 mod samples;
+mod seams;
 mod sparse;
 mod split;
 mod stitch;
@@ -128,11 +129,12 @@ pub use planar::{
 pub use quality::{align_affine, distance_correlation, neighborhood_preservation, pearson};
 pub use robust::{RobustFit, fit_robustly};
 pub use samples::{SampleSurface, SurfaceSample, sample_surface};
+pub use seams::{MAX_SEAM_GAP, PARALLEL, SNAP, boundary_seam, find_seams};
 pub use sparse::{Cholesky, CompressedMatrix, SymmetricMatrix};
 pub use split::{Split, stratified_split};
 pub use stitch::{
-    ANCHOR_WEIGHT, CONSTRAINT_WEIGHT, MAX_SEAM_GAP, Seam, Stitched, boundary_seam, face_outward,
-    orient_consistently, signed_volume, stitch,
+    ANCHOR_WEIGHT, CONSTRAINT_WEIGHT, Seam, Stitched, face_outward, orient_consistently,
+    signed_volume, stitch,
 };
 pub use synthesis::{SynthesizedSurface, synthesize};
 pub use topology::{Candidate, TopologyOptions, TopologySearch};

@@ -10,27 +10,19 @@
 //! on the same three vertices are dropped, and triangle orientation is made consistent across
 //! the seams.
 //!
-//! Seams pair vertices one to one. [`boundary_seam`] builds one from two patches' boundary
-//! loops, first adding vertices to the shorter loop by splitting its longest boundary edges
-//! ("necessary vertex additions", Fig. 12b), then choosing the cyclic shift and direction
-//! that bring the loops closest.
+//! Seams pair vertices one to one; [`find_seams`](super::find_seams) finds them where patch
+//! boundaries meet, along whole loops or stretches of them (`seams`).
 
 use super::laplacian::cotangent_laplacian;
 use super::sparse::SymmetricMatrix;
 use crate::error::{Error, Result};
-use crate::geometry::bounding_diagonal;
-use crate::geometry::mesh_graph::{boundary_loops, edge_report};
+use crate::geometry::mesh_graph::edge_report;
 use crate::io::Mesh;
 
 /// Weight of a seam constraint row.
 pub const CONSTRAINT_WEIGHT: f64 = 10.0;
 /// Weight of the pull towards the original positions.
 pub const ANCHOR_WEIGHT: f64 = 1e-1;
-
-/// The largest gap a seam accepts between its two loops, as a share of the smaller patch's
-/// bounding diagonal: beyond it the loops do not meet, and stitching would drag one patch
-/// across to the other.
-pub const MAX_SEAM_GAP: f64 = 0.25;
 
 /// Vertices of two patches that must coincide, pairwise.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
@@ -43,6 +35,9 @@ pub struct Seam {
     pub patch_b: usize,
     /// Its seam vertices, `vertices_b[k]` paired with `vertices_a[k]`.
     pub vertices_b: Vec<u32>,
+    /// Whether the seam is a whole boundary loop (the last pair joins the first) rather than
+    /// a stretch of one.
+    pub whole_loop: bool,
 }
 
 /// The stitched mesh and what the stitch moved.
@@ -318,204 +313,4 @@ pub fn face_outward(mesh: &mut Mesh) {
             t.swap(1, 2);
         }
     }
-}
-
-/// Pairs the boundary loops of `patches[a]` and `patches[b]` (each must have exactly one).
-///
-/// The loops are aligned first: the start vertex and direction of b's loop that minimize
-/// the squared distances between points at equal arc-length fractions. Then every vertex of
-/// one loop without a partner at (nearly) the same fraction on the other gets one: the other
-/// loop's boundary edge is split there, its triangle becoming two. Both loops end up with the
-/// same vertices at the same fractions, paired in order.
-///
-/// # Errors
-/// [`Error::InvalidInput`] for a missing patch, a patch without exactly one boundary loop,
-/// `a == b`, or loops farther apart than [`MAX_SEAM_GAP`] of the smaller patch (the patches
-/// are left as they were).
-pub fn boundary_seam(patches: &mut [Mesh], a: usize, b: usize) -> Result<Seam> {
-    if a == b || a >= patches.len() || b >= patches.len() {
-        return Err(Error::invalid(
-            "a seam needs two different existing patches",
-        ));
-    }
-    let la = single_loop(&patches[a], a)?;
-    let lb0 = single_loop(&patches[b], b)?;
-    let fa = arc_fractions(&patches[a].positions, &la);
-    let pa = &patches[a].positions;
-    let mut best = (f64::INFINITY, Vec::new());
-    for reverse in [false, true] {
-        for shift in 0..lb0.len() {
-            let m = lb0.len();
-            let lb: Vec<u32> = (0..m)
-                .map(|k| {
-                    lb0[if reverse {
-                        (shift + m - k) % m
-                    } else {
-                        (shift + k) % m
-                    }]
-                })
-                .collect();
-            let pb = &patches[b].positions;
-            let fb = arc_fractions(pb, &lb);
-            let cost: f64 = la
-                .iter()
-                .zip(&fa)
-                .map(|(&v, &f)| {
-                    let q = point_at(pb, &lb, &fb, f).0;
-                    let p = pa[v as usize];
-                    (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)
-                })
-                .sum();
-            if cost < best.0 {
-                best = (cost, lb);
-            }
-        }
-    }
-    // How far apart the aligned loops are, against the smaller patch.
-    let gap = {
-        let pb = &patches[b].positions;
-        let fb = arc_fractions(pb, &best.1);
-        la.iter()
-            .zip(&fa)
-            .map(|(&v, &f)| {
-                let (q, p) = (point_at(pb, &best.1, &fb, f).0, pa[v as usize]);
-                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-            })
-            .fold(0.0, f64::max)
-    };
-    let size = bounding_diagonal(&patches[a]).min(bounding_diagonal(&patches[b]));
-    if gap > MAX_SEAM_GAP * size {
-        return Err(Error::invalid(format!(
-            "the boundaries of patches {a} and {b} are up to {gap:.4e} apart, {:.0} % of the \
-             smaller patch's size {size:.4e} (at most {:.0} %): they do not meet, so a seam \
-             would drag one patch onto the other; move the patches together or seam others",
-            100.0 * gap / size,
-            100.0 * MAX_SEAM_GAP
-        )));
-    }
-    let mut loops = [la, best.1];
-    let fractions = [
-        arc_fractions(&patches[a].positions, &loops[0]),
-        arc_fractions(&patches[b].positions, &loops[1]),
-    ];
-    // Merge the two fraction lists; partners closer than a quarter of the shortest step pair.
-    let step = fractions
-        .iter()
-        .flat_map(|f| {
-            f.windows(2)
-                .map(|w| w[1] - w[0])
-                .chain(f.last().map(|l| 1.0 - l))
-        })
-        .fold(1.0, f64::min);
-    let tolerance = 0.25 * step;
-    let (mut i, mut j) = (0, 0);
-    let (na, nb) = (fractions[0].len(), fractions[1].len());
-    let mut insert: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
-    while i < na || j < nb {
-        let fi = fractions[0].get(i).copied().unwrap_or(f64::INFINITY);
-        let fj = fractions[1].get(j).copied().unwrap_or(f64::INFINITY);
-        if (fi - fj).abs() <= tolerance {
-            i += 1;
-            j += 1;
-        } else if fi < fj {
-            insert[1].push(fi);
-            i += 1;
-        } else {
-            insert[0].push(fj);
-            j += 1;
-        }
-    }
-    let patch_index = [a, b];
-    for side in 0..2 {
-        let mesh = &mut patches[patch_index[side]];
-        // Insert from the end so earlier fractions keep their edges.
-        for &f in insert[side].iter().rev() {
-            let fr = arc_fractions(&mesh.positions, &loops[side]);
-            let (point, segment) = point_at(&mesh.positions, &loops[side], &fr, f);
-            split_boundary_edge(mesh, &mut loops[side], segment, point);
-        }
-    }
-    debug_assert_eq!(loops[0].len(), loops[1].len());
-    let [vertices_a, vertices_b] = loops;
-    Ok(Seam {
-        patch_a: a,
-        vertices_a,
-        patch_b: b,
-        vertices_b,
-    })
-}
-
-/// Arc-length fraction of every loop vertex from the first (0) around the closed loop.
-fn arc_fractions(positions: &[[f64; 3]], cycle: &[u32]) -> Vec<f64> {
-    let m = cycle.len();
-    let mut out = Vec::with_capacity(m);
-    let mut total = 0.0;
-    for k in 0..m {
-        out.push(total);
-        let (p, q) = (
-            positions[cycle[k] as usize],
-            positions[cycle[(k + 1) % m] as usize],
-        );
-        total += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
-    }
-    if total > 0.0 {
-        out.iter_mut().for_each(|f| *f /= total);
-    }
-    out
-}
-
-/// The point at arc fraction `f` on the closed loop and the index of the edge it lies on.
-fn point_at(positions: &[[f64; 3]], cycle: &[u32], fractions: &[f64], f: f64) -> ([f64; 3], usize) {
-    let m = cycle.len();
-    let k = fractions
-        .partition_point(|&x| x <= f)
-        .saturating_sub(1)
-        .min(m - 1);
-    let end = if k + 1 < m { fractions[k + 1] } else { 1.0 };
-    let t = if end > fractions[k] {
-        ((f - fractions[k]) / (end - fractions[k])).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (p, q) = (
-        positions[cycle[k] as usize],
-        positions[cycle[(k + 1) % m] as usize],
-    );
-    (std::array::from_fn(|c| p[c] + t * (q[c] - p[c])), k)
-}
-
-fn single_loop(mesh: &Mesh, index: usize) -> Result<Vec<u32>> {
-    let mut loops = boundary_loops(&mesh.triangles)?;
-    if loops.len() != 1 {
-        return Err(Error::invalid(format!(
-            "patch {index} has {} boundary loops; a boundary seam needs exactly one",
-            loops.len()
-        )));
-    }
-    Ok(loops.remove(0))
-}
-
-/// Splits boundary edge `k` of the loop (from `cycle[k]` to the next) at `point`: its
-/// triangle becomes two and the new vertex joins the loop.
-fn split_boundary_edge(mesh: &mut Mesh, cycle: &mut Vec<u32>, k: usize, point: [f64; 3]) {
-    let m = cycle.len();
-    let (a, b) = (cycle[k], cycle[(k + 1) % m]);
-    let mid = mesh.positions.len() as u32;
-    mesh.positions.push(point);
-    let directed =
-        |t: &[u32; 3], x: u32, y: u32| (0..3).find(|&e| t[e] == x && t[(e + 1) % 3] == y);
-    for (x, y) in [(a, b), (b, a)] {
-        if let Some((t, e)) = mesh
-            .triangles
-            .iter()
-            .enumerate()
-            .find_map(|(t, tri)| directed(tri, x, y).map(|e| (t, e)))
-        {
-            let c = mesh.triangles[t][(e + 2) % 3];
-            mesh.triangles[t] = [x, mid, c];
-            mesh.triangles.push([mid, y, c]);
-            break;
-        }
-    }
-    cycle.insert(k + 1, mid);
 }

@@ -323,6 +323,7 @@ fn stitched_pillow_is_watertight_with_no_seam_gap() {
         vertices_a: vec![0, 1],
         patch_b: 1,
         vertices_b: vec![0],
+        whole_loop: false,
     };
     assert!(
         stitch(&patches, &[bad])
@@ -335,6 +336,7 @@ fn stitched_pillow_is_watertight_with_no_seam_gap() {
         vertices_a: vec![0],
         patch_b: 5,
         vertices_b: vec![0],
+        whole_loop: false,
     };
     assert!(stitch(&patches, &[bad]).is_err());
     let stitched = stitch(&patches, &[seam]).unwrap();
