@@ -30,6 +30,7 @@ use neurosurf_trainer::table::{Align, Table};
 
 use super::output::{self, blob_scalar, wrote_blob};
 
+mod closed;
 mod compare;
 
 #[derive(Debug, Subcommand)]
@@ -44,8 +45,11 @@ pub enum Command {
     /// Tessellate a surface network: a Coons quad grid or a Delaunay triangulation of the
     /// parameter region, pushed through the network (OBJ, PLY or STL with normals).
     Tessellate(TessellateArgs),
-    /// Stitch open patches (meshes with one boundary loop each) into one watertight mesh.
+    /// Stitch open patches into one mesh, along whole boundary loops or stretches of them.
     Stitch(StitchArgs),
+    /// Rebuild a closed mesh (holes capped) from surface-network patches: cut it into
+    /// discs, fit each, tessellate them with shared seams and stitch them watertight.
+    Closed(closed::ClosedArgs),
     /// Fill the holes of a mesh: one-ring embedding of the rings around each hole, a network
     /// on them, new vertices inside, constrained Delaunay.
     FillHole(FillHoleArgs),
@@ -64,6 +68,7 @@ pub fn run(command: &Command) -> Result<()> {
         Command::Fit(args) => fit(args),
         Command::Tessellate(args) => tessellate(args),
         Command::Stitch(args) => stitch_patches(args),
+        Command::Closed(args) => closed::run(args),
         Command::FillHole(args) => fill_holes(args),
         Command::Compare(args) => compare::run(args),
         Command::Bench(args) => bench(args),

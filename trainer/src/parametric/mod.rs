@@ -47,6 +47,7 @@ mod bench;
 mod blob;
 mod boundary;
 mod capacity;
+mod closed;
 mod compare;
 mod coons;
 mod eigen;
@@ -95,6 +96,10 @@ pub use blob::{
 };
 pub use boundary::{BoundaryOptions, boundary_loop, resample_closed};
 pub use capacity::{check_capacity, largest_parameter_count};
+pub use closed::{
+    ClosedOptions, ClosedPatch, ClosedReconstruction, FIT_SAMPLES, MAX_NORMAL_CONE, MAX_PATCHES,
+    NORMAL_PENALTY, NORMAL_SHARE, SeamCurve, reconstruct_closed,
+};
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
     CoonsBoundary, SIDE_SMOOTHING_ROUNDS, UNTANGLE_ROUNDS, WINSLOW_MIN_ROUNDS, coons_boundary,
