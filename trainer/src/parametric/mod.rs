@@ -25,6 +25,10 @@
 //! 4. **Blobs** (`blob`): [`network_to_blob`] / [`network_from_blob`] — the network as the
 //!    core's `parametric::SurfaceNetworkModel` evaluates it, in `f32` or Q16.16, on the host
 //!    and on the microcontroller.
+//! 5. **Several patches** (§6): [`find_seams`] (`seams`) finds where patch boundaries meet,
+//!    along whole loops or stretches of them, and [`stitch`] (`stitch`) welds them by a
+//!    cotangent-Laplacian least squares; `hole` fills holes. [`reconstruct_closed`]
+//!    (`closed`) cuts a closed mesh into disc patches, fits each and stitches them watertight.
 //!
 //! `samples` makes test surfaces with known parameters.
 //!
