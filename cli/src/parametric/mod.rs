@@ -634,7 +634,14 @@ fn stitch_patches(args: &StitchArgs) -> Result<()> {
     for &[a, b] in &args.seams {
         let joined =
             |s: &Seam| (s.patch_a, s.patch_b) == (a, b) || (s.patch_a, s.patch_b) == (b, a);
+        let touched = |s: &Seam| [a, b].iter().any(|p| s.patch_a == *p || s.patch_b == *p);
         if !seams.iter().any(joined) {
+            if seams.iter().any(touched) {
+                bail!(
+                    "patches {a} and {b} do not meet within reach, and one of them is seamed to \
+                     another patch already: pass a larger --reach"
+                );
+            }
             let seam = boundary_seam(&mut patches, a, b).with_context(|| {
                 format!(
                     "cannot seam patch {a} ({}) to patch {b} ({})",
@@ -670,7 +677,9 @@ fn stitch_patches(args: &StitchArgs) -> Result<()> {
         mesh: MeshReport::of(&args.out, &stitched.mesh),
         seams: seams.len(),
         partial_seams,
-        boundary_loops: boundary_loops(&stitched.mesh.triangles).map_or(0, |l| l.len()),
+        boundary_loops: boundary_loops(&stitched.mesh.triangles)
+            .with_context(|| "the stitched mesh's boundary is not a set of simple loops")?
+            .len(),
         gap_before: stitched.gap_before,
         gap_solved: stitched.gap_solved,
         gap_after: stitched.gap_after,

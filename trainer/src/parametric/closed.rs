@@ -14,10 +14,12 @@
 //!
 //! **Seams.** Two regions meet along a chain of mesh vertices between corners (where the
 //! region across changes). Every chain is thinned to the tessellation's spacing in one
-//! canonical direction, so both regions keep the same vertices. A region's polygon is its kept
-//! loop vertices at their Tutte parameters (convex: they lie on the unit circle); grid points
-//! fill it, constrained Delaunay triangulates it, and its network lifts it. The copies of every
-//! kept vertex in the patches around it are the seams [`stitch`] closes.
+//! canonical direction, so both regions keep the same vertices. Each region is fitted with one
+//! ring of triangles around it ([`OVERLAP_RINGS`]), so its seams lie inside the domain its
+//! network learned; its polygon is its kept loop vertices at their Tutte parameters (inside
+//! the unit circle, where the ring's outer loop lies). Grid points fill it, constrained
+//! Delaunay triangulates it, and its network lifts it. The copies of every kept vertex in the
+//! patches around it are the seams [`stitch`] closes.
 
 use super::fit::{SurfaceFit, fit_network};
 use super::grid::grid_inside;
@@ -85,7 +87,9 @@ pub struct ClosedPatch {
     pub points: usize,
 }
 
-/// Where two patches meet: the same seam points in each patch's parameters.
+/// Where two patches meet: the same seam points in each patch's parameters, in the order of
+/// their input vertices (not along the seam). Patches that only share a corner, where three
+/// or more meet, have one point.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct SeamCurve {
     /// First patch.
@@ -115,6 +119,11 @@ pub struct ClosedReconstruction {
     pub max_displacement: f64,
     /// The stitched mesh against the (capped) input, both ways, over its diagonal.
     pub distance: SurfaceDistance,
+    /// Mean distance between the two networks of a seam at its points (what the blobs give
+    /// there before any stitch), over the input's diagonal.
+    pub seam_gap: f64,
+    /// The largest such distance.
+    pub max_seam_gap: f64,
 }
 
 /// Rebuilds the closed `input` mesh from patches of surface networks (see the module docs).
@@ -170,6 +179,12 @@ pub fn reconstruct_closed(input: &Mesh, options: &ClosedOptions) -> Result<Close
 
     // Seam vertices, thinned to the output spacing.
     let total_area: f64 = regions.iter().map(|r| r.area).sum();
+    let diagonal = crate::geometry::bounding_diagonal(&mesh);
+    if total_area.is_nan() || total_area <= 1e-12 * diagonal * diagonal {
+        return Err(Error::invalid(
+            "the mesh encloses no area: its triangles are degenerate",
+        ));
+    }
     let spacing = (total_area / options.vertices as f64 * 2.0 / 3f64.sqrt()).sqrt();
     let kept = seam_vertices(&mesh, &labels, &regions, spacing);
 
@@ -199,7 +214,12 @@ pub fn reconstruct_closed(input: &Mesh, options: &ClosedOptions) -> Result<Close
         let target = (options.vertices as f64 * share).max(16.0);
         let h = (signed_area(&polygon).abs() / target).sqrt();
         let interior = grid_inside(&polygon, h);
-        let planar = triangulate_polygon(&polygon, &interior)?;
+        let planar = triangulate_polygon(&polygon, &interior).map_err(|e| {
+            Error::invalid(format!(
+                "patch {r}'s seam polygon cannot be triangulated ({e}): try more --vertices \
+                 or more --patches"
+            ))
+        })?;
         let surface = synthesize(&fit.network, &planar);
         for (i, &v) in corners.iter().enumerate() {
             copies.entry(v).or_default().push((r, i as u32, polygon[i]));
@@ -241,15 +261,34 @@ pub fn reconstruct_closed(input: &Mesh, options: &ClosedOptions) -> Result<Close
     }
     let (seams, curves): (Vec<Seam>, Vec<SeamCurve>) = pairs.into_values().unzip();
     let stitched = stitch(&meshes, &seams)?;
-    let distance = surface_distance(&stitched.mesh, &mesh)?;
+    let measured = surface_distance(&stitched.mesh, &mesh)?;
+    // How far apart two patches' networks put the same seam point.
+    let mut gaps = Vec::new();
+    for curve in &curves {
+        let (a, b) = (
+            &patches[curve.patch_a].fit.network,
+            &patches[curve.patch_b].fit.network,
+        );
+        for (ua, ub) in curve.parameters_a.iter().zip(&curve.parameters_b) {
+            let (p, q) = (
+                a.evaluate(ua[0], ua[1]).position,
+                b.evaluate(ub[0], ub[1]).position,
+            );
+            gaps.push(distance(p, q) / measured.diagonal);
+        }
+    }
+    let seam_gap = gaps.iter().sum::<f64>() / gaps.len().max(1) as f64;
+    let max_seam_gap = gaps.iter().copied().fold(0.0, f64::max);
     Ok(ClosedReconstruction {
+        seam_gap,
+        max_seam_gap,
         patches,
         seams: curves,
         mesh: stitched.mesh,
         capped_holes,
         gap_before: stitched.gap_before,
         max_displacement: stitched.max_displacement,
-        distance,
+        distance: measured,
     })
 }
 
@@ -307,6 +346,29 @@ fn nearest_seeds(
     (dist, label)
 }
 
+/// How many edge-connected pieces the vertices form.
+fn components(rings: &[Vec<usize>]) -> usize {
+    let mut seen = vec![false; rings.len()];
+    let mut count = 0;
+    for start in 0..rings.len() {
+        if seen[start] {
+            continue;
+        }
+        count += 1;
+        seen[start] = true;
+        let mut stack = vec![start];
+        while let Some(v) = stack.pop() {
+            for &w in &rings[v] {
+                if !seen[w] {
+                    seen[w] = true;
+                    stack.push(w);
+                }
+            }
+        }
+    }
+    count
+}
+
 /// Unit area-weighted vertex normals (zero where the triangles around cancel).
 fn vertex_normals(mesh: &Mesh) -> Vec<[f64; 3]> {
     let mut sums = vec![[0.0; 3]; mesh.positions.len()];
@@ -336,6 +398,14 @@ fn cut_into_discs(mesh: &Mesh, start: usize) -> Result<Vec<usize>> {
     let n = mesh.positions.len();
     let rings = one_rings(n, &mesh.triangles);
     let normals = vertex_normals(mesh);
+    let pieces = components(&rings);
+    if pieces > MAX_PATCHES / 2 {
+        return Err(Error::invalid(format!(
+            "the mesh has {pieces} separate pieces, each needing its own patches (at most {} \
+             pieces): remove the debris or rebuild the pieces one by one",
+            MAX_PATCHES / 2
+        )));
+    }
     let mut seeds = vec![0usize];
     let (mut dist, _) = nearest_seeds(mesh, &rings, &normals, &seeds);
     // Every component gets a seed.
@@ -456,14 +526,8 @@ fn check_regions(
 ) -> (Option<String>, Vec<usize>) {
     let mut problem = None;
     let mut seeds = Vec::new();
-    for r in 0..count {
-        let triangles: Vec<[u32; 3]> = mesh
-            .triangles
-            .iter()
-            .zip(labels)
-            .filter(|&(_, &l)| l == r)
-            .map(|(t, _)| *t)
-            .collect();
+    for (r, members) in by_label(labels, count).iter().enumerate() {
+        let triangles: Vec<[u32; 3]> = members.iter().map(|&t| mesh.triangles[t]).collect();
         if triangles.is_empty() {
             continue;
         }
@@ -519,8 +583,7 @@ fn regions_of(mesh: &Mesh, labels: &[usize]) -> Result<Vec<Region>> {
         }
     }
     let mut out = Vec::new();
-    for r in 0..count {
-        let core: Vec<usize> = (0..labels.len()).filter(|&t| labels[t] == r).collect();
+    for core in by_label(labels, count) {
         if core.is_empty() {
             continue;
         }
@@ -579,6 +642,17 @@ fn regions_of(mesh: &Mesh, labels: &[usize]) -> Result<Vec<Region>> {
         });
     }
     Ok(out)
+}
+
+/// The triangles of every label.
+fn by_label(labels: &[usize], count: usize) -> Vec<Vec<usize>> {
+    let mut out = vec![Vec::new(); count];
+    for (t, &l) in labels.iter().enumerate() {
+        if let Some(list) = out.get_mut(l) {
+            list.push(t);
+        }
+    }
+    out
 }
 
 /// Whether `triangles` form a disc: one boundary loop and Euler characteristic 1.

@@ -138,7 +138,7 @@ pub use planar::{
 pub use quality::{align_affine, distance_correlation, neighborhood_preservation, pearson};
 pub use robust::{RobustFit, fit_robustly};
 pub use samples::{SampleSurface, SurfaceSample, sample_surface};
-pub use seams::{MAX_SEAM_GAP, PARALLEL, SNAP, boundary_seam, find_seams};
+pub use seams::{MAX_SEAM_GAP, PARALLEL, SNAP, WHOLE_LOOP_SHARE, boundary_seam, find_seams};
 pub use sparse::{Cholesky, CompressedMatrix, SymmetricMatrix};
 pub use split::{Split, stratified_split};
 pub use stitch::{

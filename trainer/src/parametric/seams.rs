@@ -6,8 +6,8 @@
 //! edges runs parallel to an edge of that loop (|cos| ≥ [`PARALLEL`]), its foot on that edge
 //! falls inside the edge, and it lies within the reach (by default the longer of the two
 //! loops' median boundary edges, at most [`MAX_SEAM_GAP`] of the smaller patch). Runs of
-//! touching vertices are the stretches that meet; a loop whose every vertex touches a loop
-//! whose every vertex touches it back is a whole-loop seam.
+//! touching vertices are the stretches that meet; two loops that touch each other at
+//! [`WHOLE_LOOP_SHARE`] of their vertices or more make a whole-loop seam.
 //!
 //! A stretch's ends are carried over to the other loop: where an end's foot falls inside an
 //! edge, that edge is split (the end lands on a vertex within [`SNAP`] of an edge). Then each
@@ -36,6 +36,10 @@ pub const PARALLEL: f64 = 0.9;
 /// A stretch's end lands on an existing vertex when it falls within this share of an edge
 /// from it, instead of splitting the edge.
 pub const SNAP: f64 = 0.2;
+
+/// Share of each loop's vertices that must touch the other loop for the two to be seamed as
+/// whole loops.
+pub const WHOLE_LOOP_SHARE: f64 = 0.9;
 
 /// How far outside the other loop's edge (as a share of it) a foot may fall and still count.
 const FOOT_SLACK: f64 = 0.05;
@@ -147,8 +151,15 @@ impl Outline {
     }
 
     /// The vertex at arc length `s` (taken modulo the loop), made by splitting the edge there
-    /// unless `s` lies within [`SNAP`] of an edge from a vertex or the edge is `locked`.
-    fn vertex_at(&mut self, mesh: &mut Mesh, s: f64, locked: &dyn Fn(u32, u32) -> bool) -> u32 {
+    /// unless `s` lies within [`SNAP`] of an edge from a vertex. On a `locked` edge (another
+    /// seam's) it is the edge's end inside the stretch, which runs on from `s` forwards or not.
+    fn vertex_at(
+        &mut self,
+        mesh: &mut Mesh,
+        s: f64,
+        locked: &dyn Fn(u32, u32) -> bool,
+        forward: bool,
+    ) -> u32 {
         let s = s.rem_euclid(self.total.max(f64::MIN_POSITIVE));
         let k = self.arc.partition_point(|&x| x <= s).saturating_sub(1);
         let length = self.edge_length(k);
@@ -158,10 +169,13 @@ impl Outline {
             0.0
         };
         let (a, b) = self.edge(k);
-        if t <= SNAP || (locked(a, b) && t < 0.5) {
+        if locked(a, b) {
+            return if forward { b } else { a };
+        }
+        if t <= SNAP {
             return a;
         }
-        if t >= 1.0 - SNAP || locked(a, b) {
+        if t >= 1.0 - SNAP {
             return b;
         }
         let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
@@ -174,6 +188,18 @@ impl Outline {
             cycle
         });
         mid
+    }
+
+    /// The edges whose middles lie within `length` of arc length `start`, going forwards
+    /// (`direction` 1) or backwards (−1).
+    fn edges_within(&self, start: f64, length: f64, direction: f64) -> Vec<(u32, u32)> {
+        (0..self.len())
+            .filter(|&k| {
+                let middle = self.arc[k] + 0.5 * self.edge_length(k);
+                ((middle - start) * direction).rem_euclid(self.total) < length
+            })
+            .map(|k| self.edge(k))
+            .collect()
     }
 
     /// The vertices from `from` to `to` along the loop, forwards or backwards.
@@ -213,7 +239,7 @@ fn claim_key(patch: usize, a: u32, b: u32) -> (usize, u32, u32) {
 
 /// Finds and prepares every seam between the pairs of `patches` named in `pairs` (all pairs
 /// when empty), adding the vertices each needs (see the module docs). `reach` overrides the
-/// default largest gap a seam closes.
+/// default largest gap a seam closes; neither exceeds [`MAX_SEAM_GAP`] of the smaller patch.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for a pair naming a missing patch or one patch twice, a reach that
@@ -296,22 +322,35 @@ fn next_seam(
                 continue;
             }
             let feet_b = feet(&outline_b, pb, &outline_a, pa);
-            if feet_a.iter().all(Option::is_some) && feet_b.iter().all(Option::is_some) {
-                let edges = (0..outline_a.len()).map(|k| outline_a.edge(k));
-                if !held(claims, a, b, edges)? {
+            // A whole loop: all but a few vertices (a noisy boundary) of each touch the other.
+            let share = |f: &[Option<Foot>]| {
+                f.iter().filter(|x| x.is_some()).count() as f64 / f.len().max(1) as f64
+            };
+            let (share_a, share_b) = (share(&feet_a), share(&feet_b));
+            if share_a.min(share_b) >= WHOLE_LOOP_SHARE {
+                let edges_a = (0..outline_a.len()).map(|k| outline_a.edge(k));
+                let edges_b = (0..outline_b.len()).map(|k| outline_b.edge(k));
+                if !(held(claims, a, b, edges_a)? | held(claims, b, a, edges_b)?) {
                     let seam = loop_seam(patches, a, cycle_a.clone(), b, cycle_b.clone())?;
                     return Ok(Some(seam));
                 }
                 continue;
             }
-            for run in runs(&feet_a) {
-                let edges = run[..run.len() - 1].iter().map(|&k| outline_a.edge(k));
-                if held(claims, a, b, edges)? {
+            // Stretches of the loop that does not touch all round (a short side lying along a
+            // long one touches all round; its partner's stretches are the ones to follow).
+            let (first, second, outlines, all_feet) = if share_a == 1.0 {
+                (b, a, [&outline_b, &outline_a], [&feet_b[..], &feet_a[..]])
+            } else {
+                (a, b, [&outline_a, &outline_b], [&feet_a[..], &feet_b[..]])
+            };
+            for run in runs(all_feet[0]) {
+                let edges = run[..run.len() - 1].iter().map(|&k| outlines[0].edge(k));
+                if held(claims, first, second, edges)? {
                     continue;
                 }
-                let outlines = [outline_a.clone(), outline_b.clone()];
+                let owned = [outlines[0].clone(), outlines[1].clone()];
                 if let Some(seam) =
-                    stretch_seam(patches, [a, b], outlines, &run, [&feet_a, &feet_b], claims)?
+                    stretch_seam(patches, [first, second], owned, &run, all_feet, claims)?
                 {
                     return Ok(Some(seam));
                 }
@@ -447,13 +486,19 @@ fn stretch_seam(
     if (b1 - b0).abs() <= smallest || a1 - a0 <= smallest {
         return Ok(None);
     }
+    // Both stretches' edges, before anything changes: another seam may hold them already.
+    let edges_a = outline_a.edges_within(a0, a1 - a0, 1.0);
+    let edges_b = outline_b.edges_within(b0, (b1 - b0).abs(), sign);
+    if held(claims, a, b, edges_a.into_iter())? | held(claims, b, a, edges_b.into_iter())? {
+        return Ok(None);
+    }
     let locked_a = |x: u32, y: u32| claims.contains_key(&claim_key(a, x, y));
     let locked_b = |x: u32, y: u32| claims.contains_key(&claim_key(b, x, y));
     let [mesh_a, mesh_b] = two_mut(patches, a, b);
-    let va0 = outline_a.vertex_at(mesh_a, a0, &locked_a);
-    let va1 = outline_a.vertex_at(mesh_a, a1, &locked_a);
-    let vb0 = outline_b.vertex_at(mesh_b, b0, &locked_b);
-    let vb1 = outline_b.vertex_at(mesh_b, b1, &locked_b);
+    let va0 = outline_a.vertex_at(mesh_a, a0, &locked_a, true);
+    let va1 = outline_a.vertex_at(mesh_a, a1, &locked_a, false);
+    let vb0 = outline_b.vertex_at(mesh_b, b0, &locked_b, forward);
+    let vb1 = outline_b.vertex_at(mesh_b, b1, &locked_b, !forward);
     let path_a = outline_a.path(va0, va1, true);
     let path_b = outline_b.path(vb0, vb1, forward);
     if path_a.len() < 2 || path_b.len() < 2 || va0 == va1 || vb0 == vb1 {
@@ -883,6 +928,53 @@ mod tests {
         let seams = find_seams(&mut two, &[], None).unwrap();
         assert_eq!(seams.len(), 1);
         closed_and_oriented(&stitch(&two, &seams).unwrap().mesh);
+    }
+
+    #[test]
+    fn a_fin_on_a_seamed_edge_is_refused_even_when_the_pairs_are_named() {
+        // A sheet, its neighbour across x = 1, and a fin standing on that same edge.
+        let mut patches = vec![
+            grid(4, 4, |u, v| [u, v, 0.0]),
+            grid(5, 4, |u, v| [1.0 + u, v, 0.0]),
+            grid(3, 4, |u, v| [1.0, v, u]),
+        ];
+        let e = find_seams(&mut patches, &[[0, 1], [0, 2], [1, 2]], None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("three"), "{e}");
+        let e = find_seams(&mut patches, &[[0, 2], [1, 2]], None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("three"), "{e}");
+    }
+
+    #[test]
+    fn a_loop_with_one_vertex_off_is_still_seamed_whole() {
+        let mut patches = vec![
+            grid(8, 8, |u, v| [u, v, u * (1.0 - u) * v * (1.0 - v)]),
+            grid(8, 8, |u, v| [u, v, -u * (1.0 - u) * v * (1.0 - v)]),
+        ];
+        // One boundary vertex of the second pushed inwards by most of an edge.
+        patches[1].positions[4][1] += 0.1;
+        let seams = find_seams(&mut patches, &[], None).unwrap();
+        assert_eq!(seams.len(), 1);
+        assert!(seams[0].whole_loop);
+        closed_and_oriented(&stitch(&patches, &seams).unwrap().mesh);
+    }
+
+    #[test]
+    fn a_narrow_strip_along_a_side_is_seamed_to_it() {
+        // Every vertex of the strip touches the sheet; the sheet's stretches are followed.
+        let mut patches = vec![
+            grid(6, 6, |u, v| [u, v, 0.0]),
+            grid(9, 1, |u, v| [u, 1.0 + 0.05 * v, 0.0]),
+        ];
+        let seams = find_seams(&mut patches, &[], None).unwrap();
+        assert_eq!(seams.len(), 1, "{seams:?}");
+        let stitched = stitch(&patches, &seams).unwrap();
+        let report = edge_report(&stitched.mesh);
+        assert_eq!((report.non_manifold, report.misoriented), (0, 0));
+        assert_eq!(boundary_loops(&stitched.mesh.triangles).unwrap().len(), 1);
     }
 
     #[test]

@@ -84,7 +84,7 @@ pub fn stitch(patches: &[Mesh], seams: &[Seam]) -> Result<Stitched> {
     for (s, seam) in seams.iter().enumerate() {
         if seam.vertices_a.len() != seam.vertices_b.len() {
             return Err(Error::invalid(format!(
-                "seam {s} pairs {} vertices with {}: add vertices first (boundary_seam does)",
+                "seam {s} pairs {} vertices with {}: add vertices first (find_seams and boundary_seam do)",
                 seam.vertices_a.len(),
                 seam.vertices_b.len()
             )));
