@@ -677,6 +677,20 @@ fn a_can_of_three_patches_and_a_box_of_six_are_stitched_without_options() {
     ]);
     assert!(e.contains("do not meet"), "{e}");
     assert!(!path("pair.obj").exists());
+    // `closed` takes meshes: a point cloud is told to be meshed first.
+    fs::write(path("cloud.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();
+    let e = fails(&[
+        "parametric",
+        "closed",
+        s(&path("cloud.obj")),
+        "--out",
+        s(&path("cloud.ply")),
+    ]);
+    assert!(
+        e.contains("point cloud") && e.contains("no triangles"),
+        "{e}"
+    );
+    assert!(!path("cloud.ply").exists());
 }
 
 #[test]

@@ -85,7 +85,10 @@ pub fn run(args: &ClosedArgs) -> Result<()> {
         vertices: args.vertices,
         topology: args.network.options(args.seed)?,
     };
-    let input = read_mesh(&args.mesh)?;
+    let input = read_mesh(&args.mesh).with_context(|| {
+        "`parametric closed` takes a closed triangle mesh (OBJ, PLY or STL); a point cloud must \
+         be meshed first, for example by `implicit fit` on oriented points and then `mesh`"
+    })?;
     let result = reconstruct_closed(&input, &options)
         .with_context(|| format!("cannot rebuild {} from patches", args.mesh.display()))?;
     // Every blob is encoded (and checked) before anything is written.
