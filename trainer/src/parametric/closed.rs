@@ -800,6 +800,7 @@ fn thin(mesh: &Mesh, chain: &[u32], spacing: f64, closed: bool) -> Vec<u32> {
 mod tests {
     use super::*;
     use crate::io;
+    use crate::parametric::test_meshes::quad_triangles;
 
     /// A closed triangulated ellipsoid: a UV sphere with poles, scaled.
     fn ellipsoid(axes: [f64; 3], rings: usize, sectors: usize) -> Mesh {
@@ -823,12 +824,7 @@ mod tests {
             triangles.push([0, id(1, j), id(1, j + 1)]);
             triangles.push([south, id(rings - 1, j + 1), id(rings - 1, j)]);
         }
-        for i in 1..rings - 1 {
-            for j in 0..sectors {
-                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        triangles.extend(quad_triangles(0..sectors, 1..rings - 1, id));
         Mesh {
             positions,
             triangles,
@@ -878,16 +874,9 @@ mod tests {
             }
         }
         let id = |i: usize, j: usize| ((i % rings) * sectors + j % sectors) as u32;
-        let mut triangles = Vec::new();
-        for i in 0..rings {
-            for j in 0..sectors {
-                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
         Mesh {
             positions,
-            triangles,
+            triangles: quad_triangles(0..sectors, 0..rings, id),
         }
     }
 

@@ -157,4 +157,6 @@ pub use unrolling::{
 pub use weights::{embedding_matrix, reconstruction_weights};
 
 #[cfg(test)]
+mod test_meshes;
+#[cfg(test)]
 mod tests;

@@ -760,6 +760,7 @@ fn split_path_edge(mesh: &mut Mesh, path: &mut Vec<u32>, k: usize, point: [f64; 
 mod tests {
     use super::*;
     use crate::geometry::mesh_graph::edge_report;
+    use crate::parametric::test_meshes::quad_triangles;
     use crate::parametric::{orient_consistently, signed_volume, stitch};
 
     /// An `n × m` grid of quads over (u, v) ∈ [0, 1]², mapped by `at`, two triangles each.
@@ -770,17 +771,9 @@ mod tests {
                 positions.push(at(i as f64 / n as f64, j as f64 / m as f64));
             }
         }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut triangles = Vec::new();
-        for j in 0..m {
-            for i in 0..n {
-                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
         Mesh {
             positions,
-            triangles,
+            triangles: quad_triangles(0..m, 0..n, |i, j| (j * (n + 1) + i) as u32),
         }
     }
 
@@ -799,12 +792,8 @@ mod tests {
         for s in 0..sectors {
             triangles.push([0, id(1, s), id(1, s + 1)]);
         }
-        for ring in 1..rings {
-            for s in 0..sectors {
-                triangles.push([id(ring, s), id(ring + 1, s), id(ring + 1, s + 1)]);
-                triangles.push([id(ring, s), id(ring + 1, s + 1), id(ring, s + 1)]);
-            }
-        }
+        // Rings run along the grid's rows, sectors along its columns.
+        triangles.extend(quad_triangles(0..sectors, 1..rings, id));
         Mesh {
             positions,
             triangles,
