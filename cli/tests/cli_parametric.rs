@@ -677,7 +677,7 @@ fn a_can_of_three_patches_and_a_box_of_six_are_stitched_without_options() {
     ]);
     assert!(e.contains("do not meet"), "{e}");
     assert!(!path("pair.obj").exists());
-    // `closed` takes meshes: a point cloud is told to be meshed first.
+    // `closed` takes point clouds too, but not three points.
     fs::write(path("cloud.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();
     let e = fails(&[
         "parametric",
@@ -686,10 +686,7 @@ fn a_can_of_three_patches_and_a_box_of_six_are_stitched_without_options() {
         "--out",
         s(&path("cloud.ply")),
     ]);
-    assert!(
-        e.contains("point cloud") && e.contains("no triangles"),
-        "{e}"
-    );
+    assert!(e.contains("3 points are too few"), "{e}");
     assert!(!path("cloud.ply").exists());
 }
 
@@ -769,4 +766,60 @@ fn the_bunny_is_rebuilt_closed_and_its_patch_blobs_meet_at_their_seams() {
     // the two miss each other by both fit errors (measured with one layer: mean 1.6 %, max
     // 3.5 % of the diagonal); the stitch closes the gap in the mesh.
     assert!(mean < 0.0042 && max < 0.0105, "mean {mean}, max {max}");
+}
+
+#[test]
+fn a_closed_point_cloud_is_meshed_then_rebuilt_from_patches() {
+    // spot's vertices alone, as text rows: no triangles to go by.
+    let spot = neurosurf_trainer::io::read_mesh(
+        &neurosurf_trainer::io::data_file("spot.obj").expect("spot.obj ships with the repository"),
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (cloud, out, blobs) = (
+        dir.path().join("spot.xyz"),
+        dir.path().join("spot.obj"),
+        dir.path().join("patches"),
+    );
+    let rows: String = spot
+        .positions
+        .iter()
+        .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
+        .collect();
+    fs::write(&cloud, rows).unwrap();
+    let report = json(&ok(&[
+        "parametric",
+        "closed",
+        s(&cloud),
+        "--out",
+        s(&out),
+        "--blobs",
+        s(&blobs),
+        "--max-layers",
+        "1",
+        "--json",
+    ]));
+    // Measured with one layer: 30 patches, RMS 0.2 % of the diagonal from the points both ways.
+    assert_eq!(report["watertight"], true, "{report}");
+    assert_eq!(report["from_points"]["points"], spot.positions.len());
+    assert_eq!(report["capped_holes"], 0);
+    assert!(
+        report["relative_rms_error"].as_f64().unwrap() < 0.005,
+        "{report}"
+    );
+    let written = fs::read_dir(&blobs).unwrap().count() as u64;
+    assert_eq!(Some(written), report["patches"].as_u64().map(|p| p + 1));
+    // The text summary says the points were meshed first.
+    let text = ok(&[
+        "parametric",
+        "closed",
+        s(&cloud),
+        "--out",
+        s(&out),
+        "--max-layers",
+        "1",
+        "--patches",
+        "6",
+    ]);
+    assert!(text.contains("meshed 2930 points"), "{text}");
 }

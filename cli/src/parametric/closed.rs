@@ -10,15 +10,17 @@ use neurosurf_trainer::evaluate::Precision;
 use neurosurf_trainer::io::{check_output, read_mesh, write_atomic, write_mesh};
 use neurosurf_trainer::parametric::{
     ClosedOptions, MAX_REGION_VERTICES, NetworkSummary, SeamCurve, network_to_blob,
-    reconstruct_closed,
+    reconstruct_closed, reconstruct_closed_points,
 };
 
-use super::{MeshReport, NetworkArgs};
+use super::{MeshReport, NetworkArgs, read_points};
 use crate::output::{self, blob_scalar};
 
 #[derive(Debug, clap::Args)]
 pub struct ClosedArgs {
-    /// A closed mesh (OBJ, PLY or STL); open boundary loops (a scan's holes) are capped first.
+    /// A closed mesh (OBJ, PLY or STL; open boundary loops, a scan's holes, are capped first)
+    /// or a closed point cloud (text rows of x y z, or PLY or OBJ vertices), which is meshed
+    /// first.
     mesh: PathBuf,
     /// Output mesh (`.obj`, `.ply` or `.stl`).
     #[arg(long)]
@@ -68,6 +70,49 @@ struct ClosedReport<'a> {
     max_displacement: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     blobs: Option<&'a Path>,
+    /// How a point cloud was meshed before the cut; absent for a mesh.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    from_points: Option<PointsReport>,
+}
+
+#[derive(Serialize)]
+struct PointsReport {
+    points: usize,
+    duplicates: usize,
+    /// Cells along the longest side of the meshing grid.
+    resolution: usize,
+    /// Vertices of the mesh the cut was made on.
+    meshed_vertices: usize,
+    /// Small pieces of that mesh that were dropped.
+    dropped_pieces: usize,
+}
+
+/// What `parametric closed` was given.
+enum Input {
+    Mesh(neurosurf_trainer::io::Mesh),
+    Points(Vec<[f64; 3]>),
+}
+
+/// A mesh with triangles, or else points (text, PLY vertices or OBJ vertices).
+fn read_input(path: &Path) -> Result<Input> {
+    let mesh_file = matches!(
+        path.extension().and_then(|e| e.to_str()),
+        Some("obj" | "ply" | "stl")
+    );
+    if mesh_file
+        && let Ok(mesh) = read_mesh(path)
+        && !mesh.triangles.is_empty()
+    {
+        return Ok(Input::Mesh(mesh));
+    }
+    let points = read_points(path).with_context(|| {
+        format!(
+            "`parametric closed` takes a closed triangle mesh (OBJ, PLY or STL) or a closed \
+             point cloud (text rows of x y z, PLY or OBJ vertices); {} is neither",
+            path.display()
+        )
+    })?;
+    Ok(Input::Points(points))
 }
 
 #[derive(Serialize)]
@@ -85,12 +130,15 @@ pub fn run(args: &ClosedArgs) -> Result<()> {
         vertices: args.vertices,
         topology: args.network.options(args.seed)?,
     };
-    let input = read_mesh(&args.mesh).with_context(|| {
-        "`parametric closed` takes a closed triangle mesh (OBJ, PLY or STL); a point cloud must \
-         be meshed first, for example by `implicit fit` on oriented points and then `mesh`"
-    })?;
-    let result = reconstruct_closed(&input, &options)
-        .with_context(|| format!("cannot rebuild {} from patches", args.mesh.display()))?;
+    let (result, cloud) = match read_input(&args.mesh)? {
+        Input::Mesh(mesh) => (reconstruct_closed(&mesh, &options), None),
+        Input::Points(points) => match reconstruct_closed_points(&points, &options) {
+            Ok((result, cloud)) => (Ok(result), Some(cloud)),
+            Err(e) => (Err(e), None),
+        },
+    };
+    let result =
+        result.with_context(|| format!("cannot rebuild {} from patches", args.mesh.display()))?;
     // Every blob is encoded (and checked) before anything is written.
     let mut blobs = Vec::with_capacity(result.patches.len());
     for patch in &result.patches {
@@ -137,9 +185,30 @@ pub fn run(args: &ClosedArgs) -> Result<()> {
         gap_before_stitch: result.gap_before,
         max_displacement: result.max_displacement,
         blobs: args.blobs.as_deref(),
+        from_points: cloud.map(|c| PointsReport {
+            points: c.points.len() + c.duplicates,
+            duplicates: c.duplicates,
+            resolution: c.resolution,
+            meshed_vertices: c.mesh.positions.len(),
+            dropped_pieces: c.dropped_pieces,
+        }),
     };
     if args.json {
         return output::json(&report);
+    }
+    if let Some(cloud) = &report.from_points {
+        println!(
+            "meshed {} points ({} duplicates dropped) on a grid of {} cells: {} vertices{}",
+            cloud.points,
+            cloud.duplicates,
+            cloud.resolution,
+            cloud.meshed_vertices,
+            if cloud.dropped_pieces > 0 {
+                format!(", {} stray pieces dropped", cloud.dropped_pieces)
+            } else {
+                String::new()
+            }
+        );
     }
     println!(
         "{} patches ({} holes capped first), {} seams; RMS {:.3} % of the diagonal from the \

@@ -15,7 +15,8 @@ use serde::Serialize;
 use neurosurf_trainer::evaluate::{LoadedModel, Precision};
 use neurosurf_trainer::geometry::drop_unused_vertices;
 use neurosurf_trainer::io::{
-    Mesh, data_file, read_mesh, read_parameters, read_query_points, write_atomic, write_mesh,
+    Mesh, data_file, read_mesh, read_obj_vertices, read_parameters, read_query_points,
+    write_atomic, write_mesh,
 };
 use neurosurf_trainer::parametric::{
     Activation, BACK_SEED, BENCHMARK_SIZES, BoundaryOptions, HoleOptions, LleOptions,
@@ -1015,7 +1016,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
 /// Points from text, PLY or OBJ (its vertices).
 pub(super) fn read_points(path: &Path) -> Result<Vec<[f64; 3]>> {
     if path.extension().and_then(|e| e.to_str()) == Some("obj") {
-        return Ok(read_mesh(path)?.positions);
+        return Ok(read_obj_vertices(path)?);
     }
     Ok(read_query_points(path)?)
 }

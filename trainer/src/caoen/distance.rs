@@ -241,17 +241,26 @@ pub fn surface_distance(surface: &Mesh, reference: &Mesh) -> Result<SurfaceDista
     };
     let forward = measure(&surface.positions, &to_reference);
     let backward = measure(&reference.positions, &to_surface);
-    let squares = |d: &[f64]| d.iter().map(|x| x * x).sum::<f64>();
-    let rms = |d: &[f64]| (squares(d) / d.len().max(1) as f64).sqrt();
-    let max = |d: &[f64]| d.iter().copied().fold(0.0, f64::max);
-    Ok(SurfaceDistance {
-        rms_to_reference: rms(&forward),
-        rms_to_surface: rms(&backward),
-        rms: ((squares(&forward) + squares(&backward)) / (forward.len() + backward.len()) as f64)
-            .sqrt(),
-        max_to_reference: max(&forward),
-        max_to_surface: max(&backward),
-        hausdorff: max(&forward).max(max(&backward)),
-        diagonal,
-    })
+    Ok(SurfaceDistance::of_samples(&forward, &backward, diagonal))
+}
+
+impl SurfaceDistance {
+    /// The summary of sampled distances, already divided by `diagonal`: `forward` from the
+    /// surface to the reference, `backward` from the reference to the surface.
+    pub fn of_samples(forward: &[f64], backward: &[f64], diagonal: f64) -> SurfaceDistance {
+        let squares = |d: &[f64]| d.iter().map(|x| x * x).sum::<f64>();
+        let rms = |d: &[f64]| (squares(d) / d.len().max(1) as f64).sqrt();
+        let max = |d: &[f64]| d.iter().copied().fold(0.0, f64::max);
+        SurfaceDistance {
+            rms_to_reference: rms(forward),
+            rms_to_surface: rms(backward),
+            rms: ((squares(forward) + squares(backward))
+                / (forward.len() + backward.len()).max(1) as f64)
+                .sqrt(),
+            max_to_reference: max(forward),
+            max_to_surface: max(backward),
+            hausdorff: max(forward).max(max(backward)),
+            diagonal,
+        }
+    }
 }

@@ -54,18 +54,7 @@ pub fn feature_regions(points: &PointSet, inflate: f64) -> Vec<Region> {
         .collect()
 }
 
-/// The axis-aligned bounds of some points.
-pub fn point_bounds<'a>(points: impl IntoIterator<Item = &'a [f64; 3]>) -> Aabb {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    Aabb { lo, hi }
-}
+pub use crate::geometry::point_bounds;
 
 /// A camera at `azimuth`, `elevation` (degrees, as [`View`]) looking at the center of
 /// `bounds` from far enough that the bounding sphere's silhouette fits the image with a small

@@ -1,6 +1,20 @@
-//! Axis-aligned bounds of meshes, the yardstick of every relative distance.
+//! Axis-aligned bounds of points and meshes, the yardstick of every relative distance.
 
 use crate::io::Mesh;
+use crate::render::Aabb;
+
+/// The axis-aligned bounds of some points.
+pub fn point_bounds<'a>(points: impl IntoIterator<Item = &'a [f64; 3]>) -> Aabb {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    Aabb { lo, hi }
+}
 
 /// The length of the diagonal of a mesh's axis-aligned bounding box.
 pub fn bounding_diagonal(mesh: &Mesh) -> f64 {

@@ -6,7 +6,7 @@ pub mod bounds;
 pub mod mesh_graph;
 pub mod vector;
 
-pub use bounds::bounding_diagonal;
+pub use bounds::{bounding_diagonal, point_bounds};
 pub use mesh_graph::{
     EdgeReport, boundary_loops, drop_unused_vertices, edge_report, edge_uses, one_rings,
 };

@@ -158,6 +158,25 @@ pub fn read_mesh(path: &Path) -> Result<Mesh> {
     })
 }
 
+/// The vertices of an OBJ file, with or without faces: a point cloud written as OBJ.
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read, [`Error::Format`] for malformed content or a
+/// file without vertices, [`Error::InvalidInput`] for another extension than `.obj`.
+pub fn read_obj_vertices(path: &Path) -> Result<Vec<[f64; 3]>> {
+    if extension(path).as_deref() != Some("obj") {
+        return Err(Error::invalid(format!(
+            "{}: OBJ vertices are read from .obj files only",
+            path.display()
+        )));
+    }
+    let positions = obj::read_obj_mesh(path)?.positions;
+    if positions.is_empty() {
+        return Err(Error::format(path, "the file has no vertices"));
+    }
+    Ok(positions)
+}
+
 /// Writes `mesh` to `path` atomically, as Wavefront OBJ, binary little-endian PLY or binary
 /// STL depending on the extension (`.obj`, `.ply` or `.stl`). When `normals` is given (one per
 /// vertex) it is written too (`vn` lines, or `nx ny nz` vertex properties; STL stores facet
@@ -212,6 +231,24 @@ pub(crate) fn check_writable(mesh: &Mesh, normals: Option<&[[f64; 3]]>) -> Resul
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    #[test]
+    fn obj_vertices_are_read_with_or_without_faces() {
+        let dir = tempfile::tempdir().unwrap();
+        let cloud = dir.path().join("cloud.obj");
+        std::fs::write(&cloud, "# points\nv 0 0 0\nv 1 0 0\nv 0 1 2.5\n").unwrap();
+        let points = read_obj_vertices(&cloud).unwrap();
+        assert_eq!(points, vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 2.5]]);
+        assert!(read_mesh(&cloud).is_err());
+        let empty = dir.path().join("empty.obj");
+        std::fs::write(&empty, "# nothing\n").unwrap();
+        let e = read_obj_vertices(&empty).unwrap_err().to_string();
+        assert!(e.contains("no vertices"), "{e}");
+        let e = read_obj_vertices(&dir.path().join("cloud.ply"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(".obj files only"), "{e}");
+    }
 
     /// The unit cube `[0, 1]³` with outward (counter-clockwise) triangles.
     pub(crate) fn unit_cube() -> Mesh {

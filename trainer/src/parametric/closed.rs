@@ -148,8 +148,7 @@ pub fn reconstruct_closed(input: &Mesh, options: &ClosedOptions) -> Result<Close
     if input.triangles.is_empty() || input.positions.iter().flatten().any(|c| !c.is_finite()) {
         return Err(Error::invalid(
             "a closed object needs a mesh of finite vertices and at least one triangle; a point \
-             cloud must be meshed first (for example `implicit fit` on oriented points, then \
-             `mesh`)",
+             cloud goes to `reconstruct_closed_points` (`parametric closed` takes either)",
         ));
     }
     let (mesh, _) = drop_unused_vertices(input);

@@ -52,6 +52,7 @@ mod blob;
 mod boundary;
 mod capacity;
 mod closed;
+mod cloud_mesh;
 mod compare;
 mod coons;
 mod eigen;
@@ -103,6 +104,10 @@ pub use capacity::{check_capacity, largest_parameter_count};
 pub use closed::{
     ClosedOptions, ClosedPatch, ClosedReconstruction, FIT_SAMPLES, MAX_NORMAL_CONE, MAX_PATCHES,
     NORMAL_PENALTY, NORMAL_SHARE, SeamCurve, reconstruct_closed,
+};
+pub use cloud_mesh::{
+    CloudMesh, DEBRIS_SHARE, DISTANCE_NEIGHBORS, FAR_REACH, FLAT_SPREAD, MAX_CLOUD_RESOLUTION,
+    NORMAL_NEIGHBORS, WINDING_POINTS, mesh_closed_cloud, reconstruct_closed_points,
 };
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
