@@ -293,7 +293,8 @@ fn embed(args: &EmbedArgs) -> Result<()> {
         ),
         Parameterization::Unrolled => println!(
             "unrolled {} points (k = {}) in {seconds:.3} s: their density changes, so LLE \
-             would squeeze the sparse part; {:.2} % of neighbour pairs flipped",
+             would squeeze the sparse part, or LLE folds them at every k; {:.2} % of neighbour \
+             pairs flipped",
             report.points,
             report.neighbors,
             100.0 * report.flipped_fraction
@@ -427,7 +428,9 @@ fn fit(args: &FitArgs) -> Result<()> {
             n => format!(" less {n} off the surface (--keep-outliers fits them)"),
         },
         match report.parameterization {
-            Some(Parameterization::Unrolled) => " unrolled (their density changes)",
+            Some(Parameterization::Unrolled) => {
+                " unrolled (their density changes, or LLE folds them at every k)"
+            }
             Some(Parameterization::Lle) => " embedded",
             None => "",
         },

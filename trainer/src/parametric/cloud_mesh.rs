@@ -206,7 +206,12 @@ pub fn reconstruct_closed_points(
     options: &ClosedOptions,
 ) -> Result<(ClosedReconstruction, CloudMesh)> {
     let cloud = mesh_closed_cloud(points)?;
-    let mut result = reconstruct_closed(&cloud.mesh, options)?;
+    let mut result = reconstruct_closed(&cloud.mesh, options).map_err(|e| {
+        Error::invalid(format!(
+            "the mesh made from the points cannot be rebuilt from patches: {e} (points spread \
+             more evenly, or more of them, give a smoother mesh to cut)"
+        ))
+    })?;
     let diagonal = check_points(&cloud.points, 1)?;
     let to_surface = TriangleTree::new(&result.mesh)?;
     let backward: Vec<f64> = cloud

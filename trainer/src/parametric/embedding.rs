@@ -53,7 +53,7 @@ pub enum Parameterization {
     /// LLE's two smallest non-constant eigenvectors (§4).
     Lle,
     /// Unrolled along the patch and smoothed by the LLE matrix ([`unrolled_parameters`]):
-    /// the sampling density changes.
+    /// the sampling density changes, or LLE folds at every k tried.
     Unrolled,
 }
 
@@ -93,7 +93,9 @@ pub struct Embedding {
 
 /// LLE of an unstructured point set with k nearest neighbours; with
 /// [`LleOptions::more_neighbors`], the first of k and k + [`OTHER_NEIGHBORS`] (from 4 to
-/// fewer than the points) whose embedding does not fold.
+/// fewer than the points) whose embedding does not fold, and when every one folds, the first
+/// of them whose unrolled parameterization ([`unrolled_parameters`]) does not (with
+/// [`LleOptions::unroll_uneven`]).
 ///
 /// # Errors
 /// [`Error::InvalidInput`] for too few points for k, non-finite coordinates, duplicate points,
@@ -121,6 +123,16 @@ pub fn embed_points(points: &[[f64; 3]], options: &LleOptions) -> Result<Embeddi
             Ok(embedding) => return Ok(embedding),
             Err(e) => {
                 first_error.get_or_insert(e);
+            }
+        }
+    }
+    // LLE folds at every k: a patch curved too far for its local reconstructions (a cap
+    // reaching round a bend) may still unroll along its path lengths.
+    if options.more_neighbors && options.check_folds && options.unroll_uneven {
+        for &k in &tried {
+            let neighbors = nearest_neighbors(points, k, diagonal)?;
+            if let Some(embedding) = unrolled_if_flat(points, &neighbors, k, options) {
+                return Ok(embedding);
             }
         }
     }
@@ -179,19 +191,8 @@ pub fn embed_with_neighbors(
     };
     if sparse_area >= UNEVEN_AREA_SHARE {
         // Unrolled unless that folds or fails; then LLE's, as for an even patch.
-        if let Ok((parameters, costs)) = unrolled_parameters(points, neighbors, &m) {
-            let folds = fold_report(points, &parameters, neighbors);
-            if !options.check_folds || check_flat(&folds).is_ok() {
-                return Ok(Embedding {
-                    parameters,
-                    eigenvalues: costs,
-                    iterations: 0,
-                    folds,
-                    neighbors: options.neighbors,
-                    parameterization: Parameterization::Unrolled,
-                    sparse_area,
-                });
-            }
+        if let Some(embedding) = unrolled(points, neighbors, &m, options, sparse_area) {
+            return Ok(embedding);
         }
     }
     let eigen = smallest_nonconstant(&m, 2)?;
@@ -210,6 +211,54 @@ pub fn embed_with_neighbors(
         folds,
         neighbors: options.neighbors,
         parameterization: Parameterization::Lle,
+        sparse_area,
+    })
+}
+
+/// The unrolled parameterization ([`unrolled_parameters`]) with k = `k` neighbours, when it
+/// does not fold.
+fn unrolled_if_flat(
+    points: &[[f64; 3]],
+    neighbors: &[Vec<usize>],
+    k: usize,
+    options: &LleOptions,
+) -> Option<Embedding> {
+    let weights = reconstruction_weights(points, neighbors, options.regularization).ok()?;
+    let m = embedding_matrix(neighbors, &weights);
+    let options = LleOptions {
+        neighbors: k,
+        ..*options
+    };
+    unrolled(
+        points,
+        neighbors,
+        &m,
+        &options,
+        sparse_area_share(points, neighbors),
+    )
+}
+
+/// [`unrolled_parameters`] as an embedding, unless it fails or (with
+/// [`LleOptions::check_folds`]) folds.
+fn unrolled(
+    points: &[[f64; 3]],
+    neighbors: &[Vec<usize>],
+    m: &super::sparse::SymmetricMatrix,
+    options: &LleOptions,
+    sparse_area: f64,
+) -> Option<Embedding> {
+    let (parameters, costs) = unrolled_parameters(points, neighbors, m).ok()?;
+    let folds = fold_report(points, &parameters, neighbors);
+    if options.check_folds && check_flat(&folds).is_err() {
+        return None;
+    }
+    Some(Embedding {
+        parameters,
+        eigenvalues: costs,
+        iterations: 0,
+        folds,
+        neighbors: options.neighbors,
+        parameterization: Parameterization::Unrolled,
         sparse_area,
     })
 }
