@@ -1,8 +1,9 @@
 //! Closed meshes rebuilt from surface-network patches (`parametric closed`), measured both ways
 //! against the (capped) input: RMS and largest distance over its bounding diagonal, the gap
 //! between two patches' networks at their seam points, and the wall time. Then closed point
-//! clouds (a mesh's vertices, or area-uniform random samples of it) rebuilt the same way,
-//! measured both ways against the points and against the mesh they came from.
+//! clouds (a mesh's vertices, area-uniform random samples of it, and those samples with noise)
+//! rebuilt the same way, measured both ways against the points and against the mesh they came
+//! from.
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench closed_objects`, with after `--`:
 //! `--markdown FILE` to write the tables as well (`docs/performance/closed-objects.md`),
@@ -22,6 +23,7 @@ use neurosurf_trainer::parametric::{
     ClosedOptions, ClosedReconstruction, reconstruct_closed, reconstruct_closed_points,
 };
 use neurosurf_trainer::sample::{Spread, sample_mesh};
+use rand::{Rng, SeedableRng};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -76,9 +78,17 @@ fn main() {
     );
     for (name, mesh) in &meshes {
         let sampled = sample_mesh(mesh, samples, 1, Spread::Random).expect("samples");
+        let diagonal = neurosurf_trainer::geometry::bounding_diagonal(mesh);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let noisy: Vec<[f64; 3]> = sampled
+            .positions
+            .iter()
+            .map(|p| p.map(|c| c + NOISE * diagonal * gaussian(&mut rng)))
+            .collect();
         for (what, points) in [
             (format!("`{name}` vertices"), mesh.positions.clone()),
             (format!("`{name}`, random samples"), sampled.positions),
+            (format!("`{name}`, random samples, noise"), noisy),
         ] {
             let started = Instant::now();
             let result = match reconstruct_closed_points(&points, &options) {
@@ -117,17 +127,28 @@ fn main() {
              and the capped input, over its bounding diagonal; seam gap: the distance between \
              two patches' networks at their shared seam points, over the same diagonal (the \
              stitch closes it in the mesh).\n\n{table}\n## Point clouds\n\nThe same meshes' \
-             vertices alone, and {samples} random area-uniform samples of them (seed 1), \
-             rebuilt by `parametric closed` from the points. To the points: from every point to \
+             vertices alone, {samples} random area-uniform samples of them (seed 1), and \
+             the same samples with Gaussian noise of σ = {:.2} % of the diagonal, rebuilt by \
+             `parametric closed` from the points. To the points: from every point to \
              the output, and from every output vertex to the points' tangent disks. To the \
              mesh: both ways against the mesh the points came from; where that mesh has holes \
              (the bunny), the output closes them and the largest distance is across a hole.\n\n\
              {clouds}",
             given(&args),
-            rayon::current_num_threads()
+            rayon::current_num_threads(),
+            100.0 * NOISE
         );
         std::fs::write(in_workspace(path), text).expect("the markdown file");
     }
+}
+
+/// The noise of the third cloud of every mesh: σ as a share of the diagonal.
+const NOISE: f64 = 0.0025;
+
+/// A standard Gaussian (Box–Muller).
+fn gaussian(rng: &mut impl Rng) -> f64 {
+    let (a, b) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
+    (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
 }
 
 fn watertight(result: &ClosedReconstruction) -> &'static str {

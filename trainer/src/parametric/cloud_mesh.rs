@@ -4,8 +4,10 @@
 //! 1. **Normals.** Each point's normal is the least principal axis of its
 //!    [`NORMAL_NEIGHBORS`] nearest neighbours. The normals are oriented consistently by
 //!    propagation along the minimum spanning tree of the neighbour graph weighted by
-//!    1 − |nᵢ·nⱼ| (Hoppe et al. 1992), so the orientation turns where the surface is flattest
-//!    first; each connected piece starts at its point farthest along +x, whose normal faces +x.
+//!    1 − |nᵢ·nⱼ| (Hoppe et al. 1992) plus how far each edge leaves the tangent planes, so the
+//!    orientation turns where the surface is flattest first and goes round a thin part's rim
+//!    rather than across it; each connected piece starts at its point
+//!    farthest along +x, whose normal faces +x.
 //! 2. **Signed distance.** Near the points (within [`FAR_REACH`] spacings of the nearest),
 //!    the implicit moving least squares of the tangent planes of the [`DISTANCE_NEIGHBORS`]
 //!    nearest points (Kolluri 2008): Σ wᵢ nᵢ·(q − pᵢ) / Σ wᵢ, wᵢ = exp(−(|q − pᵢ|² − d₀²)/h²),
@@ -15,6 +17,12 @@
 //!    [`FAR_REACH`]/2 spacings: a hole in the scan wider than the band then does not let the
 //!    outside leak in, and the tangent planes are not trusted where they are far apart (a
 //!    band of 6 spacings grew spikes at fandisk's sharp corners, 3 spacings none).
+//!
+//!    Noise: the median RMS distance of a neighbourhood from its plane, times
+//!    [`NOISE_BANDWIDTH`], is the least h; where it exceeds the spacing, the normals' and the
+//!    distance's neighbourhoods grow by the square of the ratio (at most [`MAX_NEIGHBORS`]).
+//!    Spot sampled at 20 000 points with noise of σ = 0.5 % of the diagonal comes out at
+//!    0.18 % RMS from spot (0.66 %, with spikes, without the widening).
 //! 3. **Mesh.** Marching tetrahedra ([`signed_distance_mesh`]) on cells of about one spacing
 //!    (at most [`MAX_CLOUD_RESOLUTION`] along the longest side) give a closed, consistently
 //!    wound mesh; pieces holding less than [`DEBRIS_SHARE`] of the triangles are dropped.
@@ -48,6 +56,12 @@ use crate::render::Aabb;
 pub const NORMAL_NEIGHBORS: usize = 12;
 /// Tangent planes the signed distance blends.
 pub const DISTANCE_NEIGHBORS: usize = 8;
+/// The signed distance's bandwidth as a multiple of the noise: the median RMS distance of a
+/// point's neighbourhood from its plane. Where this exceeds the spacing, every neighbourhood
+/// grows by its square.
+pub const NOISE_BANDWIDTH: f64 = 6.0;
+/// Most neighbours a normal or a distance takes.
+pub const MAX_NEIGHBORS: usize = 96;
 /// Spacings from the nearest point beyond which the sign comes from the winding number.
 pub const FAR_REACH: f64 = 3.0;
 /// Points the winding number is summed over, at most (a regular subsample beyond that).
@@ -109,7 +123,21 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
     let mut sorted = spacings.clone();
     sorted.sort_by(f64::total_cmp);
     let spacing = sorted[sorted.len() / 2];
-    let normals = oriented_normals(points, &neighbors);
+    let (mut normals, residuals) = principal_normals(points, &neighbors);
+    // Noise wider than the spacing widens every neighbourhood in proportion.
+    let noise = median(residuals);
+    let widen = (NOISE_BANDWIDTH * noise / spacing).max(1.0);
+    let mut neighbors = neighbors;
+    if widen > 1.0 {
+        let k = ((NORMAL_NEIGHBORS as f64 * widen * widen) as usize).min(MAX_NEIGHBORS);
+        neighbors = nearest_neighbors(points, k.min(points.len() - 1), diagonal)?;
+        normals = principal_normals(points, &neighbors).0;
+    }
+    orient(points, &mut normals, &neighbors);
+    let bandwidth = NOISE_BANDWIDTH * noise;
+    let blended = ((DISTANCE_NEIGHBORS as f64 * widen * widen) as usize)
+        .clamp(DISTANCE_NEIGHBORS, MAX_NEIGHBORS.min(points.len()));
+    let blended = NonZeroUsize::new(blended).unwrap_or(NonZeroUsize::MIN);
 
     // The winding number's sign on a coarse grid of cells away from the points.
     let stride = points.len().div_ceil(WINDING_POINTS);
@@ -137,13 +165,15 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
     let signed = |q: [f64; 3]| -> f64 {
         let found = tree
             .query(&q)
-            .nearest_n::<SquaredEuclidean<f64>>(DISTANCE_NEIGHBORS_NZ)
+            .nearest_n::<SquaredEuclidean<f64>>(blended)
             .execute();
         let Some(first) = found.first() else {
             return 1.0;
         };
         let d0 = first.distance.sqrt();
-        let h = spacings[first.item as usize].max(1e-12 * diagonal);
+        let h = spacings[first.item as usize]
+            .max(bandwidth)
+            .max(1e-12 * diagonal);
         if d0 > FAR_REACH * h.max(spacing) {
             let sign = signs.at(q);
             if sign != 0 {
@@ -230,10 +260,10 @@ pub fn reconstruct_closed_points(
     Ok((result, cloud))
 }
 
-const DISTANCE_NEIGHBORS_NZ: NonZeroUsize = match NonZeroUsize::new(DISTANCE_NEIGHBORS) {
-    Some(k) => k,
-    None => NonZeroUsize::MIN,
-};
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(0.0)
+}
 
 /// The points without those that coincide with an earlier one, and how many were dropped.
 fn without_duplicates(points: &[[f64; 3]], diagonal: f64) -> Result<(Vec<[f64; 3]>, usize)> {
@@ -294,10 +324,10 @@ fn check_volume(points: &[[f64; 3]]) -> Result<()> {
     Ok(())
 }
 
-/// Unit normals by principal axes, oriented along the minimum spanning tree (see the module
-/// documentation).
-fn oriented_normals(points: &[[f64; 3]], neighbors: &[Vec<usize>]) -> Vec<[f64; 3]> {
-    let mut normals: Vec<[f64; 3]> = points
+/// Every point's unit normal, the least principal axis of it and its neighbours (either
+/// way round), and the RMS distance of those points from their plane.
+fn principal_normals(points: &[[f64; 3]], neighbors: &[Vec<usize>]) -> (Vec<[f64; 3]>, Vec<f64>) {
+    points
         .par_iter()
         .zip(neighbors)
         .map(|(p, list)| {
@@ -314,9 +344,15 @@ fn oriented_normals(points: &[[f64; 3]], neighbors: &[Vec<usize>]) -> Vec<[f64; 
             let eigen = SymmetricEigen::new(covariance);
             let smallest = eigen.eigenvalues.imin();
             let n = eigen.eigenvectors.column(smallest);
-            [n[0], n[1], n[2]]
+            let residual = (eigen.eigenvalues[smallest].max(0.0) / (list.len() + 1) as f64).sqrt();
+            ([n[0], n[1], n[2]], residual)
         })
-        .collect();
+        .unzip()
+}
+
+/// Orients `normals` consistently along the minimum spanning tree of the neighbour graph (see
+/// the module documentation).
+fn orient(points: &[[f64; 3]], normals: &mut [[f64; 3]], neighbors: &[Vec<usize>]) {
     // Both-ways adjacency.
     let mut graph: Vec<Vec<usize>> = neighbors.to_vec();
     for (i, list) in neighbors.iter().enumerate() {
@@ -340,7 +376,7 @@ fn oriented_normals(points: &[[f64; 3]], neighbors: &[Vec<usize>]) -> Vec<[f64; 
         done[root] = true;
         let mut frontier = BinaryHeap::new();
         for &j in &graph[root] {
-            frontier.push(frontier_edge(root, j, &normals));
+            frontier.push(frontier_edge(root, j, points, normals));
         }
         while let Some(Reverse((_, to, from))) = frontier.pop() {
             if done[to] {
@@ -352,18 +388,28 @@ fn oriented_normals(points: &[[f64; 3]], neighbors: &[Vec<usize>]) -> Vec<[f64; 
             }
             for &j in &graph[to] {
                 if !done[j] {
-                    frontier.push(frontier_edge(to, j, &normals));
+                    frontier.push(frontier_edge(to, j, points, normals));
                 }
             }
         }
     }
-    normals
 }
 
-/// A frontier edge of the spanning tree, cheapest first in a max-heap: its cost
-/// 1 − |nᵢ·nⱼ| ≥ 0 by its bits (which order non-negative floats), then its ends.
-fn frontier_edge(from: usize, to: usize, normals: &[[f64; 3]]) -> Reverse<(u64, usize, usize)> {
-    let cost = (1.0 - dot(normals[from], normals[to]).abs()).max(0.0);
+/// A frontier edge of the spanning tree, cheapest first in a max-heap: its cost ≥ 0 by its
+/// bits (which order non-negative floats), then its ends. The cost is 1 − |nᵢ·nⱼ| plus how far
+/// the edge leaves the two tangent planes, (|nᵢ·e| + |nⱼ·e|)/2 for its unit direction e: an
+/// edge straight across a thin part (a bunny's ear under noise) has parallel normals but runs
+/// along them, and the orientation must go round the rim instead.
+fn frontier_edge(
+    from: usize,
+    to: usize,
+    points: &[[f64; 3]],
+    normals: &[[f64; 3]],
+) -> Reverse<(u64, usize, usize)> {
+    let edge = sub(points[to], points[from]);
+    let length = crate::geometry::vector::norm(edge).max(f64::MIN_POSITIVE);
+    let across = (dot(normals[from], edge).abs() + dot(normals[to], edge).abs()) / (2.0 * length);
+    let cost = (1.0 - dot(normals[from], normals[to]).abs()).max(0.0) + across;
     Reverse((cost.to_bits(), to, from))
 }
 
@@ -521,6 +567,40 @@ mod tests {
         assert_eq!(clean.dropped_pieces, 0);
         let noisy = mesh_closed_cloud(&torus_points(big, small, 8000, 0.004, 2)).unwrap();
         check_torus(&noisy, big, small, 0.002);
+        // Noise of half a percent of the diagonal, about half the spacing: the neighbourhoods
+        // widen. Measured: RMS 0.21 %, worst 0.8 %; without widening, RMS 0.34 %, worst
+        // 2.0 %, in spikes.
+        let rough = mesh_closed_cloud(&torus_points(big, small, 8000, 0.02, 3)).unwrap();
+        check_torus(&rough, big, small, 0.0025);
+    }
+
+    #[test]
+    fn the_bunny_under_noise_keeps_its_ears() {
+        // The scan's vertices with noise of σ = 0.25 % of the diagonal: the widened
+        // neighbourhoods reach across the ears. Measured: RMS 0.18 % of the diagonal from the
+        // scan (the largest distances, 3.5 %, are where the output closes the scan's holes);
+        // when the orientation could go straight across an ear, one side of it faced inwards
+        // and the ears came out as blocks (RMS 1.1 %).
+        let scan =
+            crate::io::read_mesh(&crate::io::data_file("stanford-bunny.obj").unwrap()).unwrap();
+        let diagonal = crate::geometry::bounding_diagonal(&scan);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(10);
+        let points: Vec<[f64; 3]> = scan
+            .positions
+            .iter()
+            .map(|p| p.map(|c| c + 0.0025 * diagonal * gaussian(&mut rng)))
+            .collect();
+        let cloud = mesh_closed_cloud(&points).unwrap();
+        let report = edge_report(&cloud.mesh);
+        assert!(report.is_watertight(), "{report:?}");
+        assert_eq!(edge_components(&cloud.mesh).len(), 1);
+        let d = crate::caoen::surface_distance(&cloud.mesh, &scan).unwrap();
+        eprintln!(
+            "noisy bunny: RMS {:.3} %, largest {:.2} %",
+            100.0 * d.rms,
+            100.0 * d.hausdorff
+        );
+        assert!(d.rms < 0.003, "{d:?}");
     }
 
     #[test]

@@ -107,7 +107,8 @@ pub use closed::{
 };
 pub use cloud_mesh::{
     CloudMesh, DEBRIS_SHARE, DISTANCE_NEIGHBORS, FAR_REACH, FLAT_SPREAD, MAX_CLOUD_RESOLUTION,
-    NORMAL_NEIGHBORS, WINDING_POINTS, mesh_closed_cloud, reconstruct_closed_points,
+    MAX_NEIGHBORS, NOISE_BANDWIDTH, NORMAL_NEIGHBORS, WINDING_POINTS, mesh_closed_cloud,
+    reconstruct_closed_points,
 };
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
