@@ -70,6 +70,9 @@ pub const WINDING_POINTS: usize = 4000;
 pub const MAX_CLOUD_RESOLUTION: usize = 256;
 /// Points whose thinnest principal spread is below this share of their widest lie in a plane.
 pub const FLAT_SPREAD: f64 = 1e-3;
+/// Points whose thinnest principal spread is below this many times their noise (the median
+/// distance of a neighbourhood from its plane) lie in a plane, up to the noise.
+pub const FLAT_NOISE: f64 = 4.0;
 /// Pieces of the mesh with fewer than this share of its triangles are dropped.
 pub const DEBRIS_SHARE: f64 = 0.01;
 
@@ -105,7 +108,7 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
     let diagonal = check_points(points, 100)?;
     let (unique, duplicates) = without_duplicates(points, diagonal)?;
     let points = &unique[..];
-    check_volume(points)?;
+    let thinnest = check_volume(points)?;
     let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(points)
         .map_err(|e| Error::invalid(format!("k-d tree construction failed: {e}")))?;
     let neighbors = nearest_neighbors(points, NORMAL_NEIGHBORS, diagonal)?;
@@ -126,6 +129,13 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
     let (mut normals, residuals) = principal_normals(points, &neighbors);
     // Noise wider than the spacing widens every neighbourhood in proportion.
     let noise = median(residuals);
+    if thinnest < FLAT_NOISE * noise {
+        return Err(Error::invalid(format!(
+            "the points lie in a plane up to their noise (their thinnest spread is {:.1} times \
+             the noise): they enclose no volume; an open sheet goes to `parametric fit`",
+            thinnest / noise
+        )));
+    }
     let widen = (NOISE_BANDWIDTH * noise / spacing).max(1.0);
     let mut neighbors = neighbors;
     if widen > 1.0 {
@@ -300,8 +310,9 @@ fn without_duplicates(points: &[[f64; 3]], diagonal: f64) -> Result<(Vec<[f64; 3
 }
 
 /// Refuses points whose thinnest principal spread is below [`FLAT_SPREAD`] of the widest:
-/// they lie in a plane and enclose nothing.
-fn check_volume(points: &[[f64; 3]]) -> Result<()> {
+/// they lie in a plane and enclose nothing. Returns the thinnest spread (a standard
+/// deviation).
+fn check_volume(points: &[[f64; 3]]) -> Result<f64> {
     let n = points.len() as f64;
     let mean = points
         .iter()
@@ -321,7 +332,7 @@ fn check_volume(points: &[[f64; 3]]) -> Result<()> {
             spreads.min() / spreads.max()
         )));
     }
-    Ok(())
+    Ok(spreads.min())
 }
 
 /// Every point's unit normal, the least principal axis of it and its neighbours (either
@@ -652,6 +663,13 @@ mod tests {
             .collect();
         let e = mesh_closed_cloud(&flat).unwrap_err().to_string();
         assert!(e.contains("plane") && e.contains("parametric fit"), "{e}");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let rough: Vec<[f64; 3]> = flat
+            .iter()
+            .map(|p| p.map(|c| c + 0.05 * gaussian(&mut rng)))
+            .collect();
+        let e = mesh_closed_cloud(&rough).unwrap_err().to_string();
+        assert!(e.contains("up to their noise"), "{e}");
         let few = torus_points(1.0, 0.3, 60, 0.0, 4);
         let e = mesh_closed_cloud(&few).unwrap_err().to_string();
         assert!(e.contains("too few"), "{e}");

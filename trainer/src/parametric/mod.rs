@@ -106,9 +106,9 @@ pub use closed::{
     NORMAL_PENALTY, NORMAL_SHARE, SeamCurve, reconstruct_closed,
 };
 pub use cloud_mesh::{
-    CloudMesh, DEBRIS_SHARE, DISTANCE_NEIGHBORS, FAR_REACH, FLAT_SPREAD, MAX_CLOUD_RESOLUTION,
-    MAX_NEIGHBORS, NOISE_BANDWIDTH, NORMAL_NEIGHBORS, WINDING_POINTS, mesh_closed_cloud,
-    reconstruct_closed_points,
+    CloudMesh, DEBRIS_SHARE, DISTANCE_NEIGHBORS, FAR_REACH, FLAT_NOISE, FLAT_SPREAD,
+    MAX_CLOUD_RESOLUTION, MAX_NEIGHBORS, NOISE_BANDWIDTH, NORMAL_NEIGHBORS, WINDING_POINTS,
+    mesh_closed_cloud, reconstruct_closed_points,
 };
 pub use compare::{ComparisonRow, compare_methods, dihedral_variance};
 pub use coons::{
