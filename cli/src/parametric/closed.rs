@@ -7,20 +7,22 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use neurosurf_trainer::evaluate::Precision;
-use neurosurf_trainer::io::{check_output, read_mesh, write_atomic, write_mesh};
+use neurosurf_trainer::io::{
+    MeshOrPoints, check_output, read_mesh_or_points, write_atomic, write_mesh,
+};
 use neurosurf_trainer::parametric::{
     ClosedOptions, MAX_REGION_VERTICES, NetworkSummary, SeamCurve, network_to_blob,
     reconstruct_closed, reconstruct_closed_points,
 };
 
-use super::{MeshReport, NetworkArgs, read_points};
+use super::{MeshReport, NetworkArgs};
 use crate::output::{self, blob_scalar};
 
 #[derive(Debug, clap::Args)]
 pub struct ClosedArgs {
-    /// A closed mesh (OBJ, PLY or STL; open boundary loops, a scan's holes, are capped first)
-    /// or a closed point cloud (text rows of x y z, or PLY or OBJ vertices), which is meshed
-    /// first.
+    /// A closed mesh (OBJ or PLY; open boundary loops, a scan's holes, are capped first) or a
+    /// closed point cloud (text rows of x y z, or a PLY or OBJ file without faces), which is
+    /// meshed first.
     mesh: PathBuf,
     /// Output mesh (`.obj`, `.ply` or `.stl`).
     #[arg(long)]
@@ -87,34 +89,6 @@ struct PointsReport {
     dropped_pieces: usize,
 }
 
-/// What `parametric closed` was given.
-enum Input {
-    Mesh(neurosurf_trainer::io::Mesh),
-    Points(Vec<[f64; 3]>),
-}
-
-/// A mesh with triangles, or else points (text, PLY vertices or OBJ vertices).
-fn read_input(path: &Path) -> Result<Input> {
-    let mesh_file = matches!(
-        path.extension().and_then(|e| e.to_str()),
-        Some("obj" | "ply" | "stl")
-    );
-    if mesh_file
-        && let Ok(mesh) = read_mesh(path)
-        && !mesh.triangles.is_empty()
-    {
-        return Ok(Input::Mesh(mesh));
-    }
-    let points = read_points(path).with_context(|| {
-        format!(
-            "`parametric closed` takes a closed triangle mesh (OBJ, PLY or STL) or a closed \
-             point cloud (text rows of x y z, PLY or OBJ vertices); {} is neither",
-            path.display()
-        )
-    })?;
-    Ok(Input::Points(points))
-}
-
 #[derive(Serialize)]
 struct SeamFile<'a> {
     /// The blobs, in patch order.
@@ -130,9 +104,16 @@ pub fn run(args: &ClosedArgs) -> Result<()> {
         vertices: args.vertices,
         topology: args.network.options(args.seed)?,
     };
-    let (result, cloud) = match read_input(&args.mesh)? {
-        Input::Mesh(mesh) => (reconstruct_closed(&mesh, &options), None),
-        Input::Points(points) => match reconstruct_closed_points(&points, &options) {
+    let input = read_mesh_or_points(&args.mesh).with_context(|| {
+        format!(
+            "`parametric closed` takes a closed triangle mesh (OBJ or PLY) or a closed point \
+             cloud (text rows of x y z, PLY or OBJ vertices); {} could not be read",
+            args.mesh.display()
+        )
+    })?;
+    let (result, cloud) = match input {
+        MeshOrPoints::Mesh(mesh) => (reconstruct_closed(&mesh, &options), None),
+        MeshOrPoints::Points(points) => match reconstruct_closed_points(&points, &options) {
             Ok((result, cloud)) => (Ok(result), Some(cloud)),
             Err(e) => (Err(e), None),
         },

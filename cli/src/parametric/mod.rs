@@ -1018,7 +1018,11 @@ fn bench(args: &BenchArgs) -> Result<()> {
 
 /// Points from text, PLY or OBJ (its vertices).
 pub(super) fn read_points(path: &Path) -> Result<Vec<[f64; 3]>> {
-    if path.extension().and_then(|e| e.to_str()) == Some("obj") {
+    if path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+    {
         return Ok(read_obj_vertices(path)?);
     }
     Ok(read_query_points(path)?)

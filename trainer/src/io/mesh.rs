@@ -158,6 +158,42 @@ pub fn read_mesh(path: &Path) -> Result<Mesh> {
     })
 }
 
+/// What a surface file holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeshOrPoints {
+    /// Triangles.
+    Mesh(Mesh),
+    /// Points only: an OBJ without faces, a PLY without a `face` element, or text rows.
+    Points(Vec<[f64; 3]>),
+}
+
+/// A mesh when the file has faces, its points when it has none: OBJ and PLY files by their
+/// extension (any case), text rows of x y z otherwise.
+///
+/// # Errors
+/// As [`read_mesh`] for a file with faces (a bad face is an error, not a reason to read the
+/// points alone), as [`read_query_points`](super::read_query_points) for the points.
+pub fn read_mesh_or_points(path: &Path) -> Result<MeshOrPoints> {
+    match extension(path).as_deref() {
+        Some("obj") => {
+            let raw = obj::read_obj_mesh(path)?;
+            if raw.triangles.is_empty() {
+                return read_obj_vertices(path).map(MeshOrPoints::Points);
+            }
+            read_mesh(path).map(MeshOrPoints::Mesh)
+        }
+        Some("ply") => match ply::read_ply_mesh(path) {
+            Ok(mesh) if mesh.triangles.is_empty() => Ok(MeshOrPoints::Points(mesh.positions)),
+            Ok(_) => read_mesh(path).map(MeshOrPoints::Mesh),
+            Err(e) if e.to_string().contains(ply::NO_FACE_ELEMENT) => {
+                super::read_query_points(path).map(MeshOrPoints::Points)
+            }
+            Err(e) => Err(e),
+        },
+        _ => super::read_query_points(path).map(MeshOrPoints::Points),
+    }
+}
+
 /// The vertices of an OBJ file, with or without faces: a point cloud written as OBJ.
 ///
 /// # Errors
@@ -231,6 +267,34 @@ pub(crate) fn check_writable(mesh: &Mesh, normals: Option<&[[f64; 3]]>) -> Resul
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    #[test]
+    fn a_file_is_a_mesh_when_it_has_faces_and_points_when_it_has_none() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str, text: &str| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            read_mesh_or_points(&path)
+        };
+        let points = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        assert!(matches!(file("a.obj", points), Ok(MeshOrPoints::Points(p)) if p.len() == 3));
+        assert!(matches!(file("B.OBJ", points), Ok(MeshOrPoints::Points(p)) if p.len() == 3));
+        let triangle = format!("{points}f 1 2 3\n");
+        assert!(
+            matches!(file("c.obj", &triangle), Ok(MeshOrPoints::Mesh(m)) if m.triangles.len() == 1)
+        );
+        // A bad face is the mesh's error, not a reason to take the points alone.
+        let e = file("d.obj", &format!("{points}f 1 1 2\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("repeats a vertex"), "{e}");
+        let ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+                   property float z\nend_header\n0 0 0\n1 2 3\n";
+        assert!(matches!(file("e.ply", ply), Ok(MeshOrPoints::Points(p)) if p.len() == 2));
+        assert!(
+            matches!(file("f.xyz", "0 0 0\n1 1 1\n"), Ok(MeshOrPoints::Points(p)) if p.len() == 2)
+        );
+    }
 
     #[test]
     fn obj_vertices_are_read_with_or_without_faces() {

@@ -18,7 +18,9 @@ mod text;
 
 pub use atomic::{check_output, write_atomic, write_atomic_with};
 pub use data::{DATA_VARIABLE, data_dir, data_file};
-pub use mesh::{EdgeReport, Mesh, read_mesh, read_obj_vertices, write_mesh};
+pub use mesh::{
+    EdgeReport, Mesh, MeshOrPoints, read_mesh, read_mesh_or_points, read_obj_vertices, write_mesh,
+};
 pub use obj::{TextureCoordinates, write_textured_obj};
 pub use picture::read_picture;
 pub use ply::{PlyEncoding, read_points, write_mesh_ply, write_points_ply};

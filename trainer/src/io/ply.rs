@@ -434,11 +434,20 @@ fn payload_error(
 
 /// The definition of `name`, or a format error naming it.
 fn element<'h>(path: &Path, header: &'h Header, name: &str) -> Result<&'h ElementDef> {
-    header
-        .elements
-        .get(name)
-        .ok_or_else(|| Error::format(path, format!("the PLY header has no '{name}' element")))
+    header.elements.get(name).ok_or_else(|| {
+        Error::format(
+            path,
+            if name == "face" {
+                NO_FACE_ELEMENT.to_string()
+            } else {
+                format!("the PLY header has no '{name}' element")
+            },
+        )
+    })
 }
+
+/// The error text of a PLY file read as a mesh that has no faces at all.
+pub(crate) const NO_FACE_ELEMENT: &str = "the PLY header has no 'face' element";
 
 /// Whether `element` declares `property`; a format error if it is declared as a list.
 fn has_scalar(path: &Path, element: &ElementDef, property: &str) -> Result<bool> {

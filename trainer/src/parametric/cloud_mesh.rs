@@ -68,6 +68,8 @@ pub const FAR_REACH: f64 = 3.0;
 pub const WINDING_POINTS: usize = 4000;
 /// Cells along the longest side, at most.
 pub const MAX_CLOUD_RESOLUTION: usize = 256;
+/// Cells of the winding number's sign grid along the longest side, at most.
+pub const MAX_SIGN_CELLS: usize = 160;
 /// Points whose thinnest principal spread is below this share of their widest lie in a plane.
 pub const FLAT_SPREAD: f64 = 1e-3;
 /// Points whose thinnest principal spread is below this many times their noise (the median
@@ -164,7 +166,13 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
         lo: bounds.lo.map(|v| v - margin),
         hi: bounds.hi.map(|v| v + margin),
     };
-    let signs = SignGrid::new(&bounds, 0.5 * FAR_REACH * spacing, |q| {
+    // At most MAX_SIGN_CELLS cells along the longest side: a far outlier or a dense cloud
+    // coarsens the grid, and cells it leaves unknown fall back to the tangent planes.
+    let longest = sub(bounds.hi, bounds.lo)
+        .into_iter()
+        .fold(0.0_f64, f64::max);
+    let cell = (0.5 * FAR_REACH * spacing).max(longest / MAX_SIGN_CELLS as f64);
+    let signs = SignGrid::new(&bounds, cell, |q| {
         if nearest_distance(&tree, q) > 0.5 * FAR_REACH * spacing {
             if oracle.winding(q) > 0.5 { -1 } else { 1 }
         } else {
@@ -199,9 +207,6 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
         }
         sum / weights
     };
-    let longest = sub(bounds.hi, bounds.lo)
-        .into_iter()
-        .fold(0.0_f64, f64::max);
     let resolution = ((longest / spacing).ceil() as usize).clamp(16, MAX_CLOUD_RESOLUTION);
     let raw = signed_distance_mesh(signed, bounds, resolution)?;
     if raw.triangles.is_empty() {
@@ -212,9 +217,17 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
     }
     let parts = edge_components(&raw);
     let total = raw.triangles.len() as f64;
-    let (kept, dropped): (Vec<Mesh>, Vec<Mesh>) = parts
-        .into_iter()
-        .partition(|m| m.triangles.len() as f64 >= DEBRIS_SHARE * total);
+    // The largest piece comes first and is always kept.
+    let mut parts = parts.into_iter();
+    let mut kept: Vec<Mesh> = parts.next().into_iter().collect();
+    let mut dropped = 0;
+    for part in parts {
+        if part.triangles.len() as f64 >= DEBRIS_SHARE * total {
+            kept.push(part);
+        } else {
+            dropped += 1;
+        }
+    }
     let mesh = merge(kept);
     let surface = TriangleTree::new(&mesh)?;
     let squares: f64 = points
@@ -228,7 +241,7 @@ pub fn mesh_closed_cloud(points: &[[f64; 3]]) -> Result<CloudMesh> {
         normals,
         spacing,
         resolution,
-        dropped_pieces: dropped.len(),
+        dropped_pieces: dropped,
         rms_to_points: (squares / points.len() as f64).sqrt() / diagonal,
     })
 }

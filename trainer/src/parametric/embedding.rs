@@ -93,8 +93,8 @@ pub struct Embedding {
 
 /// LLE of an unstructured point set with k nearest neighbours; with
 /// [`LleOptions::more_neighbors`], the first of k and k + [`OTHER_NEIGHBORS`] (from 4 to
-/// fewer than the points) whose embedding does not fold, and when every one folds, the first
-/// of them whose unrolled parameterization ([`unrolled_parameters`]) does not (with
+/// fewer than the points) whose embedding does not fold, and when every one folds or fails,
+/// the first of them whose unrolled parameterization ([`unrolled_parameters`]) does not (with
 /// [`LleOptions::unroll_uneven`]).
 ///
 /// # Errors
@@ -126,8 +126,8 @@ pub fn embed_points(points: &[[f64; 3]], options: &LleOptions) -> Result<Embeddi
             }
         }
     }
-    // LLE folds at every k: a patch curved too far for its local reconstructions (a cap
-    // reaching round a bend) may still unroll along its path lengths.
+    // LLE folds or fails at every k: a patch curved too far for its local reconstructions (a
+    // cap reaching round a bend) may still unroll along its path lengths.
     if options.more_neighbors && options.check_folds && options.unroll_uneven {
         for &k in &tried {
             let neighbors = nearest_neighbors(points, k, diagonal)?;
