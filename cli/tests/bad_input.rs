@@ -107,7 +107,7 @@ const COMMANDS: &[Command] = &[
     },
     Command {
         args: &[
-            "caoen", "image", "compress", "{in}", "--keys", "16", "--out", "{out}",
+            "caoen", "image", "compress", "{in}", "--bytes", "400", "--out", "{out}",
         ],
         reads: Reads::Png,
     },

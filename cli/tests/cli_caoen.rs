@@ -344,12 +344,15 @@ fn key_counts_beyond_the_core_are_refused_before_fitting() {
         "image",
         "compress",
         s(&picture),
-        "--keys",
-        "257",
+        "--bytes",
+        "20",
         "--out",
         s(&out),
     ]);
-    assert!(error.contains("--keys") && error.contains("257"), "{error}");
+    assert!(
+        error.contains("--bytes") && error.contains("at least"),
+        "{error}"
+    );
     assert!(!out.exists());
 }
 

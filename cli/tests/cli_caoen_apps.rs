@@ -439,54 +439,88 @@ fn distort_moves_a_mesh_by_its_controls() {
     assert!(q.contains("Q"), "{q}");
 }
 
+/// A picture and a photograph compress within their byte budgets, decode from the file alone
+/// to the PSNR the compressor reported, and beat a thumbnail of the same bytes; damaged and
+/// foreign files, missing pictures and impossible budgets are refused by name.
 #[test]
-fn pictures_compress_to_blobs_and_back() {
+fn pictures_compress_within_their_bytes_and_back() {
     let dir = tempfile::tempdir().unwrap();
-    let picture = dir.path().join("smooth.png");
+    let edges = dir.path().join("edges.png");
     ok(&[
         "caoen",
         "image",
         "sample",
+        "--kind",
+        "edges",
         "--size",
-        "32,32",
+        "40,36",
         "--out",
-        s(&picture),
+        s(&edges),
     ]);
-    let blob = dir.path().join("smooth.nsb");
-    let packed = json(&ok(&[
+    let photo = neurosurf_trainer::io::data_file("pictures/coffee.png").unwrap();
+    let file = dir.path().join("p.nsi");
+    for (picture, budget) in [(edges.as_path(), 900u64), (photo.as_path(), 4000)] {
+        let packed = json(&ok(&[
+            "caoen",
+            "image",
+            "compress",
+            s(picture),
+            "--bytes",
+            &budget.to_string(),
+            "--out",
+            s(&file),
+            "--json",
+        ]));
+        let bytes = packed["bytes"].as_u64().unwrap();
+        assert_eq!(bytes, fs::metadata(&file).unwrap().len());
+        assert!(bytes <= budget, "{packed}");
+        let quality = packed["psnr_db"].as_f64().unwrap();
+        let thumbnail = packed["thumbnail_psnr_db"].as_f64().unwrap();
+        assert!(quality > thumbnail + 1.0, "{packed}");
+        let back = dir.path().join("back.png");
+        let unpacked = json(&ok(&[
+            "caoen",
+            "image",
+            "decompress",
+            s(&file),
+            "--out",
+            s(&back),
+            "--reference",
+            s(picture),
+            "--json",
+        ]));
+        assert_eq!(unpacked["psnr_db"].as_f64().unwrap(), quality);
+        let size = image::open(picture).unwrap().to_rgb8().dimensions();
+        assert_eq!(image::open(&back).unwrap().to_rgb8().dimensions(), size);
+    }
+    // Fixed γ and reach are taken as given.
+    let fixed = json(&ok(&[
         "caoen",
         "image",
         "compress",
-        s(&picture),
-        "--keys",
-        "64",
+        s(&edges),
+        "--bytes",
+        "900",
+        "--gamma",
+        "0.5",
+        "--reach",
+        "0.8",
         "--out",
-        s(&blob),
+        s(&file),
         "--json",
     ]));
-    assert_eq!(packed["key_points"], 64);
-    let quality = packed["psnr_db"].as_f64().unwrap();
-    assert!(quality > 30.0, "{packed}");
-    let bytes = packed["blob_bytes"].as_u64().unwrap();
-    assert_eq!(bytes, fs::metadata(&blob).unwrap().len());
-    assert!(bytes < packed["raw_bytes"].as_u64().unwrap(), "{packed}");
+    assert!(
+        (fixed["gamma"].as_f64().unwrap() - 0.5).abs() < 0.01,
+        "{fixed}"
+    );
+    assert!(
+        (fixed["reach"].as_f64().unwrap() - 0.8).abs() < 1e-9,
+        "{fixed}"
+    );
+    // A damaged file, a shape blob and a missing picture are refused by name.
     let back = dir.path().join("back.png");
-    let unpacked = json(&ok(&[
-        "caoen",
-        "image",
-        "decompress",
-        s(&blob),
-        "--out",
-        s(&back),
-        "--reference",
-        s(&picture),
-        "--json",
-    ]));
-    assert_eq!(unpacked["psnr_db"].as_f64().unwrap(), quality);
-    assert_eq!(image::open(&back).unwrap().to_rgb8().dimensions(), (32, 32));
-    // A damaged blob, a shape blob and a missing picture are refused by name.
-    let damaged = dir.path().join("damaged.nsb");
-    let mut raw = fs::read(&blob).unwrap();
+    let damaged = dir.path().join("damaged.nsi");
+    let mut raw = fs::read(&file).unwrap();
     raw.truncate(raw.len() - 10);
     fs::write(&damaged, raw).unwrap();
     let e = fails(&[
@@ -497,7 +531,7 @@ fn pictures_compress_to_blobs_and_back() {
         "--out",
         s(&back),
     ]);
-    assert!(e.contains("damaged.nsb"), "{e}");
+    assert!(e.contains("damaged.nsi") && e.contains("checksum"), "{e}");
     let shape = fit(
         dir.path(),
         &targets(dir.path(), "t.txt", 1.0, 1.0, true),
@@ -505,27 +539,31 @@ fn pictures_compress_to_blobs_and_back() {
         false,
     );
     let e = fails(&["caoen", "image", "decompress", s(&shape), "--out", s(&back)]);
-    assert!(e.contains("not a Cao En image blob"), "{e}");
+    assert!(e.contains("not a Cao En picture"), "{e}");
     let e = fails(&[
         "caoen",
         "image",
         "compress",
         s(&dir.path().join("none.png")),
-        "--keys",
-        "16",
+        "--bytes",
+        "900",
         "--out",
-        s(&blob),
+        s(&file),
     ]);
     assert!(e.contains("none.png"), "{e}");
-    let e = fails(&[
-        "caoen",
-        "image",
-        "compress",
-        s(&picture),
-        "--keys",
-        "2",
-        "--out",
-        s(&blob),
-    ]);
-    assert!(e.contains("key points"), "{e}");
+    for (option, value, says) in [
+        ("--bytes", "30", "at least"),
+        ("--gamma", "1.5", "γ"),
+        ("--gamma", "x", "auto"),
+        ("--reach", "9", "reach"),
+        ("--iterations", "40", "iterations"),
+    ] {
+        let mut args = vec!["caoen", "image", "compress", s(&edges), "--out", s(&file)];
+        if option != "--bytes" {
+            args.extend(["--bytes", "900"]);
+        }
+        args.extend([option, value]);
+        let e = fails(&args);
+        assert!(e.contains(says), "{option} {value}: {e}");
+    }
 }

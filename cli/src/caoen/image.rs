@@ -1,4 +1,5 @@
-//! `neurosurf caoen image`: pictures as Cao En networks on a 5-D hypersphere (paper §12.5).
+//! `neurosurf caoen image`: pictures as Cao En networks on a 5-D hypersphere (paper §12.5),
+//! one per 8 × 8 tile, with key points placed where the picture changes.
 
 use std::path::{Path, PathBuf};
 
@@ -6,19 +7,21 @@ use anyhow::{Context, Result};
 use clap::Subcommand;
 use serde::Serialize;
 
-use neurosurf_trainer::caoen::{CompressedImage, compress_image, psnr, smooth_test_image};
-use neurosurf_trainer::evaluate::Precision;
+use neurosurf_trainer::caoen::{
+    CompressedImage, ImageOptions, compress_image, edge_test_image, psnr, smooth_test_image,
+    thumbnail,
+};
 use neurosurf_trainer::render::write_png;
 
-use super::super::output::{self, blob_scalar, comma_list};
+use super::super::output::{self, comma_list};
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Compress a PNG into a Cao En blob (key points on S⁴, V fitted to every pixel).
+    /// Compress a PNG into at most `--bytes` bytes (key points on S⁴, V fitted to every pixel).
     Compress(CompressArgs),
-    /// Reconstruct the PNG from the blob alone.
+    /// Reconstruct the PNG from the compressed file alone.
     Decompress(DecompressArgs),
-    /// Write the smooth synthetic test picture.
+    /// Write a synthetic test picture (smooth shading, or flat shapes with hard edges).
     Sample(SampleArgs),
 }
 
@@ -30,23 +33,37 @@ pub fn run(command: &Command) -> Result<()> {
     }
 }
 
+/// `auto` (the compressor chooses) or a number.
+#[derive(Copy, Clone, Debug)]
+struct AutoOr(Option<f64>);
+
+fn auto_or_number(text: &str) -> Result<AutoOr, String> {
+    if text.eq_ignore_ascii_case("auto") {
+        return Ok(AutoOr(None));
+    }
+    text.parse::<f64>()
+        .map(|v| AutoOr(Some(v)))
+        .map_err(|_| format!("'{text}' is neither `auto` nor a number"))
+}
+
 #[derive(Debug, clap::Args)]
 pub struct CompressArgs {
-    /// The picture (PNG, or any format the `image` crate reads with its enabled features).
+    /// The picture (PNG).
     input: PathBuf,
-    /// Key points (rounded down to a grid close to the picture's aspect; 4 … 256).
+    /// The most bytes the compressed file may take (header and checksum included).
     #[arg(long)]
-    keys: usize,
-    /// Weight γ of the luminance in the source point, 0 … 1 (0: position only).
-    #[arg(long, default_value_t = 0.3)]
-    gamma: f64,
+    bytes: usize,
+    /// Weight γ of the luminance in the source point, 0 … 1, or `auto` (tries 0 and 1).
+    #[arg(long, default_value = "auto", value_parser = auto_or_number)]
+    gamma: AutoOr,
+    /// How far each key's blending reaches, in sides of its quadtree cell (0.1 … 2.5), or
+    /// `auto` (tries 0.6 and 1).
+    #[arg(long, default_value = "auto", value_parser = auto_or_number)]
+    reach: AutoOr,
     /// Luminance refinements when decoding (with γ > 0).
     #[arg(long, default_value_t = 3)]
     iterations: u8,
-    /// How the blob stores the network: `f32` or `q16.16`.
-    #[arg(long, default_value = "f32")]
-    scalar: Precision,
-    /// Output blob.
+    /// The compressed file to write.
     #[arg(long)]
     out: PathBuf,
     /// Print the summary as JSON.
@@ -60,45 +77,62 @@ struct CompressReport<'a> {
     width: u32,
     height: u32,
     key_points: usize,
-    stored_as: &'static str,
-    blob_bytes: usize,
+    gamma: f64,
+    reach: f64,
+    bytes: usize,
     /// Bytes of the picture as raw 8-bit RGB.
     raw_bytes: usize,
-    /// PSNR of the picture decoded from the blob as written, dB.
+    /// PSNR of the picture decoded from the file as written, dB.
     psnr_db: f64,
+    /// PSNR of a box thumbnail whose raw RGB fits in the same bytes, upscaled bicubically.
+    thumbnail_psnr_db: Option<f64>,
 }
 
 fn compress(args: &CompressArgs) -> Result<()> {
-    let scalar = blob_scalar(args.scalar)?;
     neurosurf_trainer::io::check_output(&args.out)?;
     let picture = neurosurf_trainer::io::read_picture(&args.input)?;
-    neurosurf_trainer::caoen::check_key_count(args.keys, "--keys")?;
-    let compressed = compress_image(&picture, args.keys, args.gamma, args.iterations)?;
-    let blob = compressed.to_blob(scalar)?;
-    // Measure what a reader of the blob gets (the words rounded to the scalar).
-    let decoded = CompressedImage::from_blob(&blob, &args.out)?.decode();
-    neurosurf_trainer::blob::write_checked(&args.out, &blob)?;
+    let options = ImageOptions {
+        bytes: args.bytes,
+        gamma: args.gamma.0,
+        reach: args.reach.0,
+        iterations: args.iterations,
+    };
+    let compressed = compress_image(&picture, &options)?;
+    let bytes = compressed.to_bytes();
+    // Measure what a reader of the file gets.
+    let decoded = CompressedImage::from_bytes(&bytes, &args.out)?.decode();
+    neurosurf_trainer::io::write_atomic(&args.out, &bytes)?;
     let report = CompressReport {
         out: &args.out,
         width: picture.width(),
         height: picture.height(),
-        key_points: compressed.network.key_count(),
-        stored_as: scalar.name(),
-        blob_bytes: blob.len(),
+        key_points: compressed.key_count(),
+        gamma: compressed.codec.gamma(),
+        reach: compressed.codec.reach(),
+        bytes: bytes.len(),
         raw_bytes: picture.as_raw().len(),
         psnr_db: psnr(&picture, &decoded)?,
+        thumbnail_psnr_db: thumbnail(&picture, bytes.len())
+            .map(|(t, _)| psnr(&picture, &t))
+            .transpose()?,
     };
     if args.json {
         return output::json(&report);
     }
     println!(
-        "{} × {} pixels, {} key points: {} bytes ({} raw), PSNR {:.2} dB; wrote {}",
+        "{} × {} pixels, {} key points (γ {:.2}, reach {:.2}): {} bytes ({} raw), PSNR {:.2} dB{}; \
+         wrote {}",
         report.width,
         report.height,
         report.key_points,
-        report.blob_bytes,
+        report.gamma,
+        report.reach,
+        report.bytes,
         report.raw_bytes,
         report.psnr_db,
+        report.thumbnail_psnr_db.map_or(String::new(), |t| format!(
+            " (a thumbnail of the same bytes: {t:.2} dB)"
+        )),
         args.out.display()
     );
     Ok(())
@@ -106,8 +140,8 @@ fn compress(args: &CompressArgs) -> Result<()> {
 
 #[derive(Debug, clap::Args)]
 pub struct DecompressArgs {
-    /// A blob written by `caoen image compress`.
-    blob: PathBuf,
+    /// A file written by `caoen image compress`.
+    input: PathBuf,
     /// The PNG to write.
     #[arg(long)]
     out: PathBuf,
@@ -125,14 +159,14 @@ struct DecompressReport<'a> {
     width: u32,
     height: u32,
     key_points: usize,
-    blob_bytes: usize,
+    bytes: usize,
     psnr_db: Option<f64>,
 }
 
 fn decompress(args: &DecompressArgs) -> Result<()> {
-    let bytes = std::fs::read(&args.blob)
-        .with_context(|| format!("cannot read {}", args.blob.display()))?;
-    let compressed = CompressedImage::from_blob(&bytes, &args.blob)?;
+    let bytes = std::fs::read(&args.input)
+        .with_context(|| format!("cannot read {}", args.input.display()))?;
+    let compressed = CompressedImage::from_bytes(&bytes, &args.input)?;
     let picture = compressed.decode();
     let psnr_db = match &args.reference {
         Some(path) => Some(psnr(&neurosurf_trainer::io::read_picture(path)?, &picture)?),
@@ -143,8 +177,8 @@ fn decompress(args: &DecompressArgs) -> Result<()> {
         out: &args.out,
         width: picture.width(),
         height: picture.height(),
-        key_points: compressed.network.key_count(),
-        blob_bytes: bytes.len(),
+        key_points: compressed.key_count(),
+        bytes: bytes.len(),
         psnr_db,
     };
     if args.json {
@@ -155,11 +189,20 @@ fn decompress(args: &DecompressArgs) -> Result<()> {
         report.width,
         report.height,
         report.key_points,
-        report.blob_bytes,
+        report.bytes,
         psnr_db.map_or(String::new(), |p| format!(", PSNR {p:.2} dB")),
         args.out.display()
     );
     Ok(())
+}
+
+/// Which synthetic picture `caoen image sample` writes.
+#[derive(Copy, Clone, Debug, clap::ValueEnum)]
+pub enum SampleKind {
+    /// Colour ramps, a soft disc and a slow wave.
+    Smooth,
+    /// Flat shapes and stripes with hard, unsmoothed edges.
+    Edges,
 }
 
 #[derive(Debug, clap::Args)]
@@ -167,6 +210,9 @@ pub struct SampleArgs {
     /// Picture size, `WIDTH,HEIGHT`.
     #[arg(long, value_parser = comma_list::<u32, 2>, default_value = "64,64")]
     size: [u32; 2],
+    /// Which picture.
+    #[arg(long, value_enum, default_value = "smooth")]
+    kind: SampleKind,
     /// The PNG to write.
     #[arg(long)]
     out: PathBuf,
@@ -177,7 +223,11 @@ fn sample(args: &SampleArgs) -> Result<()> {
     if width == 0 || height == 0 || width > 4096 || height > 4096 {
         anyhow::bail!("--size: each side must be 1 to 4096, got {width} × {height}");
     }
-    write_png(&args.out, &smooth_test_image(width, height))?;
+    let picture = match args.kind {
+        SampleKind::Smooth => smooth_test_image(width, height),
+        SampleKind::Edges => edge_test_image(width, height),
+    };
+    write_png(&args.out, &picture)?;
     println!("wrote {}", args.out.display());
     Ok(())
 }

@@ -40,7 +40,7 @@ mod distance;
 mod distort;
 mod fit;
 mod groups;
-mod image;
+pub mod image;
 mod mesh;
 mod mesh_fit;
 mod morph;
@@ -66,7 +66,8 @@ pub use fit::{
 };
 pub use groups::order_for_groups;
 pub use image::{
-    CompressedImage, ImageCodec, MAX_ITERATIONS, SPAN, compress_image, psnr, smooth_test_image,
+    CompressedImage, ImageCodec, ImageOptions, MAX_ITERATIONS, compress_image, edge_test_image,
+    least_bytes, psnr, smooth_test_image, thumbnail,
 };
 pub use mesh::{
     CaoEnMesh, MAX_SUBDIVISIONS, SourceGrid, icosphere, map_mesh, sphere_mesh, torus_grid,
