@@ -8,7 +8,8 @@
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench image_coding`, with after `--`:
 //! `--markdown FILE` to write the table as well (`docs/performance/image-coding.md`),
-//! `--picture FILE` (repeatable) for other PNG pictures, `--figure FILE` to write a strip of
+//! `--picture FILE` (repeatable) for other PNG pictures, `--budgets 5,10,20` for other shares
+//! of the raw size (percent), `--figure FILE` to write a strip of
 //! the last picture at 10 %: the original, Cao En, the thumbnail and JPEG, each doubled.
 
 mod arguments;
@@ -100,9 +101,14 @@ fn main() {
     );
     println!("{table}");
     let mut strip = None;
+    let budgets: Vec<f64> = option(&args, "--budgets").map_or(BUDGETS.to_vec(), |v| {
+        v.split(',')
+            .map(|b| b.trim().parse::<f64>().expect("--budgets: percentages") / 100.0)
+            .collect()
+    });
     for (name, picture) in &pictures {
         let (w, h) = picture.dimensions();
-        for share in BUDGETS {
+        for &share in &budgets {
             let budget = (share * f64::from(3 * w * h)) as usize;
             let started = Instant::now();
             let options = ImageOptions {
@@ -130,7 +136,7 @@ fn main() {
             let jpeg_cells = jpeg.as_ref().map_or("— | —".into(), |(b, p)| {
                 format!("{b} | {:.2}", psnr(picture, p).expect("same size"))
             });
-            if share == 0.1 {
+            if (share - 0.1).abs() < 1e-9 {
                 strip = Some(vec![
                     picture.clone(),
                     compressed.decode(),

@@ -26,10 +26,11 @@ pub const MAGIC: &[u8; 8] = b"NSIMAGE2";
 pub const HEADER_BYTES: usize = 15;
 /// Bytes after the keys (the checksum).
 pub const TRAILER_BYTES: usize = 4;
-/// The least value a stored V channel can take (V overshoots [0, 1] beside edges).
-pub const V_LOW: f64 = -0.25;
+/// The least value a stored V channel can take (V overshoots [0, 1] beside edges, where it
+/// undoes the blending's blur).
+pub const V_LOW: f64 = -0.5;
 /// The greatest value a stored V channel can take.
-pub const V_HIGH: f64 = 1.25;
+pub const V_HIGH: f64 = 1.5;
 
 /// A V channel as its byte.
 pub fn quantize(v: f64) -> u8 {
