@@ -124,6 +124,17 @@ fn the_teapot_is_four_surfaces_with_the_handle_on_the_torus() {
     // The teapot fills a good part of its frame.
     let drawn = drawn_pixels(&png);
     assert!(drawn > 160 * 120 / 6, "{drawn} pixels drawn");
+    // The paper's sixfold key layout: two poles and rings of six on the body and the lid.
+    let sixfold = json(&ok(&[
+        "caoen",
+        "teapot",
+        "--layout",
+        "sixfold",
+        "--out-dir",
+        s(dir.path()),
+        "--json",
+    ]));
+    assert_eq!(sixfold["parts"][0]["key_points"], 38, "{sixfold}");
     let missing = dir.path().join("nothing.obj");
     let e = fails(&[
         "caoen",

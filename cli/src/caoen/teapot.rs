@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use serde::Serialize;
 
-use neurosurf_trainer::caoen::{self, SurfaceDistance, fit_teapot};
+use neurosurf_trainer::caoen::{self, SurfaceDistance, TeapotLayout, fit_teapot};
 use neurosurf_trainer::evaluate::Precision;
 use neurosurf_trainer::io::{data_file, read_mesh, write_mesh};
 use neurosurf_trainer::render::write_png;
@@ -21,6 +21,11 @@ pub struct Args {
     /// Key points of the body, the lid and the spout (the handle takes a 6 × 4 torus grid).
     #[arg(long, value_parser = comma_list::<usize, 3>, default_value = "40,20,20")]
     keys: [usize; 3],
+    /// Where the body's and the lid's keys go: `farthest` (farthest-first on the surface) or
+    /// `sixfold` (the paper's Fig. 7: rings of six around the axis and a key at each pole,
+    /// 6·rings + 2 keys of those asked for).
+    #[arg(long, value_enum, default_value = "farthest")]
+    layout: Layout,
     /// How the blobs store the networks: `f32` or `q16.16`.
     #[arg(long, default_value = "f32")]
     scalar: Precision,
@@ -36,6 +41,13 @@ pub struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+}
+
+/// `--layout`.
+#[derive(Copy, Clone, Debug, clap::ValueEnum)]
+pub enum Layout {
+    Farthest,
+    Sixfold,
 }
 
 #[derive(Serialize)]
@@ -66,7 +78,11 @@ pub fn run(args: &Args) -> Result<()> {
         Some(path) => path.clone(),
         None => data_file("teapot.obj")?,
     };
-    let (parts, combined) = fit_teapot(&read_mesh(&source)?, args.keys)?;
+    let layout = match args.layout {
+        Layout::Farthest => TeapotLayout::Farthest,
+        Layout::Sixfold => TeapotLayout::Sixfold,
+    };
+    let (parts, combined) = fit_teapot(&read_mesh(&source)?, args.keys, layout)?;
     std::fs::create_dir_all(&args.out_dir)?;
     let mut report = Report {
         parts: Vec::new(),

@@ -47,6 +47,11 @@ pub enum KeyPlacement {
     Surface,
     /// Farthest-first on the parameterization (uniform on the sphere).
     Sphere,
+    /// The paper's teapot layout (Fig. 7): a key at each pole of the sphere's x axis and
+    /// rings of six keys around it, evenly spaced in latitude, every other ring turned by 30°
+    /// ([`sixfold_points`]). Sixfold symmetric when the parameterization's x axis is the
+    /// shape's axis (as for the teapot's body and lid).
+    Sixfold,
 }
 
 /// How [`fit_parameterized`] builds its network.
@@ -98,6 +103,48 @@ pub struct FitRow {
     pub vertex_rms: f64,
     /// Surface-to-mesh distance.
     pub distance: SurfaceDistance,
+}
+
+/// The points of the sphere (unit vectors) nearest the paper's sixfold teapot layout: the two
+/// poles of the x axis and ⌊(`n` − 2)/6⌋ rings of six evenly spaced in latitude, every other
+/// ring turned by 30°, so 6·rings + 2 ≤ `n` keys (at least 8). Returns their indices.
+///
+/// # Errors
+/// [`Error::InvalidInput`] when `n` is below 8, or the rings need more distinct points than
+/// there are.
+pub fn sixfold_points(points: &[[f64; 3]], n: usize) -> Result<Vec<usize>> {
+    if n < 8 {
+        return Err(Error::invalid(format!(
+            "the sixfold layout takes at least 8 keys (two poles and a ring of six), got {n}"
+        )));
+    }
+    let rings = (n - 2) / 6;
+    let mut ideal = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]];
+    for j in 0..rings {
+        let a = std::f64::consts::PI * (j + 1) as f64 / (rings + 1) as f64;
+        for k in 0..6 {
+            let phi = std::f64::consts::TAU * (k as f64 + 0.5 * (j % 2) as f64) / 6.0;
+            ideal.push([a.cos(), a.sin() * phi.cos(), a.sin() * phi.sin()]);
+        }
+    }
+    let mut chosen: Vec<usize> = Vec::with_capacity(ideal.len());
+    for target in &ideal {
+        let nearest = (0..points.len())
+            .filter(|i| !chosen.contains(i))
+            .min_by(|&a, &b| {
+                let d = |p: &[f64; 3]| (0..3).map(|k| (p[k] - target[k]).powi(2)).sum::<f64>();
+                d(&points[a]).total_cmp(&d(&points[b]))
+            })
+            .ok_or_else(|| {
+                Error::invalid(format!(
+                    "the sixfold layout needs {} distinct points, there are {}",
+                    ideal.len(),
+                    points.len()
+                ))
+            })?;
+        chosen.push(nearest);
+    }
+    Ok(chosen)
 }
 
 /// `n` indices of `points`, farthest-first: the first is the point farthest from the mean,
@@ -194,6 +241,7 @@ pub fn fit_parameterized(
     let key_vertices = match options.placement {
         KeyPlacement::Surface => farthest_points(&mesh.positions, n)?,
         KeyPlacement::Sphere => farthest_points(sphere, n)?,
+        KeyPlacement::Sixfold => sixfold_points(sphere, n)?,
     };
     let keys: Vec<[f64; 3]> = key_vertices.iter().map(|&v| sphere[v]).collect();
     let network = CaoEnNetwork {
@@ -341,6 +389,39 @@ mod tests {
     use super::*;
     use crate::caoen::{cap_holes, icosphere};
     use crate::io::{data_file, read_mesh};
+
+    /// On a dense sphere the sixfold layout has its two poles on the x axis and every key a
+    /// partner 60° round that axis; too few keys are refused by name.
+    #[test]
+    fn sixfold_points_ring_the_x_axis() {
+        let dense: Vec<[f64; 3]> = crate::caoen::support::fibonacci(20_000)
+            .iter()
+            .map(|p| [p[0], p[1], p[2]])
+            .collect();
+        let keys = sixfold_points(&dense, 40).unwrap();
+        assert_eq!(keys.len(), 38);
+        assert!(dense[keys[0]][0] > 0.999 && dense[keys[1]][0] < -0.999);
+        let (c, s) = (
+            std::f64::consts::FRAC_PI_3.cos(),
+            std::f64::consts::FRAC_PI_3.sin(),
+        );
+        for &k in &keys {
+            let w = dense[k];
+            let turned = [w[0], c * w[1] - s * w[2], s * w[1] + c * w[2]];
+            let nearest = keys
+                .iter()
+                .map(|&v| {
+                    (0..3)
+                        .map(|i| (dense[v][i] - turned[i]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(nearest < 0.04, "{w:?}: nearest turned partner {nearest}");
+        }
+        let e = sixfold_points(&dense, 7).unwrap_err().to_string();
+        assert!(e.contains("at least 8"), "{e}");
+    }
 
     /// Spot: the error falls with every doubling of n and is below the stated bounds at 400.
     #[test]

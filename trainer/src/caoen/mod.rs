@@ -75,7 +75,7 @@ pub use mesh::{
 };
 pub use mesh_fit::{
     FitRow, KeyPlacement, MeshFit, MeshFitOptions, farthest_points, fit_error_table,
-    fit_parameterized,
+    fit_parameterized, sixfold_points,
 };
 pub use morph::{MAX_FRAMES, Morph, morph_meshes};
 pub use network::{CaoEnNetwork, Evaluation, on_domain};
@@ -86,7 +86,7 @@ pub use raymarch::{
 };
 pub use render::{MAX_SAMPLE_GAP, Rendering, View, depth_buffer_image};
 pub use spherical::{SphericalMap, flipped_triangles, spherical_parameterization};
-pub use teapot::{HANDLE_KEYS, HANDLE_SPAN, TeapotPart, fit_teapot};
+pub use teapot::{HANDLE_KEYS, HANDLE_SPAN, TeapotLayout, TeapotPart, fit_teapot};
 pub use texture::{
     LIGHTING_CHECK_SUBDIVISIONS, LightingFit, cosine_law, fold_lighting, mesh_texture,
     position_part, texture_coordinates,
