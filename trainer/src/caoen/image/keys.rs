@@ -121,8 +121,14 @@ fn spread(pixels: &[[f64; 3]], width: u32, height: u32, cell: &Cell) -> f64 {
             n += 1.0;
         }
     }
-    (squares - sum.iter().map(|s| s * s).sum::<f64>() / n).max(0.0)
+    let spread = squares - sum.iter().map(|s| s * s).sum::<f64>() / n;
+    // Rounding leaves a flat cell a spread of about 1e-16 per pixel; below FLAT it is flat.
+    if spread > FLAT * n { spread } else { 0.0 }
 }
+
+/// Spread per pixel (squared colour difference, channels in [0, 1]) below which a cell is
+/// flat and never split: far under the 8-bit step (1/255)² ≈ 1.5e-5.
+const FLAT: f64 = 1e-10;
 
 /// A cell waiting in the split queue, largest spread first.
 struct Candidate {

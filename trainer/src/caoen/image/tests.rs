@@ -101,6 +101,18 @@ fn the_tiles_networks_run_in_the_core() {
     }
 }
 
+/// A flat picture takes one key per tile, however many bytes it is given, and pictures a
+/// pixel wide or tall work.
+#[test]
+fn flat_and_thin_pictures() {
+    for (w, h) in [(1, 1), (1, 37), (200, 1), (20, 20)] {
+        let picture = RgbImage::from_pixel(w, h, image::Rgb([10, 200, 30]));
+        let compressed = compress_image(&picture, &options(100_000, None)).unwrap();
+        assert_eq!(compressed.key_count(), Tile::cover(w, h).len(), "{w} × {h}");
+        assert!(psnr(&picture, &compressed.decode()).unwrap() > 45.0);
+    }
+}
+
 /// Damaged or foreign streams, and impossible requests, are errors that say what is wrong.
 #[test]
 fn bad_streams_and_requests_are_named() {
