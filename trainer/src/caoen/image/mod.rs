@@ -43,6 +43,7 @@ pub mod tiles;
 
 use image::RgbImage;
 use neurosurf_core::caoen::{Blending, Domain, MAX_SHARPNESS};
+use rayon::prelude::*;
 
 use super::network::CaoEnNetwork;
 use crate::error::{Error, Result};
@@ -173,25 +174,34 @@ pub fn compress_image(image: &RgbImage, options: &ImageOptions) -> Result<Compre
     if options.gamma.is_none() || options.reach.is_none() {
         let gammas = options.gamma.map_or(vec![0.0, 1.0], |g| vec![g]);
         let reaches = options.reach.map_or(REACHES.to_vec(), |r| vec![r]);
-        let mut best: Option<(f64, CompressedImage)> = None;
-        let mut first_error = None;
-        for &gamma in &gammas {
-            for &reach in &reaches {
+        let candidates: Vec<(f64, f64)> = gammas
+            .iter()
+            .flat_map(|&g| reaches.iter().map(move |&r| (g, r)))
+            .collect();
+        // Independent encodings: one per core.
+        let results: Vec<Result<(f64, CompressedImage)>> = candidates
+            .par_iter()
+            .map(|&(gamma, reach)| {
                 let fixed = ImageOptions {
                     gamma: Some(gamma),
                     reach: Some(reach),
                     ..*options
                 };
-                match compress_image(image, &fixed) {
-                    Ok(c) => {
-                        let score = psnr(image, &c.decode())?;
-                        if best.as_ref().is_none_or(|(s, _)| score > *s) {
-                            best = Some((score, c));
-                        }
+                let c = compress_image(image, &fixed)?;
+                Ok((psnr(image, &c.decode())?, c))
+            })
+            .collect();
+        let mut best: Option<(f64, CompressedImage)> = None;
+        let mut first_error = None;
+        for result in results {
+            match result {
+                Ok((score, c)) => {
+                    if best.as_ref().is_none_or(|(s, _)| score > *s) {
+                        best = Some((score, c));
                     }
-                    Err(e) => {
-                        first_error.get_or_insert(e);
-                    }
+                }
+                Err(e) => {
+                    first_error.get_or_insert(e);
                 }
             }
         }
@@ -369,8 +379,9 @@ impl CompressedImage {
         } else {
             1
         };
-        (0..c.height)
-            .flat_map(|y| (0..c.width).map(move |x| (x, y)))
+        (0..c.width * c.height)
+            .into_par_iter()
+            .map(|i| (i % c.width, i / c.width))
             .map(|(x, y)| {
                 let mut colour = [0.0; 3];
                 let mut l = 0.5;
@@ -555,8 +566,8 @@ impl Fades {
         x: u32,
         y: u32,
     ) -> impl Iterator<Item = (usize, f64)> + 'a {
-        let columns = tiles.iter().filter(|t| t.y0 == 0).count().max(1);
-        let rows = tiles.len() / columns;
+        let columns = self.width.div_ceil(TILE) as usize;
+        let rows = tiles.len() / columns.max(1);
         let (tx, ty) = ((x / TILE) as usize, (y / TILE) as usize);
         let near = |i: usize| [i.wrapping_sub(1), i, i + 1];
         near(ty)
