@@ -66,8 +66,8 @@ pub use fit::{
 };
 pub use groups::order_for_groups;
 pub use image::{
-    CompressedImage, ImageCodec, ImageOptions, MAX_ITERATIONS, compress_image, edge_test_image,
-    least_bytes, psnr, smooth_test_image, thumbnail,
+    CompressedImage, ImageCodec, ImageOptions, MAX_ITERATIONS, MAX_PIXELS, compress_image,
+    edge_test_image, least_bytes, psnr, smooth_test_image, thumbnail,
 };
 pub use mesh::{
     CaoEnMesh, MAX_SUBDIVISIONS, SourceGrid, icosphere, map_mesh, sphere_mesh, torus_grid,

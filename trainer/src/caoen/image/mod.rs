@@ -20,12 +20,14 @@
 //! **Adaptive keys** ([`keys`]): each tile is a quadtree; the cell whose pixels stray most from
 //! their mean is split while the stream fits the byte budget, so keys crowd at edges and
 //! texture and a flat tile costs one key. A key sits at its cell's centre, with the sharpness
-//! that makes its blending fall to 0.3 at [`ImageCodec::reach`] cell sides.
+//! that makes its blending fall to 0.3 at [`ImageCodec::reach`] cell sides (for one-pixel
+//! cells that would need q > [`MAX_SHARPNESS`], so they blend more broadly).
 //!
 //! **Fit.** V (normalized exponential blending) by least squares against every pixel, tile by
 //! tile in three Gauss–Seidel sweeps over the faded sum, with a small pull towards each cell's
-//! mean colour; with γ > 0 it is refitted with the luminance the decoder converges to, so
-//! encoder and decoder agree on where each pixel sits. V is stored in 8 bits per channel
+//! mean colour; with γ > 0 it is refitted at the luminance the decoder's last pass evaluates
+//! each pixel at, so encoder and decoder nearly agree on where each pixel sits (the refit
+//! moves those luminances a little in turn). V is stored in 8 bits per channel
 //! ([`stream`]). Left open, γ (0 or 1) and the reach ([`REACHES`]) are chosen by compressing
 //! with each and keeping the picture with the higher PSNR.
 //!
@@ -52,6 +54,9 @@ pub use baseline::{edge_test_image, psnr, smooth_test_image, thumbnail};
 use keys::{Cell, Quadtrees, place_keys};
 use tiles::{TILE, Tile, sharpness_for};
 
+/// Most pixels a compressed picture may have (4096 × 4096): the encoder keeps a few f64
+/// buffers of the whole picture, about 100 bytes a pixel.
+pub const MAX_PIXELS: u64 = 4096 * 4096;
 /// Most decoding iterations a picture may ask for.
 pub const MAX_ITERATIONS: u8 = 16;
 /// The key reaches the encoder tries when none is given: sharp keys suit edges and texture,
@@ -91,11 +96,18 @@ impl ImageCodec {
         f64::from(self.reach_percent) / 100.0
     }
 
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         let side = MAX_SIDE.min(u32::from(u16::MAX));
         if self.width == 0 || self.height == 0 || self.width > side || self.height > side {
             return Err(Error::invalid(format!(
                 "a picture of {} × {} pixels: each side must be 1 to {side}",
+                self.width, self.height
+            )));
+        }
+        if u64::from(self.width) * u64::from(self.height) > MAX_PIXELS {
+            return Err(Error::invalid(format!(
+                "a picture of {} × {} pixels: at most {MAX_PIXELS} pixels (4096 × 4096); \
+                 scale it down first",
                 self.width, self.height
             )));
         }
@@ -168,8 +180,9 @@ pub fn least_bytes(width: u32, height: u32, gamma: f64) -> usize {
 /// Compresses `image` into at most `options.bytes` bytes (see the module documentation).
 ///
 /// # Errors
-/// [`Error::InvalidInput`] for an empty or oversized picture, a budget below one key per tile
-/// (the message gives the least), γ outside [0, 1] or too many iterations.
+/// [`Error::InvalidInput`] for an empty picture or one over [`MAX_PIXELS`], a budget below
+/// one key per tile (the message gives the least), γ outside [0, 1], a reach outside 0.1 …
+/// 2.5 or too many iterations.
 pub fn compress_image(image: &RgbImage, options: &ImageOptions) -> Result<CompressedImage> {
     if options.gamma.is_none() || options.reach.is_none() {
         let gammas = options.gamma.map_or(vec![0.0, 1.0], |g| vec![g]);
@@ -250,7 +263,8 @@ pub fn compress_image(image: &RgbImage, options: &ImageOptions) -> Result<Compre
         .collect();
     let tiles = Tile::cover(w, h);
     let per_key = stream::key_bytes(gamma_byte);
-    let trees = place_keys(&pixels, w, h, &tiles, budget * 8, per_key * 8).ok_or_else(|| {
+    let bits = budget.saturating_mul(8);
+    let trees = place_keys(&pixels, w, h, &tiles, bits, per_key * 8).ok_or_else(|| {
         Error::invalid(format!(
             "{} bytes cannot hold a {w} × {h} picture; give --bytes {least} or more",
             options.bytes
@@ -278,10 +292,11 @@ pub fn compress_image(image: &RgbImage, options: &ImageOptions) -> Result<Compre
     let truth: Vec<f64> = pixels.iter().map(|p| luminance(p)).collect();
     compressed.fit(&pixels, &means, &truth);
     if gamma_byte > 0 {
+        // Where the decoder's last pass places each pixel.
         let decoded: Vec<f64> = compressed
             .decode_colours()
             .iter()
-            .map(|c| luminance(c))
+            .map(|&(_, l)| l)
             .collect();
         compressed.fit(&pixels, &means, &decoded);
     }
@@ -368,8 +383,9 @@ impl CompressedImage {
         stream::read(bytes, path)
     }
 
-    /// The decoded colours (channels in [0, 1], unclamped), row-major.
-    fn decode_colours(&self) -> Vec<[f64; 3]> {
+    /// The decoded colours (channels in [0, 1], unclamped), row-major, each with the
+    /// luminance its last pass was evaluated at (½ with γ = 0 or no iterations).
+    fn decode_colours(&self) -> Vec<([f64; 3], f64)> {
         let c = &self.codec;
         let networks = self.networks();
         let tiles = Tile::cover(c.width, c.height);
@@ -385,8 +401,10 @@ impl CompressedImage {
             .map(|(x, y)| {
                 let mut colour = [0.0; 3];
                 let mut l = 0.5;
+                let mut used = l;
                 for _ in 0..passes {
                     colour = [0.0; 3];
+                    used = l;
                     for (t, fade) in weights.at(&tiles, x, y) {
                         let s =
                             tiles[t].source(f64::from(x) + 0.5, f64::from(y) + 0.5, l, c.gamma());
@@ -397,7 +415,7 @@ impl CompressedImage {
                     }
                     l = luminance(&colour);
                 }
-                colour
+                (colour, used)
             })
             .collect()
     }
@@ -406,7 +424,7 @@ impl CompressedImage {
     pub fn decode(&self) -> RgbImage {
         let colours = self.decode_colours();
         RgbImage::from_fn(self.codec.width, self.codec.height, |x, y| {
-            let c = colours[(y * self.codec.width + x) as usize];
+            let (c, _) = colours[(y * self.codec.width + x) as usize];
             image::Rgb(c.map(|v| (v * 255.0).round().clamp(0.0, 255.0) as u8))
         })
     }

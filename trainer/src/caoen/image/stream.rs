@@ -49,7 +49,8 @@ pub fn key_bytes(gamma_byte: u8) -> usize {
     if gamma_byte > 0 { 4 } else { 3 }
 }
 
-/// The stream of `image`.
+/// The stream of `image` (its codec as [`compress_image`](super::compress_image) made it:
+/// sides up to 16 384 fit the 16-bit fields).
 pub fn write(image: &CompressedImage) -> Vec<u8> {
     let c = &image.codec;
     let mut out = MAGIC.to_vec();
@@ -70,7 +71,8 @@ pub fn write(image: &CompressedImage) -> Vec<u8> {
     for (k, v) in image.values.iter().enumerate() {
         out.extend(v);
         if c.gamma_byte > 0 {
-            out.push(image.luminances[k]);
+            // `compress_image` stores one luminance per key; mid-grey stands in for a missing one.
+            out.push(image.luminances.get(k).copied().unwrap_or(128));
         }
     }
     let crc = crc32fast::hash(&out);
@@ -90,10 +92,17 @@ pub fn read(bytes: &[u8], path: &Path) -> Result<CompressedImage> {
             path.display()
         ))
     };
-    if bytes.len() < HEADER_BYTES + TRAILER_BYTES || !bytes.starts_with(MAGIC) {
+    if !bytes.starts_with(MAGIC) {
         return Err(bad(format!(
             "it does not start with {:?}; `caoen image compress` writes these",
             std::str::from_utf8(MAGIC).unwrap_or_default()
+        )));
+    }
+    if bytes.len() < HEADER_BYTES + TRAILER_BYTES {
+        return Err(bad(format!(
+            "{} bytes are shorter than its header and checksum ({}): the file is truncated",
+            bytes.len(),
+            HEADER_BYTES + TRAILER_BYTES
         )));
     }
     let (body, crc) = bytes.split_at(bytes.len() - TRAILER_BYTES);
@@ -111,8 +120,18 @@ pub fn read(bytes: &[u8], path: &Path) -> Result<CompressedImage> {
         iterations: body[14],
     };
     codec.validate().map_err(|e| bad(e.to_string()))?;
-    let tiles = Tile::cover(codec.width, codec.height);
     let rest = &body[HEADER_BYTES..];
+    // One key per tile at least: refuse a header the bytes cannot back before building tiles.
+    let least = super::least_bytes(codec.width, codec.height, codec.gamma());
+    if bytes.len() < least {
+        return Err(bad(format!(
+            "a {} × {} picture takes at least {least} bytes, the file has {}: it is truncated",
+            codec.width,
+            codec.height,
+            bytes.len()
+        )));
+    }
+    let tiles = Tile::cover(codec.width, codec.height);
     let mut bits = rest
         .iter()
         .flat_map(|&b| (0..8).map(move |i| b >> i & 1 == 1));

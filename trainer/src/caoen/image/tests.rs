@@ -131,6 +131,18 @@ fn bad_streams_and_requests_are_named() {
     flipped[20] ^= 0x10;
     assert!(message(&flipped).contains("checksum"));
     assert!(message(b"NSIMAGE1 an older picture").contains("NSIMAGE2"));
+    assert!(message(&stream[..12]).contains("truncated"));
+    // Headers with a valid checksum that the bytes cannot back, or too many pixels.
+    let forged = |w: u16, h: u16| {
+        let mut bytes = stream::MAGIC.to_vec();
+        bytes.extend(w.to_le_bytes());
+        bytes.extend(h.to_le_bytes());
+        bytes.extend([0, 60, 3]);
+        bytes.extend(crc32fast::hash(&bytes).to_le_bytes());
+        bytes
+    };
+    assert!(message(&forged(16_000, 16_000)).contains("at most"));
+    assert!(message(&forged(4000, 4000)).contains("truncated"));
     assert!(message(&[]).contains("NSIMAGE2"));
     let small = compress_image(&picture, &options(20, Some(0.0)))
         .unwrap_err()

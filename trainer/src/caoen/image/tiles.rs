@@ -6,8 +6,10 @@
 pub const TILE: u32 = 8;
 /// Pixels beyond a tile's side over which its network fades out and the next one fades in.
 pub const MARGIN: u32 = 2;
-/// The angle a tile and its two margins span on each circle of the source point: a tile's
-/// keys stay over 90° from the far end of its window, so the window does not wrap around.
+/// The angle a tile and its two margins span on each circle of the source point. A key at a
+/// tile's corner is up to 9 pixels (202°) from the far end of the window, so there its
+/// similarity wraps round (9 pixels look like 7); every key but the broadest has fallen to
+/// nothing long before.
 pub const SPAN: f64 = 1.5 * std::f64::consts::PI;
 
 /// One tile: its pixel rectangle `[x0, x1) × [y0, y1)`.
@@ -73,7 +75,8 @@ impl Tile {
     }
 
     /// The unnormalized weight of this tile's network at pixel (`x`, `y`): 1 inside the tile
-    /// shrunk by [`MARGIN`], falling linearly to 0 at the window's edge. Two neighbours' weights
+    /// shrunk by [`MARGIN`], falling linearly towards 0 at the window's edge (⅛ at its last
+    /// pixel). Two neighbours' weights
     /// add up to 1 across their shared margin.
     pub fn fade(&self, x: u32, y: u32) -> f64 {
         let ramp = |p: u32, lo: u32, hi: u32| {
