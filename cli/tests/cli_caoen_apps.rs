@@ -100,6 +100,10 @@ fn the_teapot_is_four_surfaces_with_the_handle_on_the_torus() {
         "--json",
     ]));
     assert_eq!(report["key_points"], 104);
+    // The whole teapot: every input vertex within 3 % of the diagonal (2.5 % measured).
+    let whole = &report["whole"];
+    assert!(whole["max_to_surface"].as_f64().unwrap() < 0.03, "{whole}");
+    assert!(whole["rms"].as_f64().unwrap() < 0.012, "{whole}");
     let parts = report["parts"].as_array().unwrap();
     let names: Vec<&str> = parts.iter().map(|p| p["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["body", "lid", "spout", "handle"]);

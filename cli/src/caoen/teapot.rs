@@ -68,6 +68,9 @@ struct Part {
 struct Report<'a> {
     parts: Vec<Part>,
     key_points: usize,
+    /// The four surfaces together against the whole input mesh, relative to its diagonal.
+    /// `max_to_reference` includes the caps that close each part, hidden inside the teapot.
+    whole: SurfaceDistance,
     mesh: PathBuf,
     png: Option<&'a Path>,
 }
@@ -82,11 +85,13 @@ pub fn run(args: &Args) -> Result<()> {
         Layout::Farthest => TeapotLayout::Farthest,
         Layout::Sixfold => TeapotLayout::Sixfold,
     };
-    let (parts, combined) = fit_teapot(&read_mesh(&source)?, args.keys, layout)?;
+    let input = read_mesh(&source)?;
+    let (parts, combined) = fit_teapot(&input, args.keys, layout)?;
     std::fs::create_dir_all(&args.out_dir)?;
     let mut report = Report {
         parts: Vec::new(),
         key_points: parts.iter().map(|p| p.network.key_count()).sum(),
+        whole: caoen::surface_distance(&combined, &input)?,
         mesh: args.out_dir.join("teapot.obj"),
         png: args.png.as_deref(),
     };
@@ -123,6 +128,12 @@ pub fn run(args: &Args) -> Result<()> {
             p.name, p.key_points, p.domain, p.vertices, p.distance.rms, p.distance.hausdorff
         );
     }
+    println!(
+        "whole teapot (of its diagonal): rms {:.4}; every input vertex within {:.4} of the \
+         surfaces, which reach {:.4} from the input (the caps that close each part, inside \
+         the teapot, count too)",
+        report.whole.rms, report.whole.max_to_surface, report.whole.max_to_reference
+    );
     println!(
         "{} key points in all; wrote the blobs and {} to {}",
         report.key_points,
