@@ -172,8 +172,9 @@ fn luminance(c: &[f64]) -> f64 {
 
 /// The least bytes a `width` × `height` picture takes: one key per tile.
 pub fn least_bytes(width: u32, height: u32, gamma: f64) -> usize {
-    let tiles = Tile::cover(width, height).len();
-    let per_key = if gamma > 0.0 { 4 } else { 3 };
+    // Counted, not built: the reader calls this before trusting a header's size.
+    let tiles = width.div_ceil(TILE) as usize * height.div_ceil(TILE) as usize;
+    let per_key = stream::key_bytes((gamma.clamp(0.0, 1.0) * 255.0).round() as u8);
     stream::HEADER_BYTES + stream::TRAILER_BYTES + tiles.div_ceil(8) + tiles * per_key
 }
 
