@@ -42,8 +42,8 @@ pub enum Command {
     Shade(shade::Args),
     /// Fit a network to a closed genus-0 mesh through its spherical parameterization.
     FitMesh(fit_mesh::Args),
-    /// The teapot as four Cao En surfaces (body, lid, spout on the sphere; the handle on the
-    /// torus): four blobs, the combined mesh, optionally a picture.
+    /// The teapot as four Cao En surfaces on the sphere (body, lid, spout, handle): four
+    /// blobs, the combined mesh, its distance to the mesh by what shows, optionally a picture.
     Teapot(teapot::Args),
     /// The paper's approximate-normal network: the same key points, the exact normals at
     /// them as targets; reports its angle error against the exact normals.

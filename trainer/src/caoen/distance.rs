@@ -11,7 +11,9 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::geometry::bounding_diagonal;
+use crate::geometry::{OuterSurface, bounding_diagonal};
+
+use super::topology::cap_holes;
 use crate::geometry::vector::{dot, sub};
 use crate::io::Mesh;
 
@@ -244,6 +246,98 @@ pub fn surface_distance(surface: &Mesh, reference: &Mesh) -> Result<SurfaceDista
     Ok(SurfaceDistance::of_samples(&forward, &backward, diagonal))
 }
 
+/// [`SurfaceDistance`] between the outer surfaces of a surface and a reference made of
+/// overlapping parts (see [`outer_surface_distance`]).
+#[derive(Copy, Clone, Debug, PartialEq, serde::Serialize)]
+pub struct OuterDistance {
+    /// The distance over what each outer surface shows.
+    pub distance: SurfaceDistance,
+    /// The share of the surface's vertices hidden inside it (not measured).
+    pub hidden_surface: f64,
+    /// The share of the reference's vertices hidden inside it (not measured).
+    pub hidden_reference: f64,
+    /// The voxel cell that decides what is hidden, relative to the diagonal: gaps narrower
+    /// than it count as closed, points up to about 1.5 cells under the outer surface as on it.
+    pub cell: f64,
+}
+
+/// Measures the outer surface of `surface` against the outer surface of `reference`: the
+/// surface's vertices an observer outside can reach ([`OuterSurface`], cells of `cell` times
+/// the reference's diagonal) to the reference's triangles whose corners are all reachable,
+/// and the reference's reachable vertices to the surface's reachable triangles. Each is
+/// taken apart from the other; the reference's holes are capped ([`cap_holes`], where their
+/// outlines are simple loops) so that a part open where another covers it still encloses its
+/// inside.
+///
+/// For shapes made of overlapping closed parts (the teapot's four surfaces), where the
+/// surface inside the whole (a spout's root within the body, caps pressed on each other) is
+/// no part of the shape.
+///
+/// # Errors
+/// [`Error::InvalidInput`] for an invalid mesh, a reference with a zero diagonal, a `cell`
+/// that makes the grid too fine, or a side with nothing outer to measure.
+pub fn outer_surface_distance(
+    surface: &Mesh,
+    reference: &Mesh,
+    cell: f64,
+) -> Result<OuterDistance> {
+    let diagonal = bounding_diagonal(reference);
+    if !(diagonal > 0.0 && diagonal.is_finite()) {
+        return Err(Error::invalid(
+            "the reference mesh has a zero or non-finite bounding box",
+        ));
+    }
+    // Where a hole's outline is not a simple loop, the reference stays open there: the
+    // outside then reaches in, and more of the reference is measured, not less.
+    let closed = cap_holes(reference).unwrap_or_else(|_| reference.clone());
+    let outer = |mesh: &Mesh, walls: &Mesh| -> Result<(Vec<bool>, Mesh)> {
+        let grid = OuterSurface::new(&[walls], cell * diagonal)?;
+        let shown: Vec<bool> = mesh
+            .positions
+            .par_iter()
+            .map(|&p| grid.is_outer(p))
+            .collect();
+        let triangles: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .filter(|t| t.iter().all(|&v| shown[v as usize]))
+            .copied()
+            .collect();
+        if triangles.is_empty() {
+            return Err(Error::invalid(
+                "no triangle of the mesh is on its outer surface",
+            ));
+        }
+        let outer_mesh = Mesh {
+            positions: mesh.positions.clone(),
+            triangles,
+        };
+        Ok((shown, outer_mesh))
+    };
+    let (surface_shown, surface_outer) = outer(surface, surface)?;
+    let (reference_shown, reference_outer) = outer(reference, &closed)?;
+    let to_reference = TriangleTree::new(&reference_outer)?;
+    let to_surface = TriangleTree::new(&surface_outer)?;
+    let measure = |points: &[[f64; 3]], shown: &[bool], tree: &TriangleTree| -> Vec<f64> {
+        points
+            .par_iter()
+            .zip(shown)
+            .filter(|(_, s)| **s)
+            .map(|(&p, _)| tree.distance(p) / diagonal)
+            .collect()
+    };
+    let forward = measure(&surface.positions, &surface_shown, &to_reference);
+    let backward = measure(&reference.positions, &reference_shown, &to_surface);
+    let hidden =
+        |shown: &[bool]| shown.iter().filter(|s| !**s).count() as f64 / shown.len().max(1) as f64;
+    Ok(OuterDistance {
+        distance: SurfaceDistance::of_samples(&forward, &backward, diagonal),
+        hidden_surface: hidden(&surface_shown),
+        hidden_reference: hidden(&reference_shown),
+        cell,
+    })
+}
+
 impl SurfaceDistance {
     /// The summary of sampled distances, already divided by `diagonal`: `forward` from the
     /// surface to the reference, `backward` from the reference to the surface.
@@ -262,5 +356,64 @@ impl SurfaceDistance {
             hausdorff: max(forward).max(max(backward)),
             diagonal,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::caoen::icosphere;
+
+    fn ball(r: f64, c: [f64; 3]) -> Mesh {
+        let mut m = icosphere(4).unwrap();
+        for p in &mut m.positions {
+            *p = [0, 1, 2].map(|k| c[k] + r * p[k]);
+        }
+        m
+    }
+
+    fn join(a: &Mesh, b: &Mesh) -> Mesh {
+        let mut m = a.clone();
+        let offset = m.positions.len() as u32;
+        m.positions.extend(&b.positions);
+        m.triangles
+            .extend(b.triangles.iter().map(|t| t.map(|v| v + offset)));
+        m
+    }
+
+    /// Two overlapping balls against the same union made finer: what shows matches closely
+    /// (the chordal error), while every surface together reaches into the other ball's inside
+    /// only through the hidden parts, which the outer measure leaves out.
+    #[test]
+    fn the_outer_measure_leaves_out_what_the_union_hides() {
+        let (a, b) = (ball(1.0, [0.0; 3]), ball(0.8, [1.2, 0.0, 0.0]));
+        let surface = join(&a, &b);
+        // The reference: the same balls, without the part of each inside the other.
+        let outside = |m: &Mesh, c: [f64; 3], r: f64| Mesh {
+            positions: m.positions.clone(),
+            triangles: m
+                .triangles
+                .iter()
+                .filter(|t| {
+                    t.iter().any(|&v| {
+                        let p = m.positions[v as usize];
+                        (0..3).map(|k| (p[k] - c[k]).powi(2)).sum::<f64>().sqrt() > r
+                    })
+                })
+                .copied()
+                .collect(),
+        };
+        let reference = join(
+            &outside(&a, [1.2, 0.0, 0.0], 0.8),
+            &outside(&b, [0.0; 3], 1.0),
+        );
+        let outer = outer_surface_distance(&surface, &reference, 0.005).unwrap();
+        assert!(outer.distance.hausdorff < 0.01, "{outer:?}");
+        assert!(
+            outer.hidden_surface > 0.05 && outer.hidden_surface < 0.3,
+            "{outer:?}"
+        );
+        let all = surface_distance(&surface, &reference).unwrap();
+        assert!(all.hausdorff > 0.1, "{all:?}");
     }
 }

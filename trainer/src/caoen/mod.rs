@@ -8,7 +8,7 @@
 //! table), `distance` (two-sided surface-to-mesh distance). Pictures: `render` (depth buffer
 //! through the projection network) and `raymarch` (the convex implicit form in the core).
 //! Applications: `morph` (metamorphosis with empty key points), `distort` (S³ → ℝ³),
-//! `teapot` (four surfaces, the handle on the torus), `image` (compression on S⁴), `texture`
+//! `teapot` (four sphere surfaces, measured by what shows), `image` (compression on S⁴), `texture`
 //! (texture coordinates from the source sphere, the cosine law folded into extra outputs). The core evaluates what this writes
 //! (`neurosurf_core::caoen`).
 //!
@@ -58,7 +58,9 @@ pub use crate::geometry::bounding_diagonal;
 pub use crate::geometry::mesh_graph::drop_unused_vertices;
 pub use blob::{DecodedCaoEn, from_blob, to_blob};
 pub use capacity::check_key_count;
-pub use distance::{SurfaceDistance, TriangleTree, surface_distance};
+pub use distance::{
+    OuterDistance, SurfaceDistance, TriangleTree, outer_surface_distance, surface_distance,
+};
 pub use distort::Distortion;
 pub use fit::{
     AUTO_SHARPNESS, AUTO_SPACING, BetweenKeys, between_keys, cube_directions, fit_auto, fit_shape,
@@ -86,7 +88,7 @@ pub use raymarch::{
 };
 pub use render::{MAX_SAMPLE_GAP, Rendering, View, depth_buffer_image};
 pub use spherical::{SphericalMap, flipped_triangles, spherical_parameterization};
-pub use teapot::{HANDLE_KEYS, HANDLE_SPAN, TeapotLayout, TeapotPart, fit_teapot};
+pub use teapot::{TEAPOT_CELL, TEAPOT_KEYS, Teapot, TeapotLayout, TeapotPart, fit_teapot};
 pub use texture::{
     LIGHTING_CHECK_SUBDIVISIONS, LightingFit, cosine_law, fold_lighting, mesh_texture,
     position_part, texture_coordinates,
