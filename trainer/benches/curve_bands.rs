@@ -140,6 +140,14 @@ fn cases() -> Vec<Case> {
             let a = 1.5 * PI * t;
             [2.0 * a.cos(), a.sin(), 0.3 * a]
         }),
+        open("c-curve", "330° of a unit circle", 2, |t| {
+            let a = (15.0 + 330.0 * t).to_radians();
+            [a.cos(), a.sin(), 0.0]
+        }),
+        open("helix", "2 turns, radius 1, pitch 1", 3, |t| {
+            let a = 2.0 * TAU * t;
+            [a.cos(), a.sin(), 2.0 * t]
+        }),
         open("hairpin", "arms 1.2 apart, 3 long", 2, hairpin),
         open("spiral", "1.5 turns, r = ½ → 1½", 2, |t| {
             let (a, r) = (3.0 * PI * t, 0.5 + t);

@@ -36,6 +36,7 @@
 mod basis;
 mod bench;
 mod blob;
+mod bridge;
 mod convergence;
 mod corners;
 mod dxf;

@@ -117,11 +117,16 @@ pub(crate) fn follow_either(
     let across = (dimension as f64 - 1.0).sqrt();
     let gaussian = |f: &Followed| f.approximation.rms_residual <= FARTHER * across * f.noise;
     let alike = shorter.noise <= FOLDED_NOISE * longer.noise;
-    Ok(if gaussian(&shorter) && alike {
+    let kept = if gaussian(&shorter) && alike {
         shorter
     } else {
         longer
-    })
+    };
+    if closed {
+        Ok(kept)
+    } else {
+        super::bridge::cut_at_void(ordered, dimension, fixed, options, kept)
+    }
 }
 
 /// Rounds of [`fit_band`] that re-count the control points from the noise and length the
