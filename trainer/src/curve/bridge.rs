@@ -15,7 +15,7 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use super::fit::ApproximationOptions;
-use super::principal::{Followed, fit_band};
+use super::principal::{Followed, Polyline, fit_band};
 use crate::error::Result;
 use crate::geometry::vector::distance;
 
@@ -124,28 +124,13 @@ pub(crate) fn cut_at_void(
     if inside >= WEAKER * between {
         return Ok(followed);
     }
-    // Each point's place along the fit, by its nearest vertex of the dense polyline.
-    let Ok(vertices) = ImmutableKdTree::<f64, 3>::new_from_slice(&line) else {
-        return Ok(followed);
-    };
-    let mut at = Vec::with_capacity(line.len());
-    let mut total = 0.0;
-    at.push(0.0);
-    for pair in line.windows(2) {
-        total += distance(pair[0], pair[1]);
-        at.push(total);
-    }
-    let place = |p: &[f64; 3]| {
-        let v = vertices
-            .query(p)
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute()
-            .item as usize;
-        at[v]
-    };
-    // The new order starts past the void, runs to the fit's end, across the gap between its
-    // ends and on to the void.
+    // Each point's place along the fit: its foot's arc length.
     let gap = distance(line[0], line[line.len() - 1]);
+    let polyline = Polyline::new(line, false);
+    let total = polyline.length();
+    let place = |p: &[f64; 3]| polyline.foot(*p, 0.0).0.clamp(0.0, total);
+    // The new order starts past the weak stretch, runs to the fit's end, across the gap
+    // between its ends and on to the weak stretch.
     let mut keyed: Vec<(f64, usize)> = followed
         .order
         .iter()
