@@ -157,6 +157,16 @@ fn the_teapot_is_four_sphere_surfaces_that_show_within_3_percent() {
         s(dir.path()),
     ]);
     assert!(e.contains("nothing.obj"), "{e}");
+    // A key count a part cannot take is refused by the part's name.
+    let e = fails(&[
+        "caoen",
+        "teapot",
+        "--keys",
+        "0,20,20,26",
+        "--out-dir",
+        s(dir.path()),
+    ]);
+    assert!(e.contains("body with 0 key points"), "{e}");
 }
 
 #[test]

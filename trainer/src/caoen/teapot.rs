@@ -127,12 +127,16 @@ pub fn fit_teapot(mesh: &Mesh, keys: [usize; 4], layout: TeapotLayout) -> Result
         overlap: OVERLAP,
         ..MeshFitOptions::default()
     };
+    let named = |name: &'static str, n: usize| {
+        move |e: Error| Error::invalid(format!("the teapot's {name} with {n} key points: {e}"))
+    };
     let mut fitted = Vec::new();
     for (name, index, n) in [("body", body, keys[0]), ("lid", lid, keys[1])] {
-        fitted.push(fit_solid(name, &parts[index], n, layout, &options)?);
+        fitted.push(fit_solid(name, &parts[index], n, layout, &options).map_err(named(name, n))?);
     }
-    fitted.push(fit_tube_part("spout", &parts[spout], keys[2], &options)?);
-    fitted.push(fit_tube_part("handle", &parts[handle], keys[3], &options)?);
+    for (name, index, n) in [("spout", spout, keys[2]), ("handle", handle, keys[3])] {
+        fitted.push(fit_tube_part(name, &parts[index], n, &options).map_err(named(name, n))?);
+    }
     let mut combined = Mesh::default();
     for part in &fitted {
         let surface = sphere_mesh(&part.network, 4)?.mesh;
