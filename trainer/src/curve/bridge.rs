@@ -15,7 +15,7 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use super::fit::ApproximationOptions;
-use super::principal::{Followed, Polyline, fit_band};
+use super::principal::{Followed, Polyline, fit_band_in_order};
 use crate::error::Result;
 use crate::geometry::vector::distance;
 
@@ -93,7 +93,7 @@ fn resampled(path: &[[f64; 3]], step: f64) -> Vec<[f64; 3]> {
 /// has more points than the old one's.
 ///
 /// # Errors
-/// As [`fit_band`].
+/// As [`fit_band_in_order`].
 pub(crate) fn cut_at_void(
     ordered: &[[f64; 3]],
     dimension: usize,
@@ -148,21 +148,20 @@ pub(crate) fn cut_at_void(
         .collect();
     keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
     let order: Vec<usize> = keyed.iter().map(|k| k.1).collect();
-    let points: Vec<[f64; 3]> = order.iter().map(|&i| ordered[i]).collect();
     let (first, last) = (keyed[0].0, keyed[keyed.len() - 1].0);
     let span = (last - first).max(f64::MIN_POSITIVE);
     let places: Vec<f64> = keyed.iter().map(|k| (k.0 - first) / span).collect();
-    let Ok(mut again) = fit_band(
-        &points,
+    let Ok(again) = fit_band_in_order(
+        ordered,
+        &order,
         (dimension, false),
         (noise, places),
         fixed,
-        Some(span),
+        span,
         options,
     ) else {
         return Ok(followed);
     };
-    again.order = again.order.iter().map(|&i| order[i]).collect();
     let ((inside_again, _), _, _) = support(&again);
     Ok(if inside_again > inside {
         again

@@ -95,19 +95,18 @@ pub(crate) fn follow_either(
     let Some((order, places, length)) = around else {
         return Ok(chain);
     };
-    let points: Vec<[f64; 3]> = order.iter().map(|&i| ordered[i]).collect();
     // The graph's order runs along the band and cannot fold, so its fit need not start stiff.
-    let Ok(mut graph) = fit_band(
-        &points,
+    let Ok(graph) = fit_band_in_order(
+        ordered,
+        &order,
         shape,
         (noise, places),
         fixed,
-        Some(length),
+        length,
         options,
     ) else {
         return Ok(chain);
     };
-    graph.order = graph.order.iter().map(|&i| order[i]).collect();
     let (shorter, longer) = if graph.length <= chain.length {
         (graph, chain)
     } else {
@@ -127,6 +126,33 @@ pub(crate) fn follow_either(
     } else {
         super::bridge::cut_at_void(ordered, dimension, fixed, options, kept)
     }
+}
+
+/// [`fit_band`] of `ordered` taken in `order` (indices into it), at `places` along a band
+/// `length` long; the fit's order is given back as indices into `ordered`.
+///
+/// # Errors
+/// As [`fit_band`].
+pub(crate) fn fit_band_in_order(
+    ordered: &[[f64; 3]],
+    order: &[usize],
+    shape: (usize, bool),
+    (noise, places): (f64, Vec<f64>),
+    fixed: Option<usize>,
+    length: f64,
+    options: &ApproximationOptions,
+) -> Result<Followed> {
+    let points: Vec<[f64; 3]> = order.iter().map(|&i| ordered[i]).collect();
+    let mut fit = fit_band(
+        &points,
+        shape,
+        (noise, places),
+        fixed,
+        Some(length),
+        options,
+    )?;
+    fit.order = fit.order.iter().map(|&i| order[i]).collect();
+    Ok(fit)
 }
 
 /// Rounds of [`fit_band`] that re-count the control points from the noise and length the
