@@ -11,6 +11,12 @@
 //! the gap between its ends is full of the bend's. Measured at σ = 5 % of the diagonal on a
 //! hairpin whose arms are 6.3 deviations apart (1 000 points, 8 seeds): the weakest stretch
 //! over the gap's weakest was 0.12–0.28 on bridged fits and 1.3 or more on right ones.
+//!
+//! A fit may also cross the mouth and run on past it at both ends, so that the gap between
+//! its ends lies in the mouth too: then the bridge is weak against the fit's own typical
+//! stretch (its median support), and the band is cut there as well. A correct fit's weakest
+//! stretch (its ends, a sparse part) is weak in the same way, but following it from a cut
+//! there bridges its ends, which has fewer points still, and the cut is not kept.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
@@ -35,15 +41,20 @@ const SUPPORT_WINDOW: f64 = 2.0;
 /// the band) still has more points than the mouth its ends face across.
 const WEAKER: f64 = 0.5;
 
+/// A fit is also cut where its weakest stretch has less than this share of its typical
+/// (median) support: on the hairpin (above) the bridges that also have their ends in the
+/// mouth had 0–6 % of it.
+const VOID: f64 = 0.25;
+
 /// The weakest stretch along `path` (its vertices in order, `step` apart at most): the least
-/// mean count of points within `reach` over a window of `window` vertices, and the arc
-/// length at that window's middle.
+/// mean count of points within `reach` over a window of `window` vertices, the arc length
+/// at that window's middle, and the median count at a vertex.
 fn weakest(
     path: &[[f64; 3]],
     tree: &ImmutableKdTree<f64, 3>,
     reach: f64,
     window: usize,
-) -> (f64, f64) {
+) -> (f64, f64, f64) {
     let counts: Vec<f64> = path
         .iter()
         .map(|p| {
@@ -62,6 +73,9 @@ fn weakest(
         along.push(total);
     }
     let window = window.clamp(1, counts.len().max(1));
+    let mut sorted = counts.clone();
+    sorted.sort_by(f64::total_cmp);
+    let typical = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
     let (mut least, mut middle) = (f64::INFINITY, 0.0);
     for start in 0..=counts.len().saturating_sub(window) {
         let mean = counts[start..start + window].iter().sum::<f64>() / window as f64;
@@ -70,7 +84,7 @@ fn weakest(
             middle = along[start + window / 2];
         }
     }
-    (least, middle)
+    (least, middle, typical)
 }
 
 /// `path` resampled `step` apart at most.
@@ -89,8 +103,8 @@ fn resampled(path: &[[f64; 3]], step: f64) -> Vec<[f64; 3]> {
 
 /// `followed` (an open band's fit of `ordered`), or the band followed again from a cut at
 /// its weakest stretch, when that stretch has less than [`WEAKER`] times the support of the
-/// gap between its ends (see the module documentation) and the new fit's weakest stretch
-/// has more points than the old one's.
+/// gap between its ends or [`VOID`] times its own median (see the module documentation)
+/// and the new fit's weakest stretch has more points than the old one's.
 ///
 /// # Errors
 /// As [`fit_band_in_order`].
@@ -120,8 +134,8 @@ pub(crate) fn cut_at_void(
         let between = weakest(&resampled(&ends, step), &tree, reach, window).0;
         (inside, between, line)
     };
-    let ((inside, cut), between, line) = support(&followed);
-    if inside >= WEAKER * between {
+    let ((inside, cut, typical), between, line) = support(&followed);
+    if inside >= WEAKER * between && inside >= VOID * typical {
         return Ok(followed);
     }
     // Each point's place along the fit: its foot's arc length.
@@ -162,7 +176,7 @@ pub(crate) fn cut_at_void(
     ) else {
         return Ok(followed);
     };
-    let ((inside_again, _), _, _) = support(&again);
+    let ((inside_again, _, _), _, _) = support(&again);
     Ok(if inside_again > inside {
         again
     } else {
