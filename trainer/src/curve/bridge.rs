@@ -44,7 +44,7 @@ const WEAKER: f64 = 0.5;
 /// A fit is also cut where its weakest stretch has less than this share of its typical
 /// (median) support: on the hairpin (above) the bridges that also have their ends in the
 /// mouth had 0–6 % of it.
-const VOID: f64 = 0.25;
+pub(crate) const VOID: f64 = 0.25;
 
 /// The weakest stretch along `path` (its vertices in order, `step` apart at most): the least
 /// mean count of points within `reach` over a window of `window` vertices, the arc length
@@ -99,6 +99,22 @@ fn resampled(path: &[[f64; 3]], step: f64) -> Vec<[f64; 3]> {
     }
     out.extend(path.last());
     out
+}
+
+/// The support of `fit`'s weakest stretch over its median support (see [`cut_at_void`]),
+/// or `None` when it cannot be measured.
+pub(crate) fn weakest_share(ordered: &[[f64; 3]], fit: &Followed) -> Option<f64> {
+    let noise = fit.noise;
+    if !(noise > 0.0 && noise.is_finite()) {
+        return None;
+    }
+    let tree = ImmutableKdTree::<f64, 3>::new_from_slice(ordered).ok()?;
+    let step = noise / SAMPLES_PER_NOISE;
+    let window = (SUPPORT_WINDOW * SAMPLES_PER_NOISE).round() as usize;
+    let samples = ((fit.length / step).ceil() as usize).clamp(64, 100_000);
+    let line = fit.approximation.curve.polyline(samples);
+    let (least, _, typical) = weakest(&line, &tree, SUPPORT_REACH * noise, window);
+    (typical > 0.0).then(|| least / typical)
 }
 
 /// `followed` (an open band's fit of `ordered`), or the band followed again from a cut at

@@ -59,6 +59,7 @@ mod principal;
 mod refine;
 mod samples;
 mod schedule;
+mod skeleton;
 mod som;
 mod spline;
 mod surface;
