@@ -250,3 +250,75 @@ pub(crate) fn skeleton_order(
             .collect(),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::skeleton_order;
+    use crate::curve::samples::gaussian;
+
+    /// A hairpin band (arms 3 long, 1.2 apart, σ = 0.15: the arms 8 deviations apart) with
+    /// stray points scattered between its arms is ordered along it: no step between
+    /// consecutive points jumps along the hairpin, and its ends are the order's ends.
+    #[test]
+    fn a_band_with_strays_between_its_arms_is_ordered_along_it() {
+        let (arm, bend, sigma) = (3.0, std::f64::consts::PI * 0.6, 0.15);
+        let length = 2.0 * arm + bend;
+        let at = |s: f64| {
+            if s < arm {
+                [arm - s, 0.6]
+            } else if s < arm + bend {
+                let a = (s - arm) / 0.6;
+                [-0.6 * a.sin(), 0.6 * a.cos()]
+            } else {
+                [s - arm - bend, -0.6]
+            }
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut points = Vec::new();
+        let mut truth = Vec::new();
+        for _ in 0..800 {
+            let s = rng.random::<f64>() * length;
+            let p = at(s);
+            let noise = [gaussian(&mut rng), gaussian(&mut rng)];
+            points.push([p[0] + sigma * noise[0], p[1] + sigma * noise[1], 0.0]);
+            truth.push(Some(s / length));
+        }
+        for _ in 0..16 {
+            let (x, y) = (rng.random::<f64>() * 3.0, rng.random::<f64>() * 0.6 - 0.3);
+            points.push([x, y, 0.0]);
+            truth.push(None);
+        }
+        let (order, places, _) = skeleton_order(&points, sigma).expect("an order");
+        assert_eq!(order.len(), points.len());
+        assert!(places.windows(2).all(|w| w[0] <= w[1]));
+        let along: Vec<f64> = order.iter().filter_map(|&i| truth[i]).collect();
+        // A step to the other arm skips at least the stretch round the bend from the tips
+        // (a quarter of the length); noise along the band moves a point by 2 % per σ.
+        let jumps = along
+            .windows(2)
+            .filter(|w| (w[1] - w[0]).abs() > 0.1)
+            .count();
+        assert_eq!(jumps, 0, "steps across the hairpin's arms");
+        let (first, last) = (
+            along[..40].iter().sum::<f64>(),
+            along[along.len() - 40..].iter().sum::<f64>(),
+        );
+        let (first, last) = (first / 40.0, last / 40.0);
+        assert!(
+            first.min(last) < 0.05 && first.max(last) > 0.95,
+            "ends at {first} and {last}"
+        );
+    }
+
+    /// Too few points for three centres, or no noise to space them by: no order.
+    #[test]
+    fn a_band_without_noise_or_length_has_no_order() {
+        let points: Vec<[f64; 3]> = (0..50).map(|i| [i as f64 * 0.01, 0.0, 0.0]).collect();
+        assert!(skeleton_order(&points, 0.0).is_none());
+        assert!(skeleton_order(&points, f64::NAN).is_none());
+        assert!(skeleton_order(&points, 10.0).is_none());
+    }
+}
