@@ -129,6 +129,14 @@ fn cases() -> Vec<Case> {
             let r = 1.0 + 0.15 * (5.0 * a).sin();
             [r * a.cos(), r * a.sin(), 0.0]
         }),
+        closed("trefoil", "3-D knot, strands 3.1σ apart at closest", 3, |t| {
+            let a = TAU * t;
+            [
+                a.sin() + 2.0 * (2.0 * a).sin(),
+                a.cos() - 2.0 * (2.0 * a).cos(),
+                -(3.0 * a).sin(),
+            ]
+        }),
         open("sine", "1.3 periods", 2, |t| {
             [8.0 * t, (8.0 * t).sin(), 0.0]
         }),
@@ -149,6 +157,10 @@ fn cases() -> Vec<Case> {
             [a.cos(), a.sin(), 2.0 * t]
         }),
         open("hairpin", "arms 1.2 apart, 3 long", 2, hairpin),
+        open("s-curve", "x = sin πs, y = ¾s, s ∈ [−1, 1]", 2, |t| {
+            let s = 2.0 * t - 1.0;
+            [(PI * s).sin(), 0.75 * s, 0.0]
+        }),
         open("spiral", "1.5 turns, r = ½ → 1½", 2, |t| {
             let (a, r) = (3.0 * PI * t, 0.5 + t);
             [r * a.cos(), r * a.sin(), 0.0]

@@ -1,4 +1,4 @@
-//! An open band's order along a tree of its cluster centres: the band is covered by centres
+//! A band's order along a tree of its cluster centres: the band is covered by centres
 //! a few noise deviations apart, each moved to the mean of its points (the band's middle
 //! there), the centres are joined by the spanning tree that prefers short links through
 //! dense points, and the tree's longest path is the band.
@@ -10,7 +10,9 @@
 //! short, has next to none somewhere along it, and the tree takes it only when nothing else
 //! joins the two sides. Where the band is as wide as
 //! the centres are apart, the tree grows short side branches across it; its longest path
-//! runs along the band, and the points of a side branch find their feet on that path.
+//! runs along the band, and the points of a side branch find their feet on that path. The
+//! tree of a closed band leaves out its weakest link, and its longest path runs round the
+//! ring from there.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
@@ -212,7 +214,7 @@ fn smoothed(path: &[[f64; 3]]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// An open band's points (with noise of deviation `noise` across it) ordered along the
+/// A band's points (with noise of deviation `noise` across it) ordered along the
 /// longest path of the largest tree of their centres (see the module documentation),
 /// [`smoothed`]: each point's place is its foot's arc length on that path, extended
 /// straight past its ends. Returns
