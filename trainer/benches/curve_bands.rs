@@ -129,14 +129,19 @@ fn cases() -> Vec<Case> {
             let r = 1.0 + 0.15 * (5.0 * a).sin();
             [r * a.cos(), r * a.sin(), 0.0]
         }),
-        closed("trefoil", "3-D knot, strands 3.1σ apart at closest", 3, |t| {
-            let a = TAU * t;
-            [
-                a.sin() + 2.0 * (2.0 * a).sin(),
-                a.cos() - 2.0 * (2.0 * a).cos(),
-                -(3.0 * a).sin(),
-            ]
-        }),
+        closed(
+            "trefoil",
+            "3-D knot, strands 3.1σ apart at closest",
+            3,
+            |t| {
+                let a = TAU * t;
+                [
+                    a.sin() + 2.0 * (2.0 * a).sin(),
+                    a.cos() - 2.0 * (2.0 * a).cos(),
+                    -(3.0 * a).sin(),
+                ]
+            },
+        ),
         open("sine", "1.3 periods", 2, |t| {
             [8.0 * t, (8.0 * t).sin(), 0.0]
         }),
