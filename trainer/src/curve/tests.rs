@@ -1065,6 +1065,13 @@ fn fit_noisy(
     fit_noisy_points(at, (dimension, closed), noise, 1_000, seed)
 }
 
+/// [`fit_noisy`] on seeds 1 to 8.
+fn fit_noisy_seeds(at: &dyn Fn(f64) -> [f64; 3], shape: (usize, bool), noise: f64) -> Vec<f64> {
+    (1..=8)
+        .map(|seed| fit_noisy_points(at, shape, noise, 1_000, seed))
+        .collect()
+}
+
 /// [`fit_noisy`] with `count` points.
 fn fit_noisy_points(
     at: &dyn Fn(f64) -> [f64; 3],
@@ -1194,9 +1201,7 @@ fn a_fit_that_bridges_two_arms_is_cut_at_the_bridge() {
             [s - arm - bend, -0.6, 0.0]
         }
     };
-    let errors: Vec<f64> = (1..=8)
-        .map(|seed| fit_noisy(&hairpin, 2, false, 0.05, seed))
-        .collect();
+    let errors = fit_noisy_seeds(&hairpin, (2, false), 0.05);
     let bridged = errors.iter().filter(|&&e| e > 0.07).count();
     assert_eq!(bridged, 0, "{errors:?}");
 }
@@ -1212,9 +1217,7 @@ fn a_helix_band_is_followed_along_its_turns() {
         let a = 2.0 * std::f64::consts::TAU * t;
         [a.cos(), a.sin(), 2.0 * t]
     };
-    let errors: Vec<f64> = (1..=8)
-        .map(|seed| fit_noisy(&helix, 3, false, 0.05, seed))
-        .collect();
+    let errors = fit_noisy_seeds(&helix, (3, false), 0.05);
     let across = errors.iter().filter(|&&e| e > 0.05).count();
     assert!(across <= 1, "{errors:?}");
 }
@@ -1233,9 +1236,7 @@ fn a_knot_band_is_followed_round_its_loops() {
             -(3.0 * a).sin(),
         ]
     };
-    let errors: Vec<f64> = (1..=8)
-        .map(|seed| fit_noisy(&trefoil, 3, true, 0.03, seed))
-        .collect();
+    let errors = fit_noisy_seeds(&trefoil, (3, true), 0.03);
     let across = errors.iter().filter(|&&e| e > 0.05).count();
     assert!(across <= 2, "{errors:?}");
 }
