@@ -1223,6 +1223,20 @@ fn open_ends_do_not_grow_across_a_mouth() {
     assert!(errors.iter().all(|&e| e <= 0.04), "{errors:?}");
 }
 
+/// An S at σ = 5 % of the diagonal, each end 5.6 deviations from its middle stroke: a fit
+/// that turns back at the end of a bow is barely shorter than the right one, and loses to
+/// it ([`super::principal`]'s `folded_noise`). With a fixed noise margin between fits, seed
+/// 1 was 11.4 % of the diagonal off; now all 8 are within 4.8 %.
+#[test]
+fn a_fit_barely_shorter_loses_to_a_closer_one() {
+    let s = |t: f64| {
+        let s = 2.0 * t - 1.0;
+        [(std::f64::consts::PI * s).sin(), 0.75 * s, 0.0]
+    };
+    let errors = fit_noisy_seeds(&s, (2, false), 0.05);
+    assert!(errors.iter().all(|&e| e <= 0.05), "{errors:?}");
+}
+
 /// A helix of two turns at σ = 5 % of the diagonal, its turns 5.8 deviations apart: the
 /// chain's and the graph's starts cut across a turn (14–20 % of the diagonal on all of 8
 /// seeds); the order along the tree of the band's cluster centres ([`super::skeleton`])
@@ -1241,8 +1255,10 @@ fn a_helix_band_is_followed_along_its_turns() {
 
 /// A trefoil knot at σ = 3 % of the diagonal, its strands 5.2 deviations apart where they
 /// pass closest: the closed band's tree order ([`super::skeleton`]) and the choice without
-/// fits through voids take it round its loops on 6 of 8 seeds (1.1–1.6 %; 11.6 and 12.6 %
-/// on two), where 6 of 8 were 8–14 % off before.
+/// fits through voids take it round its loops, and a shorter fit that cuts across a loop
+/// loses to one only a little longer ([`super::principal`]'s `folded_noise`). With the
+/// tree order alone 6 of 8 seeds were 8–14 % off, with a fixed noise margin between fits 2
+/// (11.6 and 12.6 %); now none.
 #[test]
 fn a_knot_band_is_followed_round_its_loops() {
     let trefoil = |t: f64| {
@@ -1255,7 +1271,7 @@ fn a_knot_band_is_followed_round_its_loops() {
     };
     let errors = fit_noisy_seeds(&trefoil, (3, true), 0.03);
     let across = errors.iter().filter(|&&e| e > 0.05).count();
-    assert!(across <= 2, "{errors:?}");
+    assert!(across == 0, "{errors:?}");
 }
 
 /// A fit that scribbles through a band (many times longer than another fit of it) measures
