@@ -12,6 +12,12 @@
 //! hairpin whose arms are 6.3 deviations apart (1 000 points, 8 seeds): the weakest stretch
 //! over the gap's weakest was 0.12–0.28 on bridged fits and 1.3 or more on right ones.
 //!
+//! A fit whose end ran on round a bend into the band's next turn (a helix's) is weak where
+//! it crosses between the turns, but has no gap between its ends to bridge: it is also
+//! trimmed to the longer side of its weakest stretch, and whichever of the three fits has
+//! the strongest weakest stretch is kept. On the 2-turn helix at σ = 5 % (5 000 points, 8
+//! seeds) the worst seed went from 15 % of the diagonal to 2.0 %.
+//!
 //! A fit may also cross the mouth and run on past it at both ends, so that the gap between
 //! its ends lies in the mouth too: then the bridge is weak against the fit's own typical
 //! stretch (its median support), and the band is cut there as well. A correct fit's weakest
@@ -21,7 +27,7 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use super::fit::ApproximationOptions;
-use super::principal::{Followed, Polyline, fit_band_in_order};
+use super::principal::{Followed, Polyline, fit_band_in_order, ordered_by_place};
 use crate::error::Result;
 use crate::geometry::vector::distance;
 
@@ -118,9 +124,10 @@ pub(crate) fn weakest_share(ordered: &[[f64; 3]], fit: &Followed) -> Option<f64>
 }
 
 /// `followed` (an open band's fit of `ordered`), or the band followed again from a cut at
-/// its weakest stretch, when that stretch has less than [`WEAKER`] times the support of the
-/// gap between its ends or [`VOID`] times its own median (see the module documentation)
-/// and the new fit's weakest stretch has more points than the old one's.
+/// its weakest stretch or from the longer side of it, when that stretch has less than
+/// [`WEAKER`] times the support of the gap between its ends or [`VOID`] times its own
+/// median (see the module documentation): of the three, the fit whose weakest stretch has
+/// the most points.
 ///
 /// # Errors
 /// As [`fit_band_in_order`].
@@ -156,6 +163,7 @@ pub(crate) fn cut_at_void(
     }
     // Each point's place along the fit: its foot's arc length.
     let gap = distance(line[0], line[line.len() - 1]);
+    let vertices = line.clone();
     let polyline = Polyline::new(line, false);
     let total = polyline.length();
     let place = |p: &[f64; 3]| polyline.foot(*p, 0.0).0.clamp(0.0, total);
@@ -193,9 +201,49 @@ pub(crate) fn cut_at_void(
         return Ok(followed);
     };
     let ((inside_again, _, _), _, _) = support(&again);
-    Ok(if inside_again > inside {
-        again
+    let mut best = if inside_again > inside {
+        (inside_again, again)
     } else {
-        followed
-    })
+        (inside, followed)
+    };
+    // Or the fit trimmed at the weak stretch: the points ordered by their feet on its longer
+    // side alone. A fit whose end ran on round a bend into the next turn of a helix is weak
+    // where it crosses between the turns, and has no gap between its ends to bridge.
+    let mut along = 0.0;
+    let mut side: Vec<[f64; 3]> = Vec::new();
+    let keep_start = cut > 0.5 * total;
+    for (j, v) in vertices.iter().enumerate() {
+        if j > 0 {
+            along += distance(vertices[j - 1], *v);
+        }
+        if (along <= cut) == keep_start {
+            side.push(*v);
+        }
+    }
+    if side.len() >= 2 {
+        let piece = Polyline::new(side, false);
+        let places: Vec<(f64, usize)> = best
+            .1
+            .order
+            .iter()
+            .map(|&i| (piece.foot(ordered[i], 0.0).0, i))
+            .collect();
+        if let Some((order, places, span)) = ordered_by_place(places)
+            && let Ok(trimmed) = fit_band_in_order(
+                ordered,
+                &order,
+                (dimension, false),
+                (noise, places),
+                fixed,
+                span,
+                options,
+            )
+        {
+            let ((inside_trimmed, _, _), _, _) = support(&trimmed);
+            if inside_trimmed > best.0 {
+                best = (inside_trimmed, trimmed);
+            }
+        }
+    }
+    Ok(best.1)
 }
