@@ -189,15 +189,19 @@ pub(crate) fn cut_at_void(
     let (first, last) = (keyed[0].0, keyed[keyed.len() - 1].0);
     let span = (last - first).max(f64::MIN_POSITIVE);
     let places: Vec<f64> = keyed.iter().map(|k| (k.0 - first) / span).collect();
-    let Ok(again) = fit_band_in_order(
-        ordered,
-        &order,
-        (dimension, false),
-        (noise, places),
-        fixed,
-        span,
-        options,
-    ) else {
+    // The band followed again from `order`, at `places` along a band `span` long.
+    let refollow = |order: &[usize], places: Vec<f64>, span: f64| {
+        fit_band_in_order(
+            ordered,
+            order,
+            (dimension, false),
+            (noise, places),
+            fixed,
+            span,
+            options,
+        )
+    };
+    let Ok(again) = refollow(&order, places, span) else {
         return Ok(followed);
     };
     let ((inside_again, _, _), _, _) = support(&again);
@@ -229,15 +233,7 @@ pub(crate) fn cut_at_void(
             .map(|&i| (piece.foot(ordered[i], 0.0).0, i))
             .collect();
         if let Some((order, places, span)) = ordered_by_place(places)
-            && let Ok(trimmed) = fit_band_in_order(
-                ordered,
-                &order,
-                (dimension, false),
-                (noise, places),
-                fixed,
-                span,
-                options,
-            )
+            && let Ok(trimmed) = refollow(&order, places, span)
         {
             let ((inside_trimmed, _, _), _, _) = support(&trimmed);
             if inside_trimmed > best.0 {
