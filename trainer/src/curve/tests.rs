@@ -1067,8 +1067,18 @@ fn fit_noisy(
 
 /// [`fit_noisy`] on seeds 1 to 8.
 fn fit_noisy_seeds(at: &dyn Fn(f64) -> [f64; 3], shape: (usize, bool), noise: f64) -> Vec<f64> {
+    fit_many_noisy_seeds(at, shape, noise, 1_000)
+}
+
+/// [`fit_noisy_seeds`] with `count` points.
+fn fit_many_noisy_seeds(
+    at: &dyn Fn(f64) -> [f64; 3],
+    shape: (usize, bool),
+    noise: f64,
+    count: usize,
+) -> Vec<f64> {
     (1..=8)
-        .map(|seed| fit_noisy_points(at, shape, noise, 1_000, seed))
+        .map(|seed| fit_noisy_points(at, shape, noise, count, seed))
         .collect()
 }
 
@@ -1217,9 +1227,7 @@ fn open_ends_do_not_grow_across_a_mouth() {
         let a = (15.0 + 330.0 * t).to_radians();
         [a.cos(), a.sin(), 0.0]
     };
-    let errors: Vec<f64> = (1..=8)
-        .map(|seed| fit_noisy_points(&c, (2, false), 0.05, 5_000, seed))
-        .collect();
+    let errors = fit_many_noisy_seeds(&c, (2, false), 0.05, 5_000);
     assert!(errors.iter().all(|&e| e <= 0.04), "{errors:?}");
 }
 
@@ -1264,9 +1272,7 @@ fn an_end_that_runs_into_the_next_turn_is_trimmed() {
         let a = 2.0 * std::f64::consts::TAU * t;
         [a.cos(), a.sin(), 2.0 * t]
     };
-    let errors: Vec<f64> = (1..=8)
-        .map(|seed| fit_noisy_points(&helix, (3, false), 0.05, 5_000, seed))
-        .collect();
+    let errors = fit_many_noisy_seeds(&helix, (3, false), 0.05, 5_000);
     assert!(errors.iter().all(|&e| e <= 0.04), "{errors:?}");
 }
 
