@@ -330,7 +330,8 @@ pub struct FitArgs {
     #[arg(long, value_name = "FILE")]
     parameters_out: Option<PathBuf>,
     /// Fit every point. By default, points off the surface (off their neighbours' planes, or
-    /// isolated) are left out, and the summary counts them.
+    /// isolated) are left out, then those the first fit misses by far more than their
+    /// neighbours (the network is refined without them), and the summary counts both.
     #[arg(long)]
     keep_outliers: bool,
     /// Print the summary as JSON.
@@ -344,8 +345,10 @@ struct FitReport<'a> {
     stored_as: &'static str,
     blob_bytes: usize,
     points: usize,
-    /// Points left out: off their neighbours' planes, or isolated.
+    /// Points left out before the embedding: off their neighbours' planes, or isolated.
     outliers: usize,
+    /// Points left out after the first fit: off the network by more than their neighbours.
+    off_fit: usize,
     embedded: bool,
     /// `lle` or `unrolled` when the points were embedded.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -404,6 +407,7 @@ fn fit(args: &FitArgs) -> Result<()> {
         blob_bytes: bytes.len(),
         points: points.len(),
         outliers: robust.off_surface.len(),
+        off_fit: robust.off_fit.len(),
         embedded: args.parameters.is_none(),
         parameterization: robust.parameterization,
         embedding_seconds,
@@ -423,9 +427,13 @@ fn fit(args: &FitArgs) -> Result<()> {
         "{} points{}{}: hidden layers {:?} ({}, {} parameters) after {} configurations, RMS \
          error {:.3e} ({:.2e} of the diagonal); {:.3} s embedding, {:.3} s fitting",
         report.points,
-        match report.outliers {
-            0 => String::new(),
-            n => format!(" less {n} off the surface (--keep-outliers fits them)"),
+        match (report.outliers, report.off_fit) {
+            (0, 0) => String::new(),
+            (n, 0) => format!(" less {n} off the surface (--keep-outliers fits them)"),
+            (n, m) => format!(
+                " less {n} off the surface and {m} off the first fit (--keep-outliers fits \
+                 them)"
+            ),
         },
         match report.parameterization {
             Some(Parameterization::Unrolled) => {

@@ -4,7 +4,7 @@
 use super::network::SurfaceNetwork;
 use super::split::{Split, stratified_split};
 use super::topology::{TopologyOptions, TopologySearch, search};
-use super::train::{Samples, mean_square, train};
+use super::train::{Samples, TrainSettings, mean_square, train};
 use crate::error::{Error, Result};
 
 /// Fewest points a network is fitted to (the split needs a few of each kind).
@@ -76,16 +76,7 @@ pub fn fit_network(
         [0, 1, 2].map(|a| 0.5 * (xhi[a] + xlo[a])),
         half,
     )?;
-    let samples = Samples {
-        inputs: parameters
-            .iter()
-            .map(|p| template.normalize_input(p[0], p[1]))
-            .collect(),
-        targets: points
-            .iter()
-            .map(|&p| template.normalize_output(p))
-            .collect(),
-    };
+    let samples = normalized(&template, points, parameters);
     let split = stratified_split(parameters, options.seed);
     let search_training = subsample(&split.training, options.max_search_points);
     let started = std::time::Instant::now();
@@ -96,18 +87,7 @@ pub fn fit_network(
     let search_seconds = started.elapsed().as_secs_f64();
     let started = std::time::Instant::now();
     if search_training.len() < split.training.len() || options.search_train != options.train {
-        let mut refined = network.clone();
-        train(
-            &mut refined,
-            &samples,
-            &split.training,
-            &split.validation,
-            &options.train,
-        );
-        let before = mean_square(&network, &samples, &split.validation);
-        if mean_square(&refined, &samples, &split.validation) <= before {
-            network = refined;
-        }
+        network = refined(network, &samples, &split, &options.train);
     }
     let refinement_seconds = started.elapsed().as_secs_f64();
     let all: Vec<usize> = (0..points.len()).collect();
@@ -125,6 +105,100 @@ pub fn fit_network(
         search_seconds,
         refinement_seconds,
     })
+}
+
+/// `fit` refined (warm-started, with `settings`) without the points `left_out`,
+/// which leave its training and validation sets; its errors are then those of the other
+/// points, and its split indexes them in their order. `points` and `parameters` are those
+/// `fit` was fitted to. The refined network is kept only when its validation error (without
+/// `left_out`) is not worse.
+pub(crate) fn refine_without(
+    fit: &SurfaceFit,
+    points: &[[f64; 3]],
+    parameters: &[[f64; 2]],
+    settings: &TrainSettings,
+    left_out: &[usize],
+) -> SurfaceFit {
+    let started = std::time::Instant::now();
+    let mut out = vec![false; points.len()];
+    for &i in left_out {
+        if let Some(flag) = out.get_mut(i) {
+            *flag = true;
+        }
+    }
+    let keep =
+        |list: &[usize]| -> Vec<usize> { list.iter().copied().filter(|&i| !out[i]).collect() };
+    let network = &fit.network;
+    let samples = normalized(network, points, parameters);
+    let split = Split {
+        training: keep(&fit.split.training),
+        validation: keep(&fit.split.validation),
+        test: keep(&fit.split.test),
+    };
+    let network = refined(network.clone(), &samples, &split, settings);
+    let kept = keep(&(0..points.len()).collect::<Vec<_>>());
+    // The split, indexed by the kept points in their order.
+    let mut rank = vec![usize::MAX; points.len()];
+    for (r, &i) in kept.iter().enumerate() {
+        rank[i] = r;
+    }
+    let split = Split {
+        training: split.training.iter().map(|&i| rank[i]).collect(),
+        validation: split.validation.iter().map(|&i| rank[i]).collect(),
+        test: split.test.iter().map(|&i| rank[i]).collect(),
+    };
+    let rms_error =
+        mean_square(&network, &samples, &kept).sqrt() * network.output_scale * 3f64.sqrt();
+    let (lo, hi) = bounds(kept.iter().map(|&i| points[i].as_slice()), 3);
+    let diagonal = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt();
+    SurfaceFit {
+        network,
+        search: fit.search.clone(),
+        split,
+        rms_error,
+        relative_rms_error: rms_error / diagonal,
+        search_seconds: fit.search_seconds,
+        refinement_seconds: fit.refinement_seconds + started.elapsed().as_secs_f64(),
+    }
+}
+
+/// `network` trained further on `split.training` with `settings`, or `network` itself when
+/// that is not worse on `split.validation`.
+fn refined(
+    network: SurfaceNetwork,
+    samples: &Samples,
+    split: &Split,
+    settings: &TrainSettings,
+) -> SurfaceNetwork {
+    let mut trained = network.clone();
+    train(
+        &mut trained,
+        samples,
+        &split.training,
+        &split.validation,
+        settings,
+    );
+    if mean_square(&trained, samples, &split.validation)
+        <= mean_square(&network, samples, &split.validation)
+    {
+        trained
+    } else {
+        network
+    }
+}
+
+/// `points` and `parameters` in `network`'s normalized units.
+fn normalized(network: &SurfaceNetwork, points: &[[f64; 3]], parameters: &[[f64; 2]]) -> Samples {
+    Samples {
+        inputs: parameters
+            .iter()
+            .map(|p| network.normalize_input(p[0], p[1]))
+            .collect(),
+        targets: points
+            .iter()
+            .map(|&p| network.normalize_output(p))
+            .collect(),
+    }
 }
 
 /// Every `len/max`-th index (all of them when `max` covers the list); the training list is

@@ -59,6 +59,7 @@ mod eigen;
 mod embedding;
 mod fairing;
 mod fit;
+mod fit_outliers;
 mod folds;
 mod grid;
 mod growth;

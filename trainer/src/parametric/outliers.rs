@@ -40,6 +40,10 @@ pub struct OutlierOptions {
     /// Robust deviations (1.4826 · MAD) beyond the median height over the whole scan that
     /// still count as noise (6.0).
     pub deviations: f64,
+    /// Robust deviations of a point's height off the fitted network, less its neighbours',
+    /// beyond which it is left out and the network refined without it (3.0; see
+    /// `fit_outliers`).
+    pub fit_deviations: f64,
 }
 
 impl Default for OutlierOptions {
@@ -49,6 +53,7 @@ impl Default for OutlierOptions {
             height: 0.5,
             isolation: 3.0,
             deviations: 6.0,
+            fit_deviations: 3.0,
         }
     }
 }
@@ -199,7 +204,7 @@ fn flattest_plane(points: &[[f64; 3]]) -> Plane {
 }
 
 /// The median of `values` (reordered); 0 for none.
-fn median(values: &mut [f64]) -> f64 {
+pub(super) fn median(values: &mut [f64]) -> f64 {
     if values.is_empty() {
         return 0.0;
     }

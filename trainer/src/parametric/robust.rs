@@ -4,7 +4,8 @@
 use std::time::Instant;
 
 use super::embedding::{LleOptions, Parameterization, embed_points};
-use super::fit::{SurfaceFit, fit_network};
+use super::fit::{SurfaceFit, fit_network, refine_without};
+use super::fit_outliers::find_fit_outliers;
 use super::outliers::{OutlierOptions, Outliers, find_outliers};
 use super::topology::TopologyOptions;
 use crate::error::{Error, Result};
@@ -20,8 +21,13 @@ pub struct RobustFit {
     pub neighbors: Option<usize>,
     /// How the points were parameterized (`None` when parameters were given).
     pub parameterization: Option<Parameterization>,
-    /// Points removed before the embedding: off their neighbours' planes, or isolated.
+    /// Points left out before the embedding, in input order: off their neighbours' planes,
+    /// or isolated.
     pub off_surface: Vec<usize>,
+    /// Points left out after the first fit, in input order: their height off the network
+    /// stands out from their neighbours' (`OutlierOptions::fit_deviations`); the network
+    /// was refined without them.
+    pub off_fit: Vec<usize>,
     /// The final fit.
     pub fit: SurfaceFit,
     /// Wall time of the outlier search and the embedding (s).
@@ -76,13 +82,38 @@ pub fn fit_robustly(
     let embedding_seconds = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
-    let fit = fit_network(&chosen, &uv, topology)?;
+    let mut fit = fit_network(&chosen, &uv, topology)?;
+    let mut kept = kept;
+    let mut uv = uv;
+    let mut left_out_of_fit = Vec::new();
+    if let Some(options) = outliers {
+        // Points near the surface but off it, which the search before the embedding could
+        // not tell from a rough surface, stand out against the fitted network.
+        let off_fit = find_fit_outliers(&fit.network, &chosen, &uv, options.fit_deviations);
+        if !off_fit.is_empty() {
+            fit = refine_without(&fit, &chosen, &uv, &topology.train, &off_fit);
+            let mut out = vec![false; kept.len()];
+            for &i in &off_fit {
+                out[i] = true;
+            }
+            left_out_of_fit = off_fit.iter().map(|&i| kept[i]).collect();
+            uv = (0..kept.len())
+                .filter(|&i| !out[i])
+                .map(|i| uv[i])
+                .collect();
+            kept = (0..kept.len())
+                .filter(|&i| !out[i])
+                .map(|i| kept[i])
+                .collect();
+        }
+    }
     Ok(RobustFit {
         kept,
         parameters: uv,
         neighbors,
         parameterization,
         off_surface: first.removed,
+        off_fit: left_out_of_fit,
         fit,
         embedding_seconds,
         fitting_seconds: start.elapsed().as_secs_f64(),
@@ -120,7 +151,8 @@ mod tests {
         let run = |points: &[[f64; 3]], outliers| {
             wavy_error(&fit_robustly(points, None, &lle, &topology, outliers).unwrap())
         };
-        // Median over seeds: one network search varies by 2× from seed to seed.
+        // Every seed within 1.5× of the clean fit (measured 0.69–1.09); kept, the median
+        // is over 2×.
         let (mut robust, mut plain) = (Vec::new(), Vec::new());
         for seed in 1..=5 {
             let clean = sample_surface(SampleSurface::Wavy, 1_500, 0.002, seed)
@@ -143,7 +175,7 @@ mod tests {
         robust.sort_by(f64::total_cmp);
         plain.sort_by(f64::total_cmp);
         eprintln!("against the clean fit: left out {robust:.2?}, kept {plain:.2?}");
-        assert!(robust[2] < 1.5, "{robust:?}");
+        assert!(robust[4] < 1.5, "{robust:?}");
         assert!(plain[2] > 2.0, "{plain:?}");
     }
 }

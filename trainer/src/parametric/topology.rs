@@ -93,7 +93,12 @@ pub struct TopologyOptions {
     /// LM settings of the candidates: at most 30 steps, stopping after 6 without a 0.1 %
     /// validation gain.
     pub search_train: TrainSettings,
-    /// LM settings of the chosen network's refinement on all training points.
+    /// LM settings of the chosen network's refinement on all training points: at most 100
+    /// steps, stopping after 6 without a 0.1 % validation gain. With 1 % the refinement
+    /// stopped while the fit still improved by a few per cent every ten steps: on seven
+    /// surfaces (1 500 points, noise 0.2 % of the diagonal, 6 seeds) 0.1 % lowers the RMS to
+    /// the true surface by 16 %, and on the bunny's 10 000-point patch by 18 %, in about
+    /// twice the fitting time there.
     pub train: TrainSettings,
     /// Seed of the initial weights.
     pub seed: u64,
@@ -117,7 +122,10 @@ impl Default for TopologyOptions {
                 min_gain: 1e-3,
                 ..TrainSettings::default()
             },
-            train: TrainSettings::default(),
+            train: TrainSettings {
+                min_gain: 1e-3,
+                ..TrainSettings::default()
+            },
             seed: 1,
         }
     }
@@ -125,7 +133,8 @@ impl Default for TopologyOptions {
 
 impl TopologyOptions {
     /// The search without warm starts: every configuration from random weights, trained until
-    /// the validation error converges (up to 100 LM steps, the refinement's settings). Several
+    /// the validation error converges (up to 100 LM steps, stopping after 6 without a 1 %
+    /// validation gain; no refinement follows). Several
     /// times slower on large sets; hole filling uses it because its network must *extrapolate*
     /// into the hole, and networks grown along the chain bend more there (fandisk holes: the
     /// worst new vertex 0.054 from the surface against 0.020).
@@ -133,7 +142,8 @@ impl TopologyOptions {
         let defaults = TopologyOptions::default();
         TopologyOptions {
             grow: false,
-            search_train: defaults.train,
+            search_train: TrainSettings::default(),
+            train: TrainSettings::default(),
             ..defaults
         }
     }
