@@ -64,9 +64,13 @@ fn points_to_network_to_meshes_and_the_target_agrees() {
     assert!(fit["relative_rms_error"].as_f64().unwrap() < 0.01, "{fit}");
     let layers = fit["hidden_layers"].as_array().unwrap();
     assert!(!layers.is_empty() && layers.len() <= 2, "{fit}");
+    // The blob records the points fitted: a coarse network's first fit may leave out a few
+    // where its own error changes fastest (at most 2 %).
+    let off_fit = fit["off_fit"].as_u64().unwrap();
+    assert!(fit["outliers"] == 0 && off_fit <= 6, "{fit}");
     let info = ok(&["info", s(&blob)]);
     assert!(
-        info.contains("surface-network") && info.contains("300 points"),
+        info.contains("surface-network") && info.contains(&format!("{} points", 300 - off_fit)),
         "{info}"
     );
 
