@@ -35,9 +35,6 @@ pub const SPREAD_NEIGHBORS: usize = 32;
 const SPREAD_ASKED: std::num::NonZero<usize> =
     std::num::NonZero::new(SPREAD_NEIGHBORS + 1).unwrap();
 
-/// A point and its [`NEIGHBORS`] nearest.
-const ASKED: std::num::NonZero<usize> = std::num::NonZero::new(NEIGHBORS + 1).unwrap();
-
 /// Gauss–Newton steps from a point's (u, v) to the foot of its perpendicular on the network.
 const FOOT_STEPS: usize = 3;
 
@@ -94,17 +91,21 @@ pub fn find_fit_outliers(
     let Ok(tree) = ImmutableKdTree::<f64, 2>::new_from_slice(&scaled) else {
         return Vec::new();
     };
+    // Each point's SPREAD_NEIGHBORS nearest in (u, v), nearest first; the first NEIGHBORS
+    // of them give its neighbours' heights.
     let around: Vec<Vec<usize>> = scaled
         .iter()
         .enumerate()
         .map(|(i, uv)| {
-            tree.query(uv)
-                .nearest_n::<SquaredEuclidean<f64>>(ASKED)
-                .execute()
+            let mut found = tree
+                .query(uv)
+                .nearest_n::<SquaredEuclidean<f64>>(SPREAD_ASKED)
+                .execute();
+            found.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+            found
                 .into_iter()
                 .map(|n| n.item as usize)
                 .filter(|&j| j != i)
-                .take(NEIGHBORS)
                 .collect()
         })
         .collect();
@@ -112,7 +113,7 @@ pub fn find_fit_outliers(
         .iter()
         .enumerate()
         .map(|(i, list)| {
-            let mut theirs: Vec<f64> = list.iter().map(|&j| heights[j]).collect();
+            let mut theirs: Vec<f64> = list.iter().take(NEIGHBORS).map(|&j| heights[j]).collect();
             heights[i] - median(&mut theirs)
         })
         .collect();
@@ -121,6 +122,7 @@ pub fn find_fit_outliers(
         .enumerate()
         .map(|(i, list)| {
             list.iter()
+                .take(NEIGHBORS)
                 .map(|&j| distance(points[i], points[j]))
                 .fold(f64::INFINITY, f64::min)
         })
@@ -138,14 +140,9 @@ pub fn find_fit_outliers(
             // Where the network's error changes quickly, the differences around are large
             // too: a point is measured by the larger of the patch's spread and theirs, over
             // enough points for a steady estimate.
-            let mut theirs: Vec<f64> = tree
-                .query(&scaled[i])
-                .nearest_n::<SquaredEuclidean<f64>>(SPREAD_ASKED)
-                .execute()
-                .into_iter()
-                .map(|n| n.item as usize)
-                .filter(|&j| j != i)
-                .map(|j| (differences[j] - middle).abs())
+            let mut theirs: Vec<f64> = around[i]
+                .iter()
+                .map(|&j| (differences[j] - middle).abs())
                 .collect();
             let local = 1.4826 * median(&mut theirs);
             (differences[i] - middle).abs() > (deviations * spread.max(local)).max(floor)
