@@ -6,7 +6,10 @@
 //! [`OutlierOptions::height`] times their spread (or, on a noisy scan, more than the median
 //! height plus [`OutlierOptions::deviations`] robust deviations), or when it is farther from
 //! its neighbours than [`OutlierOptions::isolation`] times they are from theirs (a local
-//! ratio, so a sparser region of the scan is not an outlier). Each plane is fitted to a
+//! ratio, so a sparser region of the scan is not an outlier), or than
+//! [`OutlierOptions::edge_isolation`] times when its neighbours all lie to one side of it (it
+//! stands beyond the scan's edge, where the region the points cover would reach out to it in
+//! a spike). Each plane is fitted to a
 //! neighbour's own neighbours, the flattest of the plane of all of them and of those without
 //! one, so an outlier tilts neither its own plane nor, much, its neighbours'. A point's height
 //! is the median over the [`PLANES_ASKED`] flattest planes among its neighbours': those of
@@ -19,7 +22,7 @@
 
 use super::neighbors::nearest_neighbors;
 use crate::error::Result;
-use crate::geometry::vector::{distance, dot, sub};
+use crate::geometry::vector::{cross, distance, dot, sub};
 
 /// How many of its neighbours' planes (the flattest) a point is measured against, the median
 /// of their verdicts.
@@ -37,6 +40,10 @@ pub struct OutlierOptions {
     /// Mean distance to the neighbours over the median of the neighbours' own, beyond which a
     /// point is isolated (3.0).
     pub isolation: f64,
+    /// The same ratio for a point beyond the edge of the others: its neighbours, seen in
+    /// their plane, leave a gap of more than a half-turn around it (2.5). Points on a scan's
+    /// border sit at 1.2–1.6.
+    pub edge_isolation: f64,
     /// Robust deviations (1.4826 · MAD) beyond the median height over the whole scan that
     /// still count as noise (6.0).
     pub deviations: f64,
@@ -52,6 +59,7 @@ impl Default for OutlierOptions {
             neighbors: 10,
             height: 0.5,
             isolation: 3.0,
+            edge_isolation: 2.5,
             deviations: 6.0,
             fit_deviations: 3.0,
         }
@@ -121,10 +129,39 @@ pub fn find_outliers(points: &[[f64; 3]], options: &OutlierOptions) -> Result<Ou
         .map(|i| {
             let mut theirs: Vec<f64> = neighbors[i].iter().map(|&j| reach[j]).collect();
             let typical = median(&mut theirs);
-            heights[i] > height_limit || reach[i] > options.isolation * typical
+            heights[i] > height_limit
+                || reach[i] > options.isolation * typical
+                || (reach[i] > options.edge_isolation * typical
+                    && widest_gap(points[i], &neighbors[i], points, planes[i].normal)
+                        > std::f64::consts::PI)
         })
         .collect();
     Ok(Outliers::from_flags(&flags))
+}
+
+/// The widest angle around `p` between two of its `neighbors`, seen along `normal`: more
+/// than π when they all lie on one side of it.
+fn widest_gap(p: [f64; 3], neighbors: &[usize], points: &[[f64; 3]], normal: [f64; 3]) -> f64 {
+    let helper = if normal[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let first = cross(normal, helper);
+    let second = cross(normal, first);
+    let mut angles: Vec<f64> = neighbors
+        .iter()
+        .map(|&j| {
+            let d = sub(points[j], p);
+            dot(d, second).atan2(dot(d, first))
+        })
+        .collect();
+    angles.sort_unstable_by(f64::total_cmp);
+    let (Some(&lowest), Some(&highest)) = (angles.first(), angles.last()) else {
+        return 0.0;
+    };
+    let wrap = lowest + std::f64::consts::TAU - highest;
+    angles.windows(2).map(|w| w[1] - w[0]).fold(wrap, f64::max)
 }
 
 /// The median of `values` plus `deviations` robust deviations (1.4826 · MAD); infinite when
@@ -260,6 +297,23 @@ mod tests {
                 );
             }
             assert!(found.removed.iter().all(|&i| i >= 2_000), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn a_lone_point_beyond_the_edge_goes_and_the_edge_stays() {
+        // On the surface's extension, 0.15 beyond its edge at x = 1 (about 3.5 point
+        // spacings): no plane tells it from the surface, and the region the points cover
+        // would reach out to it in a spike.
+        for seed in 1..=3 {
+            let mut points = sample_surface(SampleSurface::Wavy, 2_000, 0.0, seed)
+                .unwrap()
+                .points;
+            let y = 0.3 * seed as f64 - 0.6;
+            let x = 1.15;
+            points.push([x, y, 0.25 * (2.5 * x).sin() * (2.0 * y).cos()]);
+            let found = find_outliers(&points, &OutlierOptions::default()).unwrap();
+            assert_eq!(found.removed, vec![2_000], "seed {seed}");
         }
     }
 
