@@ -13,7 +13,8 @@
 //! is reported.
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench uneven_density`, with after `--`:
-//! `--points 2000`, `--seeds 4`, `--markdown FILE` to write the table as well
+//! `--points 2000`, `--seeds 4`, `--surfaces WORD` for the surfaces whose name holds it,
+//! `--markdown FILE` to write the table as well
 //! (`docs/performance/uneven-density.md`), `--pictures DIR` to draw every mesh with its points
 //! and every parameter-plane grid with the points' parameters (PNG).
 
@@ -315,11 +316,12 @@ fn main() {
         .parse()
         .expect("--seeds: a count");
     let pictures = option(&args, "--pictures");
+    let only = option(&args, "--surfaces").unwrap_or("");
     let mut table = String::from(
         "| surface | tessellation | uncovered | stray | folded triangles | seeds unrolled | failed \
          seeds |\n|---|---|---:|---:|---:|---:|---:|\n",
     );
-    for surface in surfaces() {
+    for surface in surfaces().into_iter().filter(|s| s.name.contains(only)) {
         for (label, tessellation) in [
             ("Coons 30 × 30", Tessellation::Coons { resolution: 30 }),
             ("Delaunay ~900", Tessellation::Delaunay { vertices: 900 }),
