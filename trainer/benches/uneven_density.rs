@@ -19,7 +19,9 @@
 //! and every parameter-plane grid with the points' parameters (PNG).
 
 mod arguments;
-use arguments::{given, in_workspace, option};
+mod hull;
+use arguments::{given, in_workspace, option, parsed};
+use hull::{convex_hull, grid_mesh, inside_convex};
 
 use std::fmt::Write as _;
 
@@ -122,70 +124,15 @@ fn sample(surface: &Surface, count: usize, seed: u64) -> (Vec<[f64; 3]>, Vec<[f6
     (points, parameters)
 }
 
-/// The convex hull of `points`, counter-clockwise (Andrew's monotone chain).
-fn convex_hull(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut sorted = points.to_vec();
-    sorted.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    let turn = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
-    let mut hull: Vec<[f64; 2]> = Vec::new();
-    for pass in 0..2 {
-        let start = hull.len();
-        let ordered: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
-            Box::new(sorted.iter())
-        } else {
-            Box::new(sorted.iter().rev())
-        };
-        for &p in ordered {
-            while hull.len() >= start + 2
-                && turn(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(p);
-        }
-        hull.pop();
-    }
-    hull
-}
-
-fn inside_convex(p: [f64; 2], hull: &[[f64; 2]]) -> bool {
-    (0..hull.len()).all(|i| {
-        let (a, b) = (hull[i], hull[(i + 1) % hull.len()]);
-        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) >= 0.0
-    })
-}
-
 /// The true surface triangulated on a `side × side` grid of its parameters; cells with a
 /// corner outside the surface, or outside `reach` when given, are left out.
 fn truth(surface: &Surface, side: usize, reach: Option<&[[f64; 2]]>) -> Mesh {
-    let at = |i: usize, j: usize| (i as f64 / side as f64, j as f64 / side as f64);
-    let positions = (0..=side)
-        .flat_map(|j| (0..=side).map(move |i| (i, j)))
-        .map(|(i, j)| {
-            let (s, t) = at(i, j);
-            (surface.position)(s, t)
-        })
-        .collect();
-    let index = |i: usize, j: usize| (j * (side + 1) + i) as u32;
-    let mut triangles = Vec::new();
-    for j in 0..side {
-        for i in 0..side {
-            let corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
-            if corners.iter().all(|&(i, j)| {
-                let (s, t) = at(i, j);
-                (surface.inside)(s, t) && reach.is_none_or(|hull| inside_convex([s, t], hull))
-            }) {
-                triangles.push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
-                triangles.push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
-            }
-        }
-    }
-    Mesh {
-        positions,
-        triangles,
-    }
+    grid_mesh(
+        side,
+        [[0.0, 1.0], [0.0, 1.0]],
+        surface.position,
+        |[s, t]| (surface.inside)(s, t) && reach.is_none_or(|hull| inside_convex([s, t], hull)),
+    )
 }
 
 /// Area-weighted samples of `mesh`: every triangle's centroid and its area.
@@ -307,14 +254,8 @@ struct Outcome {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let count: usize = option(&args, "--points")
-        .unwrap_or("2000")
-        .parse()
-        .expect("--points: a count");
-    let seeds: u64 = option(&args, "--seeds")
-        .unwrap_or("4")
-        .parse()
-        .expect("--seeds: a count");
+    let count: usize = parsed(&args, "--points", "2000", "a count");
+    let seeds: u64 = parsed(&args, "--seeds", "4", "a count");
     let pictures = option(&args, "--pictures");
     let only = option(&args, "--surfaces").unwrap_or("");
     let mut table = String::from(

@@ -24,3 +24,13 @@ pub fn in_workspace(path: &str) -> std::path::PathBuf {
         .join("..")
         .join(path)
 }
+
+/// The value after `name` parsed, or `default` when not given; a value that does not parse
+/// stops the bench naming `name` and what it should be.
+#[allow(dead_code)] // Not every bench takes a value.
+pub fn parsed<T: std::str::FromStr>(args: &[String], name: &str, default: &str, what: &str) -> T {
+    option(args, name)
+        .unwrap_or(default)
+        .parse()
+        .unwrap_or_else(|_| panic!("{name}: {what}"))
+}
