@@ -30,8 +30,8 @@ use std::fmt::Write as _;
 use neurosurf_trainer::caoen::surface_distance;
 use neurosurf_trainer::io::{Mesh, write_mesh};
 use neurosurf_trainer::parametric::{
-    BoundaryOptions, LleOptions, OutlierOptions, TopologyOptions, coons_boundary, coons_grid,
-    fit_robustly, synthesize,
+    LleOptions, OutlierOptions, TopologyOptions, coons_boundary_of_polygon, coons_grid,
+    fit_robustly, parameter_region, synthesize,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -165,8 +165,9 @@ fn rebuild(
         Some(&OutlierOptions::default()),
     )
     .map_err(|e| e.to_string())?;
-    let boundary =
-        coons_boundary(&fit.parameters, &BoundaryOptions::default()).map_err(|e| e.to_string())?;
+    // The region `patch fit` stores in the blob, which `patch tessellate` meshes.
+    let region = parameter_region(&fit.parameters).map_err(|e| e.to_string())?;
+    let boundary = coons_boundary_of_polygon(&region).map_err(|e| e.to_string())?;
     let grid = coons_grid(&boundary, RESOLUTION, RESOLUTION).map_err(|e| e.to_string())?;
     let mesh = synthesize(&fit.fit.network, &grid).mesh;
     if let Some(name) = keep {
