@@ -1,16 +1,18 @@
 //! Filled holes against the surface they replace: holes punched `--rings` deep (3) at
 //! `--holes` (40) spread-out vertices of each mesh, filled with the network's surface alone
 //! (`fairing: false`) and with the default options (faired unless a crease runs through the
-//! region), and measured by their new vertices' distance from the removed triangles, as a
+//! region, else put on the smooth parts' own surfaces), and measured by their new vertices' distance from the removed triangles, as a
 //! share of the hole's diameter: how many bulge outwards by more than 2 %, the worst bulge and
 //! the median distance either way.
 //!
 //! Run: `cargo bench -p neurosurf-trainer --bench hole_fill`, with after `--`:
-//! `--meshes spot.obj,fandisk.obj` for meshes from the data folder, `--rings 3,5`,
+//! `--meshes spot.obj,fandisk.obj,box,can` for meshes from the data folder and the machined
+//! shapes of our own (`box`: 2 × 1.5 × 1; `can`: a capped cylinder), `--rings 3,5`,
 //! `--holes 40`, `--markdown FILE` to write the table as well
 //! (`docs/performance/hole-fill.md`).
 
 mod arguments;
+mod machined;
 use arguments::{given, in_workspace, option};
 
 use std::fmt::Write as _;
@@ -78,7 +80,7 @@ fn summary(shares: &Shares) -> (usize, f64, f64) {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let meshes: Vec<&str> = option(&args, "--meshes")
-        .unwrap_or("spot.obj,fandisk.obj,stanford-bunny.obj")
+        .unwrap_or("spot.obj,fandisk.obj,stanford-bunny.obj,box,can")
         .split(',')
         .collect();
     let rings: Vec<usize> = option(&args, "--rings")
@@ -95,8 +97,14 @@ fn main() {
          |---|---:|---:|---:|---:|---:|\n",
     );
     for name in &meshes {
-        let path = io::data_file(name).expect("a mesh in the data folder");
-        let mesh = io::read_mesh(&path).expect("a readable mesh");
+        let mesh = match *name {
+            "box" => machined::box_mesh(),
+            "can" => machined::can_mesh(),
+            _ => {
+                let path = io::data_file(name).expect("a mesh in the data folder");
+                io::read_mesh(&path).expect("a readable mesh")
+            }
+        };
         for &r in &rings {
             let (network, default, skipped) = measure(&mesh, r, holes);
             let (nb, nw, nm) = summary(&network);
@@ -122,7 +130,9 @@ fn main() {
         let text = format!(
             "# Filled holes\n\nWritten by `cargo bench -p neurosurf-trainer --bench hole_fill -- \
              {}`: holes punched at spread-out vertices, filled with the network's surface alone \
-             → with the default options (faired unless a sharp crease runs through the region); \
+             → with the default options (faired where no sharp crease runs through the region, \
+             else on the smooth parts' own surfaces); `box` and `can` are a 2 × 1.5 × 1 box \
+             and a capped cylinder (radius 1, height 1.5) meshed by the bench; \
              the new vertices' distance from the removed triangles, % of the hole's diameter \
              (a bulge is a distance outwards).\n\n{table}",
             given(&args)

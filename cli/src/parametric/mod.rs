@@ -746,8 +746,8 @@ pub struct FillHoleArgs {
     /// Also write the holed mesh (with --punch).
     #[arg(long, value_name = "FILE")]
     holed: Option<PathBuf>,
-    /// Keep the network's surface in every hole instead of fairing it (holes a sharp crease
-    /// runs through keep it anyway).
+    /// Keep the network's surface in every hole, instead of fairing it or, where a sharp
+    /// crease runs through the region, putting it on the smooth parts' surfaces.
     #[arg(long)]
     no_fairing: bool,
     /// Output mesh (`.obj`, `.ply` or `.stl`).
@@ -774,6 +774,9 @@ struct FillReport<'a> {
     /// Holes whose new vertices were faired: all but those a sharp crease runs through (none
     /// with `--no-fairing`).
     faired: usize,
+    /// Holes a sharp crease runs through whose new vertices went onto the smooth parts'
+    /// surfaces meeting at the crease (none with `--no-fairing`).
+    creases_followed: usize,
     /// Vertices no triangle used (left by a punched hole or in the input), removed.
     removed_unused_vertices: usize,
 }
@@ -810,7 +813,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
     }
     let (mut new_vertices, mut new_triangles, mut region_vertices) = (0, 0, 0);
     let mut tutte_embeddings = 0;
-    let mut faired = 0;
+    let (mut faired, mut creases_followed) = (0, 0);
     let mut unfilled = Vec::new();
     for (index, hole) in holes.iter().enumerate() {
         // Filling appends vertices and triangles, so the other loops keep their indices.
@@ -821,6 +824,7 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
                 region_vertices += filled.region_vertices;
                 tutte_embeddings += usize::from(filled.tutte);
                 faired += usize::from(filled.faired);
+                creases_followed += usize::from(filled.followed_creases);
                 mesh = filled.mesh;
             }
             Err(e) => {
@@ -867,17 +871,20 @@ fn fill_holes(args: &FillHoleArgs) -> Result<()> {
         region_vertices,
         tutte_embeddings,
         faired,
+        creases_followed,
         removed_unused_vertices,
     };
     if args.json {
         return output::json(&report);
     }
     println!(
-        "filled {} of {} hole(s) ({} faired, the others on their networks): {} new vertices, \
-         {} new triangles, networks trained on {} vertices; {} unused vertices removed",
+        "filled {} of {} hole(s) ({} faired, {} across creases on the parts' surfaces, the others \
+         on their networks): {} new vertices, {} new triangles, networks trained on {} \
+         vertices; {} unused vertices removed",
         report.filled,
         report.holes,
         report.faired,
+        report.creases_followed,
         report.new_vertices,
         report.new_triangles,
         report.region_vertices,

@@ -5,7 +5,9 @@
 //! keeps its vertices, so the filled mesh is watertight when the rest of it was. The new
 //! vertices are then faired ([`fair_new_vertices`]): a network trained on the ring around a
 //! hole extrapolates into it and may bulge out, where the least-bending fill continues the
-//! surface around it.
+//! surface around it. Where a sharp crease runs through the region, fairing would round it
+//! off: the new vertices go onto the region's smooth parts extended into the hole instead,
+//! meeting at the crease ([`follow_creases`]).
 //!
 //! The region is every vertex within [`HoleOptions::rings`] edges of the hole boundary. The
 //! grid step in the parameter plane is the mean parameter-plane length of the region's
@@ -18,6 +20,7 @@
 
 use std::collections::VecDeque;
 
+use super::crease_fill::follow_creases;
 use super::embedding::{LleOptions, embed_mesh};
 use super::fairing::fair_new_vertices;
 use super::fit::{SurfaceFit, fit_network};
@@ -77,6 +80,9 @@ pub struct HoleFill {
     pub tutte: bool,
     /// Whether the new vertices were faired: asked for, and no crease runs through the region.
     pub faired: bool,
+    /// Whether the new vertices were put on the region's smooth parts extended into the hole
+    /// (`crease_fill.rs`): fairing asked for, and a crease runs through the region.
+    pub followed_creases: bool,
 }
 
 /// Fills the hole bounded by `hole` (a boundary loop of `mesh`, as [`boundary_loops`]
@@ -196,8 +202,17 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
     let new_triangles = fill.len();
     out.triangles.extend(fill);
     // Fairing that cannot be solved leaves the network's fill, which is whole already.
-    let faired =
-        options.fairing && !creased(&region) && fair_new_vertices(&mut out, &new_vertices).is_ok();
+    let creased = creased(&region);
+    let faired = options.fairing && !creased && fair_new_vertices(&mut out, &new_vertices).is_ok();
+    let followed_creases = options.fairing
+        && creased
+        && follow_creases(
+            &region,
+            &local_hole,
+            uv,
+            &interior,
+            &mut out.positions[base as usize..],
+        ) > 0;
     Ok(HoleFill {
         mesh: out,
         new_vertices,
@@ -206,6 +221,7 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
         fit,
         tutte,
         faired,
+        followed_creases,
     })
 }
 
@@ -309,7 +325,7 @@ fn annulus_embedding(region: &Mesh, hole: &[u32]) -> Result<Vec<[f64; 2]>> {
 }
 
 /// Edge hops from the nearest of `sources`, up to `max` (usize::MAX beyond).
-fn ring_depths(rings: &[Vec<usize>], sources: &[u32], max: usize) -> Vec<usize> {
+pub(super) fn ring_depths(rings: &[Vec<usize>], sources: &[u32], max: usize) -> Vec<usize> {
     let mut depth = vec![usize::MAX; rings.len()];
     let mut queue = VecDeque::new();
     for &v in sources {

@@ -55,6 +55,7 @@ mod closed;
 mod cloud_mesh;
 mod compare;
 mod coons;
+mod crease_fill;
 mod eigen;
 mod embedding;
 mod fairing;
