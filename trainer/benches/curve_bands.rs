@@ -221,7 +221,9 @@ fn measure(
                 .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
                 .collect();
             let name = format!("{}-{count}-{seed}{suffix}.xyz", case.name);
-            std::fs::write(in_workspace(dir).join(name), text).expect("--save DIR");
+            let dir = in_workspace(dir);
+            std::fs::create_dir_all(&dir).expect("--save DIR: a folder that can be made");
+            std::fs::write(dir.join(name), text).expect("--save DIR");
         };
         write("", points.points());
         write("-fit", &polyline);
