@@ -74,6 +74,9 @@ pub struct HoleFill {
     pub new_triangles: usize,
     /// Vertices that trained the network.
     pub region_vertices: usize,
+    /// Rings of the region around the hole: [`HoleOptions::rings`], or fewer when the region
+    /// that many rings deep could not be laid flat.
+    pub region_rings: usize,
     /// The network fitted to the region.
     pub fit: SurfaceFit,
     /// Whether the region was embedded by Tutte's method because LLE folded it.
@@ -99,9 +102,30 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
             "the hole is not a boundary loop of the mesh",
         ));
     }
+    // A region that reaches round a thin part (not an annulus) or folds may lie flat with
+    // fewer rings: each is tried down to two, and the first error is the one reported.
+    let mut first = None;
+    for rings in (options.rings.min(2)..=options.rings).rev() {
+        match fill_hole_with_rings(mesh, hole, options, rings) {
+            Ok(filled) => return Ok(filled),
+            Err(e) => {
+                first.get_or_insert(e);
+            }
+        }
+    }
+    Err(first.unwrap_or_else(|| Error::invalid("no ring count to try")))
+}
+
+/// [`fill_hole`] with a region of `rings` rings.
+fn fill_hole_with_rings(
+    mesh: &Mesh,
+    hole: &[u32],
+    options: &HoleOptions,
+    rings_asked: usize,
+) -> Result<HoleFill> {
     let n = mesh.positions.len();
     let rings = one_rings(n, &mesh.triangles);
-    let depth = ring_depths(&rings, hole, options.rings);
+    let depth = ring_depths(&rings, hole, rings_asked);
     let mut local = vec![u32::MAX; n];
     let mut region = Mesh::default();
     for v in 0..n {
@@ -144,35 +168,42 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
         ));
     }
     let local_hole: Vec<u32> = hole.iter().map(|&v| local[v as usize]).collect();
-    let (parameters, tutte) = match embed_mesh(&region, &options.embedding) {
-        Ok(embedding) => (embedding.parameters, false),
-        Err(folded) => {
-            let plane = annulus_embedding(&region, &local_hole).map_err(|e| {
-                Error::invalid(format!(
-                    "{folded}; and Tutte's embedding does not apply: {e}"
-                ))
-            })?;
-            (plane, true)
+    // The hole's outline in the parameter plane, new vertices on a grid inside it at the
+    // region's mean edge length, and their triangulation.
+    let layout = |uv: &[[f64; 2]]| -> Result<(Vec<[f64; 2]>, _)> {
+        let polygon: Vec<[f64; 2]> = local_hole.iter().map(|&v| uv[v as usize]).collect();
+        let mut total = 0.0;
+        let mut count = 0usize;
+        for t in &region.triangles {
+            for e in 0..3 {
+                let (a, b) = (uv[t[e] as usize], uv[t[(e + 1) % 3] as usize]);
+                total += ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+                count += 1;
+            }
         }
+        let step = total / count.max(1) as f64;
+        let interior = grid_inside(&polygon, step);
+        let planar = triangulate_polygon(&polygon, &interior)?;
+        Ok((interior, planar))
+    };
+    let tutte_instead = |why: Error| -> Result<_> {
+        let plane = annulus_embedding(&region, &local_hole).map_err(|e| {
+            Error::invalid(format!("{why}; and Tutte's embedding does not apply: {e}"))
+        })?;
+        let laid = layout(&plane)?;
+        Ok((plane, true, laid))
+    };
+    // LLE first; where it folds the region, or the hole's outline crosses itself in its
+    // plane, Tutte's embedding, which can do neither.
+    let (parameters, tutte, (interior, planar)) = match embed_mesh(&region, &options.embedding) {
+        Ok(embedding) => match layout(&embedding.parameters) {
+            Ok(laid) => (embedding.parameters, false, laid),
+            Err(crossing) => tutte_instead(crossing)?,
+        },
+        Err(folded) => tutte_instead(folded)?,
     };
     let fit = fit_network(&region.positions, &parameters, &options.topology)?;
     let uv = &parameters;
-    let polygon: Vec<[f64; 2]> = hole
-        .iter()
-        .map(|&v| uv[local[v as usize] as usize])
-        .collect();
-    let mut total = 0.0;
-    let mut count = 0usize;
-    for t in &region.triangles {
-        for e in 0..3 {
-            let (a, b) = (uv[t[e] as usize], uv[t[(e + 1) % 3] as usize]);
-            total += ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
-            count += 1;
-        }
-    }
-    let step = total / count.max(1) as f64;
-    let interior = grid_inside(&polygon, step);
-    let planar = triangulate_polygon(&polygon, &interior)?;
 
     let m = hole.len();
     let mut out = mesh.clone();
@@ -218,6 +249,7 @@ pub fn fill_hole(mesh: &Mesh, hole: &[u32], options: &HoleOptions) -> Result<Hol
         new_vertices,
         new_triangles,
         region_vertices: region.positions.len(),
+        region_rings: rings_asked,
         fit,
         tutte,
         faired,
