@@ -41,8 +41,9 @@ pub struct HoleOptions {
     pub embedding: LleOptions,
     /// Regression ([`TopologyOptions::from_random_starts`]: the network extrapolates).
     pub topology: TopologyOptions,
-    /// Fair the new vertices after the network placed them ([`fair_new_vertices`]) unless a
-    /// sharp crease runs through the region around the hole: on by default; off keeps the
+    /// Fair the new vertices after the network placed them ([`fair_new_vertices`]), or, where
+    /// a sharp crease runs through the region around the hole, put them on the region's
+    /// smooth parts extended into it (`crease_fill.rs`): on by default; off keeps the
     /// network's surface everywhere.
     #[serde(default = "faired")]
     pub fairing: bool,
