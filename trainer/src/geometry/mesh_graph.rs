@@ -26,6 +26,18 @@ pub fn one_rings(vertex_count: usize, triangles: &[[u32; 3]]) -> Vec<Vec<usize>>
     rings
 }
 
+/// The triangles (indices) on each undirected edge (keys with the smaller index first).
+pub fn edge_faces(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), Vec<usize>> {
+    let mut faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (t, triangle) in triangles.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (triangle[e], triangle[(e + 1) % 3]);
+            faces.entry((a.min(b), a.max(b))).or_default().push(t);
+        }
+    }
+    faces
+}
+
 /// How many triangles use each undirected edge (keys with the smaller index first).
 pub fn edge_uses(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), usize> {
     let mut uses = HashMap::new();
@@ -175,14 +187,7 @@ pub fn dihedral_angles(mesh: &Mesh) -> Vec<f64> {
             [0.0; 3]
         }
     };
-    let mut faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (t, triangle) in mesh.triangles.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (triangle[e], triangle[(e + 1) % 3]);
-            faces.entry((a.min(b), a.max(b))).or_default().push(t);
-        }
-    }
-    faces
+    edge_faces(&mesh.triangles)
         .values()
         .filter(|f| f.len() == 2)
         .map(|f| {

@@ -13,11 +13,11 @@
 //! (`trainer/benches/uneven_density.rs`). A gap between dense points and sparse ones far
 //! from them is still carved, since the mean stays well below the gap.
 
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::BinaryHeap;
 
 use super::planar::{delaunay, signed_area};
 use crate::error::{Error, Result};
-use crate::geometry::mesh_graph::boundary_loops;
+use crate::geometry::mesh_graph::{boundary_loops, edge_faces};
 
 /// Boundary settings.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -43,13 +43,7 @@ pub fn boundary_loop(points: &[[f64; 2]], options: &BoundaryOptions) -> Result<V
         let (p, q) = (points[a as usize], points[b as usize]);
         ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt()
     };
-    let mut faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (t, tri) in triangles.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (tri[e], tri[(e + 1) % 3]);
-            faces.entry((a.min(b), a.max(b))).or_default().push(t);
-        }
-    }
+    let faces = edge_faces(&triangles);
     let spacing = local_spacing(points, &triangles);
     let limit =
         |a: u32, b: u32| options.carve_factor * (spacing[a as usize] * spacing[b as usize]).sqrt();

@@ -30,7 +30,9 @@ use super::topology::TopologyOptions;
 use super::tutte::tutte_disk;
 use crate::caoen::{SurfaceDistance, cap_holes_planar, surface_distance};
 use crate::error::{Error, Result};
-use crate::geometry::mesh_graph::{boundary_loops, drop_unused_vertices, edge_report, one_rings};
+use crate::geometry::mesh_graph::{
+    boundary_loops, drop_unused_vertices, edge_faces, edge_report, one_rings,
+};
 use crate::geometry::vector::{cross, distance, dot, norm, scale, sub};
 use crate::io::Mesh;
 use rayon::prelude::*;
@@ -448,13 +450,7 @@ fn triangle_labels(mesh: &Mesh, vertex_label: &[usize], count: usize) -> Vec<usi
             if b == c { b } else { a }
         })
         .collect();
-    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (i, t) in mesh.triangles.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (t[e], t[(e + 1) % 3]);
-            by_edge.entry((a.min(b), a.max(b))).or_default().push(i);
-        }
-    }
+    let by_edge = edge_faces(&mesh.triangles);
     let neighbours = |i: usize| -> Vec<usize> {
         let t = mesh.triangles[i];
         (0..3)

@@ -25,7 +25,7 @@
 use std::collections::HashMap;
 
 use super::hole::ring_depths;
-use crate::geometry::mesh_graph::one_rings;
+use crate::geometry::mesh_graph::{edge_faces, one_rings};
 use crate::geometry::vector::{add, cross, distance, dot, norm, scale, sub};
 use crate::io::Mesh;
 
@@ -289,13 +289,7 @@ fn smooth_parts(region: &Mesh) -> (Vec<Vec<usize>>, Meetings) {
             }
         })
         .collect();
-    let mut faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (t, triangle) in triangles.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (triangle[e], triangle[(e + 1) % 3]);
-            faces.entry((a.min(b), a.max(b))).or_default().push(t);
-        }
-    }
+    let faces = edge_faces(triangles);
     let sharp = |f: &[usize]| dot(normals[f[0]], normals[f[1]]) < PART_EDGE.cos();
     // Flood fill the triangles across smooth edges.
     let mut neighbours = vec![Vec::new(); triangles.len()];

@@ -112,18 +112,10 @@ pub fn triangulate_polygon(boundary: &[[f64; 2]], interior: &[[f64; 2]]) -> Resu
 /// The triangles inside the polygon whose vertices are 0 … m−1 in order: a flood fill from
 /// the convex hull that flips sides whenever it crosses a polygon edge.
 fn inside_by_parity(triangles: &[[u32; 3]], m: u32) -> Vec<[u32; 3]> {
-    use std::collections::{HashMap, VecDeque};
+    use std::collections::VecDeque;
     let key = |a: u32, b: u32| (a.min(b), a.max(b));
     let is_constraint = |a: u32, b: u32| a < m && b < m && ((a + 1) % m == b || (b + 1) % m == a);
-    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (t, tri) in triangles.iter().enumerate() {
-        for e in 0..3 {
-            by_edge
-                .entry(key(tri[e], tri[(e + 1) % 3]))
-                .or_default()
-                .push(t);
-        }
-    }
+    let by_edge = crate::geometry::mesh_graph::edge_faces(triangles);
     let mut side: Vec<Option<bool>> = vec![None; triangles.len()];
     let mut queue = VecDeque::new();
     for (&(a, b), list) in &by_edge {

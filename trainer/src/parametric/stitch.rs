@@ -248,14 +248,8 @@ pub fn stitch(patches: &[Mesh], seams: &[Seam]) -> Result<Stitched> {
 /// from each component's first triangle); if the result is closed with negative volume, all
 /// are flipped so normals face outward. Returns how many triangles were flipped.
 pub fn orient_consistently(triangles: &mut [[u32; 3]]) -> usize {
-    use std::collections::{HashMap, VecDeque};
-    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (t, tri) in triangles.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (tri[e], tri[(e + 1) % 3]);
-            by_edge.entry((a.min(b), a.max(b))).or_default().push(t);
-        }
-    }
+    use std::collections::VecDeque;
+    let by_edge = crate::geometry::mesh_graph::edge_faces(triangles);
     let has_directed =
         |tri: &[u32; 3], a: u32, b: u32| (0..3).any(|e| tri[e] == a && tri[(e + 1) % 3] == b);
     let mut seen = vec![false; triangles.len()];
